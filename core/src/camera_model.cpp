@@ -1,0 +1,107 @@
+#include "dreamsense/core/camera_model.hpp"
+
+#include <cmath>
+
+#include <opencv2/calib3d.hpp>
+
+namespace dreamsense {
+
+std::optional<cv::Point2d> CameraModel::project_camera_point(const cv::Vec3d& cam) const {
+  if (cam[2] <= 1e-9) return std::nullopt;
+  std::vector<cv::Point3d> pts{cv::Point3d(cam[0], cam[1], cam[2])};
+  std::vector<cv::Point2d> px;
+  cv::projectPoints(pts, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(K), distortion, px);
+  return px.front();
+}
+
+cv::Vec3d CameraModel::pixel_ray(const cv::Point2d& px) const {
+  std::vector<cv::Point2d> in{px}, out;
+  cv::undistortPoints(in, out, cv::Mat(K), distortion);
+  cv::Vec3d ray(out[0].x, out[0].y, 1.0);
+  return ray / cv::norm(ray);
+}
+
+Status CameraModel::check() const {
+  std::string bad;
+  if (image_size.width <= 0 || image_size.height <= 0) bad += " image size must be positive;";
+  if (K(0, 0) <= 0 || K(1, 1) <= 0) bad += " focal lengths must be positive;";
+  const cv::Matx33d should_be_identity = R * R.t();
+  if (cv::norm(should_be_identity - cv::Matx33d::eye()) > 1e-6 || cv::determinant(R) < 0)
+    bad += " R is not a rotation;";
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "camera model '{}':{}", frame, bad);
+  return ok_status();
+}
+
+Result<CameraModel> read_camera_model(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path))
+    return make_error(ErrorCode::kNotFound, "{}: missing calibration file", path.string());
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(path.string(), cv::FileStorage::READ))
+      return make_error(ErrorCode::kCorruptData, "{}: unreadable calibration file", path.string());
+    CameraModel m;
+    cv::Mat K, R, t;
+    fs["frame"] >> m.frame;
+    m.image_size.width = static_cast<int>(fs["image_width"]);
+    m.image_size.height = static_cast<int>(fs["image_height"]);
+    fs["camera_matrix"] >> K;
+    fs["distortion_coefficients"] >> m.distortion;
+    fs["camera_from_world_R"] >> R;
+    fs["camera_from_world_t"] >> t;
+    if (K.empty() || K.rows != 3 || K.cols != 3)
+      return make_error(ErrorCode::kCorruptData, "{}: camera_matrix missing or not 3x3",
+                        path.string());
+    m.K = cv::Matx33d(K);
+    if (m.distortion.empty()) m.distortion = cv::Mat::zeros(1, 5, CV_64F);
+    m.distortion.convertTo(m.distortion, CV_64F);
+    if (!R.empty()) m.R = cv::Matx33d(R);
+    if (!t.empty()) m.t = cv::Vec3d(t.reshape(1, 3));
+    if (auto st = m.check(); !st)
+      return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), st.error().message);
+    return m;
+  } catch (const cv::Exception& e) {
+    return make_error(ErrorCode::kCorruptData, "{}: unreadable calibration file ({})",
+                      path.string(), e.msg);
+  }
+}
+
+Status write_camera_model(const std::filesystem::path& path, const CameraModel& m) {
+  try {
+    cv::FileStorage fs(path.string(), cv::FileStorage::WRITE);
+    if (!fs.isOpened())
+      return make_error(ErrorCode::kIoError, "{}: cannot write calibration file", path.string());
+    fs << "frame" << m.frame;
+    fs << "image_width" << m.image_size.width << "image_height" << m.image_size.height;
+    fs << "camera_matrix" << cv::Mat(m.K);
+    fs << "distortion_coefficients" << m.distortion;
+    fs.writeComment("Extrinsics: camera_from_world, X_cam = R * X_world + t (metres)");
+    fs << "camera_from_world_R" << cv::Mat(m.R);
+    fs << "camera_from_world_t" << cv::Mat(m.t);
+    return ok_status();
+  } catch (const cv::Exception& e) {
+    return make_error(ErrorCode::kIoError, "{}: {}", path.string(), e.msg);
+  }
+}
+
+cv::Matx33d rotation_from_ypr_deg(double yaw, double pitch, double roll) {
+  const double y = yaw * CV_PI / 180, p = pitch * CV_PI / 180, r = roll * CV_PI / 180;
+  const cv::Matx33d Ry(std::cos(y), 0, std::sin(y), 0, 1, 0, -std::sin(y), 0, std::cos(y));
+  const cv::Matx33d Rx(1, 0, 0, 0, std::cos(p), -std::sin(p), 0, std::sin(p), std::cos(p));
+  const cv::Matx33d Rz(std::cos(r), -std::sin(r), 0, std::sin(r), std::cos(r), 0, 0, 0, 1);
+  return Ry * Rx * Rz;
+}
+
+void look_at(const cv::Vec3d& eye, const cv::Vec3d& target, const cv::Vec3d& down,
+             cv::Matx33d& R_cam_from_world, cv::Vec3d& t_cam_from_world) {
+  cv::Vec3d z = target - eye;
+  z /= cv::norm(z);
+  cv::Vec3d x = down.cross(z);  // y (down) x z (forward) = x (right)
+  if (cv::norm(x) < 1e-9) x = cv::Vec3d(1, 0, 0).cross(z);
+  x /= cv::norm(x);
+  const cv::Vec3d y = z.cross(x);
+  // Rows of R are the camera axes expressed in world.
+  R_cam_from_world = cv::Matx33d(x[0], x[1], x[2], y[0], y[1], y[2], z[0], z[1], z[2]);
+  t_cam_from_world = -(R_cam_from_world * eye);
+}
+
+}  // namespace dreamsense

@@ -1,0 +1,250 @@
+#include "dreamsense/core/pipeline.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "dreamsense/core/log.hpp"
+
+namespace dreamsense {
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+}  // namespace
+
+Status PipelineOptions::check() const {
+  if (auto s = sync.check(); !s) return s;
+  return blackboard.check();
+}
+
+Pipeline::Pipeline(PipelineOptions options, SourceInfo info,
+                   std::vector<std::unique_ptr<Analyzer>> analyzers)
+    : options_(std::move(options)),
+      info_(std::move(info)),
+      analyzers_(std::move(analyzers)),
+      blackboard_(options_.blackboard) {
+  for (const auto& a : analyzers_) stats_.analyzers.push_back(AnalyzerStats{std::string(a->name())});
+}
+
+Result<std::unique_ptr<Pipeline>> Pipeline::build(PipelineOptions options, SourceInfo source_info,
+                                                  std::vector<std::unique_ptr<Analyzer>> analyzers) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  std::set<std::string> names, written;
+  for (const auto& a : analyzers) {
+    if (!a) return make_error(ErrorCode::kInvalidArgument, "pipeline: null analyser");
+    const std::string name(a->name());
+    if (!names.insert(name).second)
+      return make_error(ErrorCode::kFailedPrecondition, "pipeline: two analysers named '{}'", name);
+    const AnalyzerContract c = a->contract();
+    for (const auto& in : c.required_inputs)
+      if (source_info.find(in) == nullptr)
+        return make_error(ErrorCode::kFailedPrecondition,
+                          "pipeline: analyser '{}' needs sensor '{}', which the source does not have",
+                          name, in);
+    for (const auto& key : c.reads)
+      if (written.count(key) == 0)
+        return make_error(ErrorCode::kFailedPrecondition,
+                          "pipeline: analyser '{}' reads '{}', which no earlier analyser writes", name,
+                          key);
+    for (const auto& key : c.writes)
+      if (!written.insert(key).second)
+        return make_error(ErrorCode::kFailedPrecondition,
+                          "pipeline: blackboard key '{}' has two writers (second: '{}')", key, name);
+  }
+  return std::unique_ptr<Pipeline>(
+      new Pipeline(std::move(options), std::move(source_info), std::move(analyzers)));
+}
+
+std::vector<StreamSpec> Pipeline::stream_specs() const {
+  std::set<SensorId> used;
+  for (const auto& a : analyzers_) {
+    const AnalyzerContract c = a->contract();
+    used.insert(c.required_inputs.begin(), c.required_inputs.end());
+    for (const auto& o : c.optional_inputs)
+      if (info_.find(o) != nullptr) used.insert(o);
+  }
+  std::vector<StreamSpec> specs;
+  for (const auto& s : info_.sensors) {
+    if (!used.empty() && used.count(s.id) == 0) continue;
+    specs.push_back(StreamSpec{
+        s.id, s.kind == SensorKind::kAudio ? StreamMode::kContinuous : StreamMode::kFrame});
+  }
+  return specs;
+}
+
+Status Pipeline::process_tick(const MultiFrame& frame, const TickCallback& on_tick) {
+  const auto t_tick = Clock::now();
+  for (size_t i = 0; i < analyzers_.size(); ++i) {
+    Analyzer& a = *analyzers_[i];
+    AnalyzerStats& st = stats_.analyzers[i];
+    BlackboardWriter writer{std::string(a.name())};
+    const auto t0 = Clock::now();
+    try {
+      Status s = a.process(frame, blackboard_.snapshot(), writer);
+      if (!s) {
+        st.errors++;
+        if (st.errors <= 5)
+          log::warn("{} at {}: {}", a.name(), frame.stamp.to_string(), s.error().message);
+        continue;
+      }
+      blackboard_.commit(writer, frame.stamp);
+    } catch (const CheckFailure& e) {
+      // A broken precondition inside an analyser: log, reset it, keep the pipeline running.
+      st.errors++;
+      if (st.errors <= 5)
+        log::error("{} at {}: {}; resetting it", a.name(), frame.stamp.to_string(), e.what());
+      a.reset();
+    }
+    st.calls++;
+    st.latency_ms.push_back(ms_since(t0));
+  }
+  stats_.ticks++;
+  if (on_tick) {
+    if (auto s = on_tick(frame, blackboard_.snapshot()); !s) return s;
+  }
+  stats_.tick_latency_ms.push_back(ms_since(t_tick));
+  return ok_status();
+}
+
+Status Pipeline::run(Source& source, const TickCallback& on_tick,
+                     const ProgressCallback& on_progress) {
+  const auto t0 = Clock::now();
+  Status s = options_.sync.policy == SyncPolicy::kSettled
+                 ? run_settled(source, on_tick, on_progress)
+                 : run_live(source, on_tick, on_progress);
+  stats_.wall_seconds = ms_since(t0) / 1000.0;
+  return s;
+}
+
+Status Pipeline::run_settled(Source& source, const TickCallback& on_tick,
+                             const ProgressCallback& on_progress) {
+  const auto specs = stream_specs();
+  std::set<SensorId> used;
+  for (const auto& sp : specs) used.insert(sp.id);
+  Synchronizer sync(options_.sync, specs);
+  Timestamp first = Timestamp::unset(), last = Timestamp::unset();
+  auto drain = [&]() -> Status {
+    for (const MultiFrame& mf : sync.poll()) {
+      if (!first.is_set()) first = mf.stamp;
+      last = mf.stamp;
+      if (auto st = process_tick(mf, on_tick); !st) return st;
+      if (on_progress) on_progress(mf.stamp);
+    }
+    return ok_status();
+  };
+  while (true) {
+    Result<FramePtr> r = source.next();
+    if (!r) {
+      if (!is_end_of_stream(r.error())) return tl::unexpected(r.error());
+      break;
+    }
+    if (used.count((*r)->sensor) == 0) continue;
+    stats_.frames++;
+    if (auto st = sync.push(*r); !st) return st;
+    if (auto st = drain(); !st) return st;
+  }
+  sync.end_all();
+  if (auto st = drain(); !st) return st;
+  stats_.sync = sync.stats();
+  if (first.is_set()) stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
+  return ok_status();
+}
+
+Status Pipeline::run_live(Source& source, const TickCallback& on_tick,
+                          const ProgressCallback& on_progress) {
+  const auto specs = stream_specs();
+  std::set<SensorId> used;
+  for (const auto& sp : specs) used.insert(sp.id);
+  Synchronizer sync(options_.sync, specs);
+
+  // The reader thread plays the sensors: it releases each frame at its stamp (if pacing).
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::deque<FramePtr> queue;
+  bool reader_done = false;
+  Status reader_status = ok_status();
+  Timestamp media_origin = Timestamp::unset();
+  Clock::time_point wall_origin;
+  std::atomic<bool> stop{false};
+  std::thread reader([&] {
+    while (!stop) {
+      Result<FramePtr> r = source.next();
+      if (!r) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!is_end_of_stream(r.error())) reader_status = tl::unexpected(r.error());
+        reader_done = true;
+        cv.notify_all();
+        return;
+      }
+      if (stop) return;
+      if (used.count((*r)->sensor) == 0) continue;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        if (!media_origin.is_set()) {
+          media_origin = (*r)->stamp;
+          wall_origin = Clock::now();
+        }
+        if (options_.pace_source) {
+          const auto due = wall_origin + std::chrono::nanoseconds(((*r)->stamp - media_origin).ns());
+          lock.unlock();
+          while (!stop && Clock::now() < due)
+            std::this_thread::sleep_for(std::min<Clock::duration>(due - Clock::now(),
+                                                                  std::chrono::milliseconds(20)));
+          lock.lock();
+        }
+        queue.push_back(*r);
+      }
+      cv.notify_all();
+    }
+  });
+
+  Status result = ok_status();
+  Timestamp first = Timestamp::unset(), last = Timestamp::unset(), newest_seen;
+  while (true) {
+    std::deque<FramePtr> batch;
+    bool done = false;
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      cv.wait_for(lock, std::chrono::milliseconds(2),
+                  [&] { return !queue.empty() || reader_done; });
+      batch.swap(queue);
+      done = reader_done && batch.empty();
+    }
+    for (auto& f : batch) {
+      stats_.frames++;
+      newest_seen = std::max(newest_seen, f->stamp);
+      if (auto st = sync.push(f); !st) { result = st; break; }
+    }
+    if (!result || done) break;
+    // Media "now": paced → wall clock mapped onto the session clock; else the newest stamp seen.
+    Timestamp now = newest_seen;
+    if (options_.pace_source && media_origin.is_set()) {
+      std::lock_guard<std::mutex> lock(mutex);
+      now = media_origin + Duration::from_ns(
+                               std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                   Clock::now() - wall_origin).count());
+    }
+    for (const MultiFrame& mf : sync.poll(now)) {
+      if (!first.is_set()) first = mf.stamp;
+      last = mf.stamp;
+      result = process_tick(mf, on_tick);
+      sync.done();
+      if (on_progress) on_progress(mf.stamp);
+    }
+    if (!result) break;
+  }
+  stop = true;  // on error the reader exits after its current frame
+  reader.join();
+  if (result && !reader_status) result = reader_status;
+  stats_.sync = sync.stats();
+  if (first.is_set()) stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
+  return result;
+}
+
+}  // namespace dreamsense

@@ -1,0 +1,171 @@
+#include "dreamsense/core/pipeline.hpp"
+
+#include <gtest/gtest.h>
+
+namespace dreamsense {
+namespace {
+
+inline constexpr Key<int> kSeen{"test.seen"};
+inline constexpr Key<int> kDoubled{"test.doubled"};
+
+// A source of skeleton frames at 30 Hz and audio chunks every 20 ms, in stamp order.
+class FakeSource : public Source {
+ public:
+  explicit FakeSource(int seconds) {
+    for (int i = 0; i < seconds * 30; ++i)
+      frames_.push_back(make_frame("skel", Timestamp::from_ns(i * 1'000'000'000LL / 30),
+                                   static_cast<uint64_t>(i), Skeleton{}));
+    std::stable_sort(frames_.begin(), frames_.end(),
+                     [](const FramePtr& a, const FramePtr& b) { return a->stamp < b->stamp; });
+  }
+  Result<FramePtr> next() override {
+    if (pos_ >= frames_.size()) return make_error(ErrorCode::kEndOfStream, "end");
+    return frames_[pos_++];
+  }
+  SourceInfo info() const override {
+    SourceInfo i;
+    i.sensors.push_back(SensorDescription{"skel", SensorKind::kSkeleton, 30});
+    return i;
+  }
+
+ private:
+  std::vector<FramePtr> frames_;
+  size_t pos_ = 0;
+};
+
+class CountingAnalyzer : public Analyzer {
+ public:
+  std::string_view name() const override { return "counter"; }
+  AnalyzerContract contract() const override { return {{"skel"}, {}, {}, {kSeen.name}}; }
+  Status process(const MultiFrame& in, const BlackboardView&, BlackboardWriter& out) override {
+    if (in.frame("skel"))
+      out.set(kSeen, ++count_, in.stamp, 1.f);
+    else
+      out.set_absent(kSeen, in.stamp);
+    return ok_status();
+  }
+  int count_ = 0;
+};
+
+class DoublingAnalyzer : public Analyzer {
+ public:
+  std::string_view name() const override { return "doubler"; }
+  AnalyzerContract contract() const override { return {{}, {}, {kSeen.name}, {kDoubled.name}}; }
+  Status process(const MultiFrame& in, const BlackboardView& prior,
+                 BlackboardWriter& out) override {
+    auto seen = prior.get(kSeen);
+    if (!seen || !seen->present() || seen->stamp != in.stamp)
+      return make_error(ErrorCode::kInternal, "counter's result of this tick is not visible");
+    out.set(kDoubled, *seen->value * 2, in.stamp, 1.f);
+    return ok_status();
+  }
+};
+
+class ThrowingAnalyzer : public Analyzer {
+ public:
+  std::string_view name() const override { return "thrower"; }
+  AnalyzerContract contract() const override { return {}; }
+  Status process(const MultiFrame&, const BlackboardView&, BlackboardWriter&) override {
+    DS_CHECK_EQ(1, 2);
+    return ok_status();
+  }
+  void reset() override { resets++; }
+  int resets = 0;
+};
+
+TEST(Pipeline, LaterAnalysersSeeEarlierResultsOfTheSameTick) {
+  FakeSource src(2);
+  std::vector<std::unique_ptr<Analyzer>> a;
+  a.push_back(std::make_unique<CountingAnalyzer>());
+  a.push_back(std::make_unique<DoublingAnalyzer>());
+  PipelineOptions o;
+  o.sync.start = Timestamp::from_ns(0);
+  auto p = Pipeline::build(o, src.info(), std::move(a));
+  ASSERT_TRUE(p) << p.error().message;
+  int ticks = 0;
+  auto st = (*p)->run(src, [&](const MultiFrame& mf, const BlackboardView& v) -> Status {
+    ++ticks;
+    auto d = v.get(kDoubled);
+    EXPECT_TRUE(d && d->stamp == mf.stamp);
+    return ok_status();
+  });
+  ASSERT_TRUE(st) << st.error().message;
+  EXPECT_EQ(ticks, 50);
+  EXPECT_EQ((*p)->stats().analyzers[1].errors, 0u);
+  EXPECT_EQ((*p)->stats().analyzers[0].latency_ms.size(), 50u);
+}
+
+TEST(Pipeline, BuildRejectsBadWiring) {
+  FakeSource src(1);
+  {
+    std::vector<std::unique_ptr<Analyzer>> a;
+    a.push_back(std::make_unique<DoublingAnalyzer>());  // reads what nobody wrote before it
+    a.push_back(std::make_unique<CountingAnalyzer>());
+    auto p = Pipeline::build({}, src.info(), std::move(a));
+    ASSERT_FALSE(p);
+    EXPECT_NE(p.error().message.find("test.seen"), std::string::npos);
+  }
+  {
+    std::vector<std::unique_ptr<Analyzer>> a;
+    a.push_back(std::make_unique<CountingAnalyzer>());
+    SourceInfo no_skeleton;
+    auto p = Pipeline::build({}, no_skeleton, std::move(a));
+    ASSERT_FALSE(p);
+    EXPECT_NE(p.error().message.find("'skel'"), std::string::npos);
+  }
+  {
+    std::vector<std::unique_ptr<Analyzer>> a;
+    a.push_back(std::make_unique<CountingAnalyzer>());
+    a.push_back(std::make_unique<CountingAnalyzer>());
+    EXPECT_FALSE(Pipeline::build({}, src.info(), std::move(a)));
+  }
+}
+
+TEST(Pipeline, BrokenCheckInAnAnalyserResetsItAndTheRunGoesOn) {
+  FakeSource src(1);
+  std::vector<std::unique_ptr<Analyzer>> a;
+  a.push_back(std::make_unique<CountingAnalyzer>());
+  auto thrower = std::make_unique<ThrowingAnalyzer>();
+  ThrowingAnalyzer* t = thrower.get();
+  a.push_back(std::move(thrower));
+  auto p = Pipeline::build({}, src.info(), std::move(a));
+  ASSERT_TRUE(p);
+  ASSERT_TRUE((*p)->run(src, nullptr));
+  EXPECT_EQ((*p)->stats().analyzers[1].errors, (*p)->stats().ticks);
+  EXPECT_EQ(t->resets, static_cast<int>((*p)->stats().ticks));
+}
+
+TEST(Pipeline, LivePolicyPacedByStampsKeepsUpWithAFastAnalyser) {
+  FakeSource src(1);  // plays for one second of wall time
+  std::vector<std::unique_ptr<Analyzer>> a;
+  a.push_back(std::make_unique<CountingAnalyzer>());
+  PipelineOptions o;
+  o.sync.policy = SyncPolicy::kLatestWithinTolerance;
+  auto p = Pipeline::build(o, src.info(), std::move(a));
+  ASSERT_TRUE(p);
+  ASSERT_TRUE((*p)->run(src, nullptr));
+  EXPECT_EQ((*p)->stats().frames, 30u);
+  EXPECT_GE((*p)->stats().ticks, 20u);
+  EXPECT_LE((*p)->stats().ticks, 26u);
+}
+
+TEST(Pipeline, LivePolicyUnpacedTakesOnlyTheNewestFrames) {
+  FakeSource src(1);  // all frames arrive at once: live keeps the newest, counts the rest
+  std::vector<std::unique_ptr<Analyzer>> a;
+  a.push_back(std::make_unique<CountingAnalyzer>());
+  PipelineOptions o;
+  o.sync.policy = SyncPolicy::kLatestWithinTolerance;
+  o.pace_source = false;
+  auto p = Pipeline::build(o, src.info(), std::move(a));
+  ASSERT_TRUE(p);
+  ASSERT_TRUE((*p)->run(src, nullptr));
+  const auto& st = (*p)->stats();
+  EXPECT_EQ(st.frames, 30u);
+  EXPECT_GE(st.ticks, 1u);
+  EXPECT_LT(st.ticks, 25u);
+  const auto& skel = st.sync.streams.at("skel");
+  EXPECT_EQ(skel.delivered + skel.dropped + skel.unmatched, 30u - 0u) << "every frame accounted";
+}
+
+}  // namespace
+}  // namespace dreamsense

@@ -1,0 +1,138 @@
+#pragma once
+// Session format v1: a folder with session.yaml and one entry per stream. See docs/session_format.md.
+//
+//   session.yaml            manifest (format, format_version, streams, metadata, complete flag)
+//   <id>.mjpg + <id>.idx    colour stream "mjpeg": concatenated JPEG frames + index lines
+//                           "sequence,stamp_ns,offset,size" (crash-safe: append-only)
+//   <id>.avi/.mp4 + <id>.stamps  colour stream "video": any OpenCV-readable container +
+//                           one stamp_ns per line (read-only support, e.g. imported recordings)
+//   <id>.depth + <id>.idx   depth stream "raw16": concatenated little-endian uint16 frames (mm)
+//   <id>.jsonl              skeleton stream: one JSON object per frame
+//   <id>.wav                audio stream: multichannel PCM WAV; first-sample stamp in manifest
+//   calib/<id>.yaml         CameraModel files (dreamsense/core/camera_model.hpp)
+//   truth.jsonl             optional ground truth (docs/truth_format.md)
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dreamsense/core/sensor_frame.hpp"
+#include "dreamsense/core/source.hpp"
+#include "dreamsense/core/status.hpp"
+
+namespace dreamsense::sources {
+
+inline constexpr int kSessionFormatVersion = 1;
+inline constexpr const char* kManifestName = "session.yaml";
+
+struct StreamEntry {
+  SensorId id;
+  SensorKind kind = SensorKind::kColor;
+  std::string encoding;     // colour: "mjpeg" | "video"; depth: "raw16"; skeleton: "jsonl"; audio: "wav"
+  std::string file;         // data file, relative to the session folder
+  std::string index;        // index/stamps file (colour, depth), relative
+  double rate_hz = 0;       // nominal
+  int width = 0, height = 0;
+  int sample_rate = 0, channels = 0;
+  int64_t start_ns = 0;     // audio: stamp of the first sample
+  std::string calibration;  // relative path of the CameraModel file, may be empty
+  std::string frame;        // transform-tree frame name (defaults to id)
+};
+
+struct Participant {
+  int id = 0;
+  std::optional<std::string> gender;  // "male" | "female"
+  std::optional<double> age_months;
+};
+
+struct SessionManifest {
+  int format_version = kSessionFormatVersion;
+  std::string name;
+  int64_t clock_origin_unix_ns = 0;  // wall-clock time of session stamp 0 (for exports)
+  Participant participant;
+  std::string condition;             // "RET" | "SHT" | ""
+  std::string task;                  // e.g. "TT", "JA", "IM"
+  double frame_rate = 25.0;
+  bool complete = false;             // set by SessionWriter::close(); false after a crash
+  std::vector<StreamEntry> streams;
+  std::string truth;                 // "truth.jsonl" when the session has ground truth
+  std::map<std::string, std::string> metadata;  // free key/values (e.g. generator, seed)
+
+  const StreamEntry* find(const SensorId& id) const;
+};
+
+// Reads and validates session.yaml (unknown version, missing keys, duplicate ids: clear errors).
+Result<SessionManifest> read_manifest(const std::filesystem::path& session_dir);
+// Atomic: writes a temporary file and renames it.
+Status write_manifest(const std::filesystem::path& session_dir, const SessionManifest& manifest);
+// The checks read_manifest applies after parsing (version, required fields, duplicate ids,
+// encoding valid for the kind, relative file paths); errors name session.yaml and the key.
+Status check_manifest(const SessionManifest& manifest);
+// The default data/index file names of a stream ("<id>.mjpg" + "<id>.idx", "<id>.depth" +
+// "<id>.idx", "<id>.jsonl", "<id>.wav"); SessionWriter::create fills empty `file`/`index`
+// (and an empty `frame` with the id) with these.
+void fill_stream_defaults(StreamEntry& stream);
+
+struct SessionReaderOptions {
+  Duration audio_chunk = Duration::from_ms(40);  // audio is delivered in chunks of this length
+  // A session that was not closed (crash) is read up to its last complete record, with a warning.
+  // When false, an incomplete session is an error.
+  bool allow_incomplete = true;
+  std::vector<SensorId> only;  // if not empty, read only these streams
+  Status check() const;
+};
+
+// Replays a session as a Source: frames of all streams merged in stamp order (ties broken by
+// stream order in the manifest), so replay is deterministic.
+// open() validates everything it can before the first frame: files present and readable, index
+// consistent with data size (truncation), WAV rate/channels as declared, stamps increasing.
+// Errors name the file and the problem in one line.
+class SessionReader : public Source {
+ public:
+  static Result<std::unique_ptr<SessionReader>> open(const std::filesystem::path& session_dir,
+                                                     SessionReaderOptions options = {});
+  ~SessionReader() override;
+  Result<FramePtr> next() override;
+  SourceInfo info() const override;
+  const SessionManifest& manifest() const;
+  const std::filesystem::path& dir() const;
+
+ private:
+  SessionReader();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct SessionWriterOptions {
+  int jpeg_quality = 92;
+  Duration flush_interval = Duration::from_seconds(1.0);  // of session time
+  Status check() const;
+};
+
+// Writes a session. The manifest (with its declared streams) is written at create() with
+// complete: false; data files are append-only and flushed (fsync) at least every flush_interval
+// of session time, so after a kill everything up to the last flushed second reads back.
+class SessionWriter {
+ public:
+  static Result<std::unique_ptr<SessionWriter>> create(const std::filesystem::path& session_dir,
+                                                       SessionManifest manifest,
+                                                       SessionWriterOptions options = {});
+  ~SessionWriter();  // closes if still open (errors are logged)
+  // Routes by frame.sensor; the payload must match the declared stream kind and size.
+  Status write(const SensorFrame& frame);
+  Status flush();
+  // Flushes, closes every file and rewrites the manifest with complete: true.
+  Status close();
+  const std::filesystem::path& dir() const;
+
+ private:
+  SessionWriter();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dreamsense::sources

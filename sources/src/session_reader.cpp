@@ -1,0 +1,728 @@
+// SessionReader: validates a session folder up front, then replays its streams merged by stamp.
+
+#include <fcntl.h>
+#include <sndfile.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "dreamsense/core/log.hpp"
+#include "dreamsense/sources/session.hpp"
+
+namespace dreamsense::sources {
+namespace {
+
+// Streams whose first stamps are further apart than this are on different clocks.
+constexpr int64_t kMaxFirstStampSpreadNs = 10'000'000'000LL;
+
+std::string errno_text(int err) { return std::strerror(err); }
+
+struct Context {
+  std::filesystem::path dir;
+  const SessionManifest* manifest = nullptr;
+  SessionReaderOptions options;
+  // The session was not closed and allow_incomplete is set: tolerate a torn tail.
+  bool tolerate_tail = false;
+};
+
+tl::unexpected<Error> missing(const std::string& name) {
+  return make_error(ErrorCode::kNotFound, "{}: missing (declared in {})", name, kManifestName);
+}
+
+Status require_file(const Context& ctx, const std::string& name) {
+  std::error_code ec;
+  const auto p = ctx.dir / name;
+  if (!std::filesystem::exists(p, ec)) return missing(name);
+  if (!std::filesystem::is_regular_file(p, ec))
+    return make_error(ErrorCode::kCorruptData, "{}: not a regular file", name);
+  return ok_status();
+}
+
+Result<std::string> read_text(const Context& ctx, const std::string& name) {
+  if (auto st = require_file(ctx, name); !st) return tl::unexpected(st.error());
+  std::ifstream in(ctx.dir / name, std::ios::binary);
+  if (!in) return make_error(ErrorCode::kIoError, "{}: cannot read: {}", name, errno_text(errno));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct Line {
+  int number = 0;        // 1-based
+  std::string_view text;
+  bool terminated = true;  // ends with '\n'
+};
+
+std::vector<Line> split_lines(std::string_view text) {
+  std::vector<Line> lines;
+  size_t pos = 0;
+  int number = 1;
+  while (pos < text.size()) {
+    const size_t nl = text.find('\n', pos);
+    Line l;
+    l.number = number++;
+    if (nl == std::string_view::npos) {
+      l.text = text.substr(pos);
+      l.terminated = false;
+      pos = text.size();
+    } else {
+      l.text = text.substr(pos, nl - pos);
+      pos = nl + 1;
+    }
+    if (!l.text.empty() && l.text.back() == '\r') l.text.remove_suffix(1);
+    lines.push_back(l);
+  }
+  return lines;
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+std::optional<int64_t> parse_int(std::string_view s) {
+  s = trim(s);
+  int64_t v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || p != s.data() + s.size() || s.empty()) return std::nullopt;
+  return v;
+}
+
+std::string shorten(std::string_view s) {
+  return s.size() > 60 ? std::string(s.substr(0, 60)) + "..." : std::string(s);
+}
+
+int64_t sample_stamp(int64_t start_ns, int64_t sample, int64_t rate) {
+  return start_ns + (sample / rate) * 1000000000LL + (sample % rate) * 1000000000LL / rate;
+}
+
+// ----------------------------------------------------------------------------------------------
+
+class StreamReader {
+ public:
+  explicit StreamReader(const StreamEntry& e) : entry_(e) {}
+  virtual ~StreamReader() = default;
+  virtual Status open(const Context& ctx) = 0;
+  // Stamp of the next frame, or nullopt at the end.
+  virtual std::optional<int64_t> peek() const = 0;
+  // Reads (and decodes) the next frame; advances even when decoding fails.
+  virtual Result<FramePtr> read() = 0;
+  virtual std::optional<int64_t> first_stamp() const = 0;
+  virtual std::optional<int64_t> last_stamp() const = 0;
+  // The file named in clock errors.
+  virtual const std::string& main_file() const { return entry_.file; }
+  const StreamEntry& entry() const { return entry_; }
+
+ protected:
+  StreamEntry entry_;
+};
+
+// mjpeg (colour) and raw16 (depth): data file + index "sequence,stamp_ns,offset,size".
+class IndexedReader : public StreamReader {
+ public:
+  using StreamReader::StreamReader;
+  ~IndexedReader() override {
+    if (fd_ >= 0) ::close(fd_);
+  }
+
+  Status open(const Context& ctx) override {
+    if (auto st = require_file(ctx, entry_.file); !st) return st;
+    auto text = read_text(ctx, entry_.index);
+    if (!text) return tl::unexpected(text.error());
+    fd_ = ::open((ctx.dir / entry_.file).c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0)
+      return make_error(ErrorCode::kIoError, "{}: cannot read: {}", entry_.file,
+                        errno_text(errno));
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0)
+      return make_error(ErrorCode::kIoError, "{}: cannot stat: {}", entry_.file,
+                        errno_text(errno));
+    const uint64_t data_size = static_cast<uint64_t>(st.st_size);
+    const bool depth = entry_.encoding == "raw16";
+    const uint64_t depth_bytes = static_cast<uint64_t>(entry_.width) * entry_.height * 2;
+
+    const auto lines = split_lines(*text);
+    for (size_t i = 0; i < lines.size(); ++i) {
+      const Line& l = lines[i];
+      const std::string_view t = trim(l.text);
+      if (t.empty() || t.front() == '#') continue;
+      if (!l.terminated && ctx.tolerate_tail) {
+        log::warn("{}: line {}: ignoring the partial last line (incomplete session)",
+                  entry_.index, l.number);
+        break;
+      }
+      Entry e;
+      std::vector<std::string_view> fields;
+      for (size_t pos = 0;;) {
+        const size_t comma = t.find(',', pos);
+        fields.push_back(t.substr(pos, comma == std::string_view::npos ? t.npos : comma - pos));
+        if (comma == std::string_view::npos) break;
+        pos = comma + 1;
+      }
+      int64_t values[4] = {0, 0, 0, 0};
+      bool ok = fields.size() == 4;
+      for (size_t f = 0; ok && f < 4; ++f) {
+        auto v = parse_int(fields[f]);
+        ok = v.has_value();
+        if (ok) values[f] = *v;
+      }
+      if (!ok || values[0] < 0 || values[2] < 0 || values[3] <= 0)
+        return make_error(ErrorCode::kCorruptData,
+                          "{}: line {}: malformed index line '{}' (expected "
+                          "sequence,stamp_ns,offset,size)",
+                          entry_.index, l.number, shorten(t));
+      e.sequence = static_cast<uint64_t>(values[0]);
+      e.stamp_ns = values[1];
+      e.offset = static_cast<uint64_t>(values[2]);
+      e.size = static_cast<uint64_t>(values[3]);
+      if (!entries_.empty() && e.stamp_ns <= entries_.back().stamp_ns)
+        return make_error(ErrorCode::kCorruptData, "{}: line {}: stamp {} not after previous {}",
+                          entry_.index, l.number, e.stamp_ns, entries_.back().stamp_ns);
+      if (depth && e.size != depth_bytes)
+        return make_error(ErrorCode::kCorruptData,
+                          "{}: line {}: frame of {} bytes, a {}x{} raw16 frame has {}",
+                          entry_.index, l.number, e.size, entry_.width, entry_.height,
+                          depth_bytes);
+      entries_.push_back(e);
+    }
+
+    // Truncation: an index entry past the end of the data.
+    for (size_t k = 0; k < entries_.size(); ++k) {
+      const Entry& e = entries_[k];
+      if (e.offset + e.size <= data_size) continue;
+      if (ctx.tolerate_tail) {
+        log::warn("{}: incomplete session: index has {} frames, data holds {}; reading {}",
+                  entry_.file, entries_.size(), k, k);
+        entries_.resize(k);
+        break;
+      }
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: truncated: index has {} frames but data ends {} frame {}",
+                        entry_.file, entries_.size(), e.offset < data_size ? "inside" : "before",
+                        k);
+    }
+
+    // Cheap integrity check of every JPEG: SOI at the start, EOI at the end. In an incomplete
+    // session, broken frames at the very end (a torn tail) are dropped with a warning.
+    if (!depth) {
+      if (ctx.tolerate_tail) {
+        const size_t before = entries_.size();
+        while (!entries_.empty() && !jpeg_markers_ok(entries_.back())) entries_.pop_back();
+        if (entries_.size() != before)
+          log::warn("{}: incomplete session: dropping {} torn frame(s) at the end", entry_.file,
+                    before - entries_.size());
+      }
+      for (size_t k = 0; k < entries_.size(); ++k) {
+        const Entry& e = entries_[k];
+        if (!jpeg_markers_ok(e))
+          return make_error(ErrorCode::kCorruptData,
+                            "{}: corrupt: frame {} (offset {}, {} bytes) is not a complete JPEG "
+                            "(no SOI/EOI marker)",
+                            entry_.file, k, e.offset, e.size);
+      }
+    }
+    return ok_status();
+  }
+
+  std::optional<int64_t> peek() const override {
+    if (next_ >= entries_.size()) return std::nullopt;
+    return entries_[next_].stamp_ns;
+  }
+  std::optional<int64_t> first_stamp() const override {
+    if (entries_.empty()) return std::nullopt;
+    return entries_.front().stamp_ns;
+  }
+  std::optional<int64_t> last_stamp() const override {
+    if (entries_.empty()) return std::nullopt;
+    return entries_.back().stamp_ns;
+  }
+
+  Result<FramePtr> read() override {
+    const size_t k = next_++;
+    const Entry& e = entries_.at(k);
+    buffer_.resize(e.size);
+    size_t done = 0;
+    while (done < e.size) {
+      const ssize_t n = ::pread(fd_, buffer_.data() + done, e.size - done,
+                                static_cast<off_t>(e.offset + done));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0)
+        return make_error(ErrorCode::kCorruptData, "{}: frame {}: read failed: {}", entry_.file,
+                          k, n < 0 ? errno_text(errno) : "unexpected end of file");
+      done += static_cast<size_t>(n);
+    }
+    const Timestamp stamp = Timestamp::from_ns(e.stamp_ns);
+    if (entry_.encoding == "raw16") {
+      cv::Mat depth(entry_.height, entry_.width, CV_16UC1);
+      std::memcpy(depth.data, buffer_.data(), e.size);
+      if constexpr (std::endian::native == std::endian::big) {
+        auto* p = depth.ptr<uint16_t>();
+        for (size_t i = 0; i < depth.total(); ++i)
+          p[i] = static_cast<uint16_t>((p[i] >> 8) | (p[i] << 8));
+      }
+      DepthImage d;
+      d.depth_mm = depth;
+      return make_frame(entry_.id, stamp, e.sequence, std::move(d));
+    }
+    cv::Mat image;
+    try {
+      image = cv::imdecode(buffer_, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception&) {
+      image.release();
+    }
+    if (image.empty())
+      return make_error(ErrorCode::kCorruptData, "{}: corrupt: frame {} (offset {}) does not decode",
+                        entry_.file, k, e.offset);
+    if (image.cols != entry_.width || image.rows != entry_.height)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, k,
+                        image.cols, image.rows, entry_.width, entry_.height);
+    if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3))
+      return make_error(ErrorCode::kUnsupported, "{}: frame {}: unsupported image type {}",
+                        entry_.file, k, image.type());
+    ColorImage c;
+    c.image = image;
+    return make_frame(entry_.id, stamp, e.sequence, std::move(c));
+  }
+
+ private:
+  struct Entry {
+    uint64_t sequence = 0;
+    int64_t stamp_ns = 0;
+    uint64_t offset = 0, size = 0;
+  };
+  bool jpeg_markers_ok(const Entry& e) const {
+    unsigned char head[2] = {0, 0}, tail[2] = {0, 0};
+    return e.size >= 4 && ::pread(fd_, head, 2, static_cast<off_t>(e.offset)) == 2 &&
+           ::pread(fd_, tail, 2, static_cast<off_t>(e.offset + e.size - 2)) == 2 &&
+           head[0] == 0xFF && head[1] == 0xD8 && tail[0] == 0xFF && tail[1] == 0xD9;
+  }
+  int fd_ = -1;
+  std::vector<Entry> entries_;
+  size_t next_ = 0;
+  std::vector<uchar> buffer_;
+};
+
+// "video": any container OpenCV reads + one stamp_ns per line (read-only).
+class VideoReader : public StreamReader {
+ public:
+  using StreamReader::StreamReader;
+
+  Status open(const Context& ctx) override {
+    if (auto st = require_file(ctx, entry_.file); !st) return st;
+    auto text = read_text(ctx, entry_.index);
+    if (!text) return tl::unexpected(text.error());
+    for (const Line& l : split_lines(*text)) {
+      const std::string_view t = trim(l.text);
+      if (t.empty() || t.front() == '#') continue;
+      auto v = parse_int(t);
+      if (!v)
+        return make_error(ErrorCode::kCorruptData,
+                          "{}: line {}: malformed stamp '{}' (expected one stamp_ns per line)",
+                          entry_.index, l.number, shorten(t));
+      if (!stamps_.empty() && *v <= stamps_.back())
+        return make_error(ErrorCode::kCorruptData, "{}: line {}: stamp {} not after previous {}",
+                          entry_.index, l.number, *v, stamps_.back());
+      stamps_.push_back(*v);
+    }
+    try {
+      capture_.open((ctx.dir / entry_.file).string(), cv::CAP_ANY);
+    } catch (const cv::Exception&) {
+    }
+    if (!capture_.isOpened())
+      return make_error(ErrorCode::kCorruptData, "{}: unreadable: OpenCV cannot open the video",
+                        entry_.file);
+    const auto count = static_cast<int64_t>(capture_.get(cv::CAP_PROP_FRAME_COUNT));
+    if (count > 0 && count != static_cast<int64_t>(stamps_.size()))
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: {}: video has {} frames but {} has {} stamps", entry_.file,
+                        count < static_cast<int64_t>(stamps_.size()) ? "truncated" : "mismatch",
+                        count, entry_.index, stamps_.size());
+    const int w = static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_WIDTH));
+    const int h = static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_HEIGHT));
+    if (w > 0 && h > 0 && (w != entry_.width || h != entry_.height))
+      return make_error(ErrorCode::kCorruptData, "{}: video is {}x{}, session.yaml declares {}x{}",
+                        entry_.file, w, h, entry_.width, entry_.height);
+    return ok_status();
+  }
+  std::optional<int64_t> peek() const override {
+    if (next_ >= stamps_.size()) return std::nullopt;
+    return stamps_[next_];
+  }
+  std::optional<int64_t> first_stamp() const override {
+    if (stamps_.empty()) return std::nullopt;
+    return stamps_.front();
+  }
+  std::optional<int64_t> last_stamp() const override {
+    if (stamps_.empty()) return std::nullopt;
+    return stamps_.back();
+  }
+  Result<FramePtr> read() override {
+    const size_t k = next_++;
+    cv::Mat image;
+    bool ok = false;
+    try {
+      ok = capture_.read(image);
+    } catch (const cv::Exception&) {
+      ok = false;
+    }
+    if (!ok || image.empty())
+      return make_error(ErrorCode::kCorruptData, "{}: corrupt: frame {} cannot be read",
+                        entry_.file, k);
+    if (image.cols != entry_.width || image.rows != entry_.height)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, k,
+                        image.cols, image.rows, entry_.width, entry_.height);
+    ColorImage c;
+    c.image = image;
+    return make_frame(entry_.id, Timestamp::from_ns(stamps_[k]), k, std::move(c));
+  }
+
+ private:
+  std::vector<int64_t> stamps_;
+  cv::VideoCapture capture_;
+  size_t next_ = 0;
+};
+
+// Skeleton "jsonl": parsed completely at open (frames are small).
+class SkeletonReader : public StreamReader {
+ public:
+  using StreamReader::StreamReader;
+
+  Status open(const Context& ctx) override {
+    auto text = read_text(ctx, entry_.file);
+    if (!text) return tl::unexpected(text.error());
+    for (const Line& l : split_lines(*text)) {
+      if (trim(l.text).empty()) continue;
+      if (!l.terminated && ctx.tolerate_tail) {
+        log::warn("{}: line {}: ignoring the partial last line (incomplete session)", entry_.file,
+                  l.number);
+        break;
+      }
+      auto frame = parse_line(l);
+      if (!frame) return tl::unexpected(frame.error());
+      if (!frames_.empty() && (*frame)->stamp <= frames_.back()->stamp)
+        return make_error(ErrorCode::kCorruptData, "{}: line {}: stamp {} not after previous {}",
+                          entry_.file, l.number, (*frame)->stamp.ns(),
+                          frames_.back()->stamp.ns());
+      frames_.push_back(std::move(*frame));
+    }
+    return ok_status();
+  }
+  std::optional<int64_t> peek() const override {
+    if (next_ >= frames_.size()) return std::nullopt;
+    return frames_[next_]->stamp.ns();
+  }
+  std::optional<int64_t> first_stamp() const override {
+    if (frames_.empty()) return std::nullopt;
+    return frames_.front()->stamp.ns();
+  }
+  std::optional<int64_t> last_stamp() const override {
+    if (frames_.empty()) return std::nullopt;
+    return frames_.back()->stamp.ns();
+  }
+  Result<FramePtr> read() override { return frames_.at(next_++); }
+
+ private:
+  Result<FramePtr> parse_line(const Line& l) const {
+    auto bad = [&](const std::string& what) {
+      return make_error(ErrorCode::kCorruptData, "{}: line {}: {}", entry_.file, l.number, what);
+    };
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(l.text);
+    } catch (const nlohmann::json::exception& e) {
+      return bad(fmt::format("malformed JSON: {}", e.what()));
+    }
+    if (!j.is_object()) return bad("expected a JSON object");
+    if (!j.contains("stamp_ns") || !j["stamp_ns"].is_number_integer())
+      return bad("missing integer 'stamp_ns'");
+    const int64_t stamp = j["stamp_ns"].get<int64_t>();
+    uint64_t sequence = frames_.size();
+    if (j.contains("sequence")) {
+      if (!j["sequence"].is_number_unsigned()) return bad("'sequence' is not a non-negative integer");
+      sequence = j["sequence"].get<uint64_t>();
+    }
+    Skeleton sk;
+    if (j.contains("bodies")) {
+      const auto& bodies = j["bodies"];
+      if (!bodies.is_array()) return bad("'bodies' is not a list");
+      for (size_t b = 0; b < bodies.size(); ++b) {
+        const auto& jb = bodies[b];
+        if (!jb.is_object()) return bad(fmt::format("bodies[{}] is not an object", b));
+        SkeletonBody body;
+        body.body_id = static_cast<int>(b);
+        if (jb.contains("id")) {
+          if (!jb["id"].is_number_integer()) return bad(fmt::format("bodies[{}].id is not an integer", b));
+          body.body_id = jb["id"].get<int>();
+        }
+        if (jb.contains("joints")) {
+          const auto& joints = jb["joints"];
+          if (!joints.is_object()) return bad(fmt::format("bodies[{}].joints is not an object", b));
+          for (const auto& [name, v] : joints.items()) {
+            auto id = joint_from_name(name);
+            if (!id) return bad(fmt::format("bodies[{}]: unknown joint '{}'", b, name));
+            if (!v.is_array() || (v.size() != 3 && v.size() != 4) ||
+                !std::all_of(v.begin(), v.end(), [](const auto& x) { return x.is_number(); }))
+              return bad(fmt::format("bodies[{}].joints.{}: expected [x, y, z, confidence]", b,
+                                     name));
+            JointObservation& o = body.joint(*id);
+            o.position_m = {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+            o.confidence = v.size() == 4 ? v[3].get<float>() : 1.f;
+          }
+        }
+        sk.bodies.push_back(body);
+      }
+    }
+    return make_frame(entry_.id, Timestamp::from_ns(stamp), sequence, std::move(sk));
+  }
+
+  std::vector<FramePtr> frames_;
+  size_t next_ = 0;
+};
+
+// Audio "wav": delivered in chunks of options.audio_chunk.
+class WavReader : public StreamReader {
+ public:
+  using StreamReader::StreamReader;
+  ~WavReader() override {
+    if (file_ != nullptr) sf_close(file_);
+  }
+
+  Status open(const Context& ctx) override {
+    if (auto st = require_file(ctx, entry_.file); !st) return st;
+    SF_INFO info{};
+    file_ = sf_open((ctx.dir / entry_.file).c_str(), SFM_READ, &info);
+    if (file_ == nullptr)
+      return make_error(ErrorCode::kCorruptData, "{}: unreadable: {}", entry_.file,
+                        sf_strerror(nullptr));
+    if (info.samplerate != entry_.sample_rate)
+      return make_error(ErrorCode::kCorruptData, "{}: sample rate {} Hz, {} declares {} Hz",
+                        entry_.file, info.samplerate, kManifestName, entry_.sample_rate);
+    if (info.channels != entry_.channels)
+      return make_error(ErrorCode::kCorruptData, "{}: {} channels, {} declares {}", entry_.file,
+                        info.channels, kManifestName, entry_.channels);
+    pcm16_ = (info.format & SF_FORMAT_SUBMASK) == SF_FORMAT_PCM_16;
+    if (!pcm16_) sf_command(file_, SFC_SET_NORM_FLOAT, nullptr, SF_TRUE);
+    total_ = info.frames;
+    chunk_ = std::max<int64_t>(
+        1, ctx.options.audio_chunk.ns() * entry_.sample_rate / 1000000000LL);
+    return ok_status();
+  }
+  std::optional<int64_t> peek() const override {
+    if (pos_ >= total_) return std::nullopt;
+    return stamp_of(pos_);
+  }
+  std::optional<int64_t> first_stamp() const override {
+    if (total_ <= 0) return std::nullopt;
+    return stamp_of(0);
+  }
+  std::optional<int64_t> last_stamp() const override {
+    if (total_ <= 0) return std::nullopt;
+    return stamp_of((total_ - 1) / chunk_ * chunk_);
+  }
+  Result<FramePtr> read() override {
+    const int64_t want = std::min(chunk_, total_ - pos_);
+    const int ch = entry_.channels;
+    AudioChunk a;
+    a.sample_rate = entry_.sample_rate;
+    a.channels = ch;
+    a.samples.resize(static_cast<size_t>(want * ch));
+    sf_count_t got = 0;
+    if (pcm16_) {
+      shorts_.resize(a.samples.size());
+      got = sf_readf_short(file_, shorts_.data(), want);
+      for (size_t i = 0; i < static_cast<size_t>(std::max<sf_count_t>(got, 0) * ch); ++i)
+        a.samples[i] = std::max(-1.f, static_cast<float>(shorts_[i]) / 32767.f);
+    } else {
+      got = sf_readf_float(file_, a.samples.data(), want);
+    }
+    const int64_t first = pos_;
+    const uint64_t sequence = static_cast<uint64_t>(pos_ / chunk_);
+    if (got <= 0) {
+      pos_ = total_;
+      return make_error(ErrorCode::kCorruptData, "{}: corrupt: read failed at sample {}: {}",
+                        entry_.file, first, sf_strerror(file_));
+    }
+    if (got < want) {  // the header claimed more than the file holds
+      a.samples.resize(static_cast<size_t>(got * ch));
+      total_ = pos_ + got;
+    }
+    pos_ += got;
+    return make_frame(entry_.id, Timestamp::from_ns(stamp_of(first)), sequence, std::move(a));
+  }
+
+ private:
+  int64_t stamp_of(int64_t sample) const {
+    return sample_stamp(entry_.start_ns, sample, entry_.sample_rate);
+  }
+  SNDFILE* file_ = nullptr;
+  bool pcm16_ = true;
+  int64_t total_ = 0, pos_ = 0, chunk_ = 1;
+  std::vector<int16_t> shorts_;
+};
+
+}  // namespace
+
+// ----------------------------------------------------------------------------------------------
+
+Status SessionReaderOptions::check() const {
+  if (audio_chunk.ns() <= 0)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "SessionReaderOptions: audio_chunk must be > 0, got {} s",
+                      audio_chunk.seconds());
+  return ok_status();
+}
+
+struct SessionReader::Impl {
+  std::filesystem::path dir;
+  SessionManifest manifest;
+  SessionReaderOptions options;
+  std::vector<std::unique_ptr<StreamReader>> streams;  // manifest order
+  SourceInfo info;
+};
+
+SessionReader::SessionReader() : impl_(std::make_unique<Impl>()) {}
+SessionReader::~SessionReader() = default;
+
+const SessionManifest& SessionReader::manifest() const { return impl_->manifest; }
+const std::filesystem::path& SessionReader::dir() const { return impl_->dir; }
+SourceInfo SessionReader::info() const { return impl_->info; }
+
+Result<std::unique_ptr<SessionReader>> SessionReader::open(const std::filesystem::path& session_dir,
+                                                           SessionReaderOptions options) {
+  if (auto st = options.check(); !st) return tl::unexpected(st.error());
+  auto manifest = read_manifest(session_dir);
+  if (!manifest) return tl::unexpected(manifest.error());
+
+  std::unique_ptr<SessionReader> reader(new SessionReader());
+  Impl& impl = *reader->impl_;
+  impl.dir = session_dir;
+  impl.manifest = std::move(*manifest);
+  impl.options = options;
+  const SessionManifest& m = impl.manifest;
+
+  for (const auto& id : options.only) {
+    if (m.find(id) != nullptr) continue;
+    std::string ids;
+    for (const auto& s : m.streams) ids += (ids.empty() ? "" : ", ") + s.id;
+    return make_error(ErrorCode::kNotFound, "{}: no stream '{}' (streams: {})", kManifestName, id,
+                      ids);
+  }
+
+  Context ctx;
+  ctx.dir = session_dir;
+  ctx.manifest = &m;
+  ctx.options = options;
+  if (!m.complete) {
+    if (!options.allow_incomplete)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: incomplete session (complete: false: the recorder was not closed, "
+                        "e.g. it crashed); allow_incomplete is off",
+                        kManifestName);
+    log::warn("{}: incomplete session (complete: false); reading up to the last complete record",
+              (session_dir / kManifestName).string());
+    ctx.tolerate_tail = true;
+  }
+  if (!m.truth.empty() && !std::filesystem::exists(session_dir / m.truth))
+    log::warn("{}: declared in {} but missing", m.truth, kManifestName);
+
+  for (const auto& s : m.streams) {
+    if (!options.only.empty() &&
+        std::find(options.only.begin(), options.only.end(), s.id) == options.only.end())
+      continue;
+    if (!s.calibration.empty()) {
+      if (auto st = require_file(ctx, s.calibration); !st) return tl::unexpected(st.error());
+    }
+    std::unique_ptr<StreamReader> r;
+    if (s.encoding == "mjpeg" || s.encoding == "raw16") r = std::make_unique<IndexedReader>(s);
+    else if (s.encoding == "video") r = std::make_unique<VideoReader>(s);
+    else if (s.encoding == "jsonl") r = std::make_unique<SkeletonReader>(s);
+    else if (s.encoding == "wav") r = std::make_unique<WavReader>(s);
+    else
+      return make_error(ErrorCode::kUnsupported, "{}: stream {}: unknown encoding '{}'",
+                        kManifestName, s.id, s.encoding);
+    if (auto st = r->open(ctx); !st) return tl::unexpected(st.error());
+    impl.streams.push_back(std::move(r));
+  }
+
+  // Clock check: every stream's first stamp must be near the others'.
+  std::vector<int64_t> firsts;
+  for (const auto& r : impl.streams)
+    if (auto f = r->first_stamp()) firsts.push_back(*f);
+  if (firsts.size() >= 2) {
+    std::vector<int64_t> sorted = firsts;
+    std::sort(sorted.begin(), sorted.end());
+    const int64_t median = sorted[(sorted.size() - 1) / 2];
+    for (const auto& r : impl.streams) {
+      auto f = r->first_stamp();
+      if (!f || std::llabs(*f - median) <= kMaxFirstStampSpreadNs) continue;
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: clock mismatch: first stamp {} is {:.1f} s from the other streams' "
+                        "({}); streams must share the session clock",
+                        r->main_file(), Timestamp::from_ns(*f).to_string(),
+                        static_cast<double>(*f - median) * 1e-9,
+                        Timestamp::from_ns(median).to_string());
+    }
+  }
+
+  SourceInfo& info = impl.info;
+  info.live = false;
+  std::optional<int64_t> start, end;
+  for (const auto& r : impl.streams) {
+    const StreamEntry& s = r->entry();
+    SensorDescription d;
+    d.id = s.id;
+    d.kind = s.kind;
+    d.rate_hz = s.kind == SensorKind::kAudio ? 1e9 / static_cast<double>(options.audio_chunk.ns())
+                                             : (s.rate_hz > 0 ? s.rate_hz : m.frame_rate);
+    d.width = s.width;
+    d.height = s.height;
+    d.sample_rate = s.sample_rate;
+    d.channels = s.channels;
+    if (!s.calibration.empty())
+      d.calibration = std::filesystem::absolute(session_dir / s.calibration).lexically_normal();
+    d.frame = s.frame.empty() ? s.id : s.frame;
+    info.sensors.push_back(std::move(d));
+    if (auto f = r->first_stamp()) start = start ? std::min(*start, *f) : *f;
+    if (auto l = r->last_stamp()) end = end ? std::max(*end, *l) : *l;
+  }
+  if (start) info.start = Timestamp::from_ns(*start);
+  if (end) info.end = Timestamp::from_ns(*end);
+  return reader;
+}
+
+Result<FramePtr> SessionReader::next() {
+  StreamReader* best = nullptr;
+  int64_t best_stamp = 0;
+  for (auto& r : impl_->streams) {
+    auto s = r->peek();
+    if (!s) continue;
+    if (best == nullptr || *s < best_stamp) {  // ties: the earlier stream in the manifest
+      best = r.get();
+      best_stamp = *s;
+    }
+  }
+  if (best == nullptr)
+    return make_error(ErrorCode::kEndOfStream, "{}: end of session", impl_->dir.string());
+  return best->read();
+}
+
+}  // namespace dreamsense::sources
