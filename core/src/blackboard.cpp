@@ -8,13 +8,13 @@ const detail::Slot* BlackboardView::find(std::string_view name, std::type_index 
   auto it = state_->slots.find(name);
   if (it == state_->slots.end()) return nullptr;
   if (it->second->type != type)
-    throw CheckFailure(fmt::format("blackboard key '{}' read as {} but holds {}", name,
-                                   type.name(), it->second->type.name()));
+    throw CheckFailure(fmt::format("blackboard key '{}' read as {} but holds {}", name, type.name(),
+                                   it->second->type.name()));
   return it->second.get();
 }
 
-void BlackboardWriter::put(const char* key, std::type_index type,
-                           std::shared_ptr<const void> value, Timestamp stamp, float confidence) {
+void BlackboardWriter::put(const char* key, std::type_index type, std::shared_ptr<const void> value,
+                           Timestamp stamp, float confidence) {
   DS_CHECK(key != nullptr);
   DS_CHECK(stamp.is_set());
   writes_.push_back(Write{key, type, detail::Record{std::move(value), stamp, confidence, source_}});
@@ -22,7 +22,8 @@ void BlackboardWriter::put(const char* key, std::type_index type,
 
 Status BlackboardOptions::check() const {
   if (history_length < 1)
-    return make_error(ErrorCode::kInvalidArgument, "BlackboardOptions: history_length must be >= 1");
+    return make_error(ErrorCode::kInvalidArgument,
+                      "BlackboardOptions: history_length must be >= 1");
   return ok_status();
 }
 

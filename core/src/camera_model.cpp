@@ -1,8 +1,8 @@
 #include "dreamsense/core/camera_model.hpp"
 
-#include <cmath>
-
 #include <opencv2/calib3d.hpp>
+
+#include <cmath>
 
 namespace dreamsense {
 
@@ -28,7 +28,8 @@ Status CameraModel::check() const {
   const cv::Matx33d should_be_identity = R * R.t();
   if (cv::norm(should_be_identity - cv::Matx33d::eye()) > 1e-6 || cv::determinant(R) < 0)
     bad += " R is not a rotation;";
-  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "camera model '{}':{}", frame, bad);
+  if (!bad.empty())
+    return make_error(ErrorCode::kInvalidArgument, "camera model '{}':{}", frame, bad);
   return ok_status();
 }
 

@@ -1,5 +1,7 @@
 #include "dreamsense/core/pipeline.hpp"
 
+#include "dreamsense/core/log.hpp"
+
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -7,8 +9,6 @@
 #include <mutex>
 #include <set>
 #include <thread>
-
-#include "dreamsense/core/log.hpp"
 
 namespace dreamsense {
 namespace {
@@ -29,11 +29,13 @@ Pipeline::Pipeline(PipelineOptions options, SourceInfo info,
       info_(std::move(info)),
       analyzers_(std::move(analyzers)),
       blackboard_(options_.blackboard) {
-  for (const auto& a : analyzers_) stats_.analyzers.push_back(AnalyzerStats{std::string(a->name())});
+  for (const auto& a : analyzers_)
+    stats_.analyzers.push_back(AnalyzerStats{std::string(a->name())});
 }
 
-Result<std::unique_ptr<Pipeline>> Pipeline::build(PipelineOptions options, SourceInfo source_info,
-                                                  std::vector<std::unique_ptr<Analyzer>> analyzers) {
+Result<std::unique_ptr<Pipeline>> Pipeline::build(
+    PipelineOptions options, SourceInfo source_info,
+    std::vector<std::unique_ptr<Analyzer>> analyzers) {
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
   std::set<std::string> names, written;
   for (const auto& a : analyzers) {
@@ -44,18 +46,19 @@ Result<std::unique_ptr<Pipeline>> Pipeline::build(PipelineOptions options, Sourc
     const AnalyzerContract c = a->contract();
     for (const auto& in : c.required_inputs)
       if (source_info.find(in) == nullptr)
-        return make_error(ErrorCode::kFailedPrecondition,
-                          "pipeline: analyser '{}' needs sensor '{}', which the source does not have",
-                          name, in);
+        return make_error(
+            ErrorCode::kFailedPrecondition,
+            "pipeline: analyser '{}' needs sensor '{}', which the source does not have", name, in);
     for (const auto& key : c.reads)
       if (written.count(key) == 0)
         return make_error(ErrorCode::kFailedPrecondition,
-                          "pipeline: analyser '{}' reads '{}', which no earlier analyser writes", name,
-                          key);
+                          "pipeline: analyser '{}' reads '{}', which no earlier analyser writes",
+                          name, key);
     for (const auto& key : c.writes)
       if (!written.insert(key).second)
         return make_error(ErrorCode::kFailedPrecondition,
-                          "pipeline: blackboard key '{}' has two writers (second: '{}')", key, name);
+                          "pipeline: blackboard key '{}' has two writers (second: '{}')", key,
+                          name);
   }
   return std::unique_ptr<Pipeline>(
       new Pipeline(std::move(options), std::move(source_info), std::move(analyzers)));
@@ -152,7 +155,8 @@ Status Pipeline::run_settled(Source& source, const TickCallback& on_tick,
   sync.end_all();
   if (auto st = drain(); !st) return st;
   stats_.sync = sync.stats();
-  if (first.is_set()) stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
+  if (first.is_set())
+    stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
   return ok_status();
 }
 
@@ -191,11 +195,12 @@ Status Pipeline::run_live(Source& source, const TickCallback& on_tick,
           wall_origin = Clock::now();
         }
         if (options_.pace_source) {
-          const auto due = wall_origin + std::chrono::nanoseconds(((*r)->stamp - media_origin).ns());
+          const auto due =
+              wall_origin + std::chrono::nanoseconds(((*r)->stamp - media_origin).ns());
           lock.unlock();
           while (!stop && Clock::now() < due)
-            std::this_thread::sleep_for(std::min<Clock::duration>(due - Clock::now(),
-                                                                  std::chrono::milliseconds(20)));
+            std::this_thread::sleep_for(
+                std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(20)));
           lock.lock();
         }
         queue.push_back(*r);
@@ -219,16 +224,19 @@ Status Pipeline::run_live(Source& source, const TickCallback& on_tick,
     for (auto& f : batch) {
       stats_.frames++;
       newest_seen = std::max(newest_seen, f->stamp);
-      if (auto st = sync.push(f); !st) { result = st; break; }
+      if (auto st = sync.push(f); !st) {
+        result = st;
+        break;
+      }
     }
     if (!result || done) break;
     // Media "now": paced → wall clock mapped onto the session clock; else the newest stamp seen.
     Timestamp now = newest_seen;
     if (options_.pace_source && media_origin.is_set()) {
       std::lock_guard<std::mutex> lock(mutex);
-      now = media_origin + Duration::from_ns(
-                               std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                   Clock::now() - wall_origin).count());
+      now = media_origin + Duration::from_ns(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                 Clock::now() - wall_origin)
+                                                 .count());
     }
     for (const MultiFrame& mf : sync.poll(now)) {
       if (!first.is_set()) first = mf.stamp;
@@ -243,7 +251,8 @@ Status Pipeline::run_live(Source& source, const TickCallback& on_tick,
   reader.join();
   if (result && !reader_status) result = reader_status;
   stats_.sync = sync.stats();
-  if (first.is_set()) stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
+  if (first.is_set())
+    stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
   return result;
 }
 

@@ -5,25 +5,29 @@
 namespace dreamsense {
 namespace {
 constexpr std::array<std::string_view, kJointCount> kJointNames = {
-    "shoulder_center", "head",        "shoulder_left",  "elbow_left",  "wrist_left",
-    "hand_left",       "shoulder_right", "elbow_right", "wrist_right", "hand_right",
-    "spine",           "hip_center",  "hip_left",       "knee_left",   "ankle_left",
-    "foot_left",       "hip_right",   "knee_right",     "ankle_right", "foot_right"};
+    "shoulder_center", "head",           "shoulder_left", "elbow_left",  "wrist_left",
+    "hand_left",       "shoulder_right", "elbow_right",   "wrist_right", "hand_right",
+    "spine",           "hip_center",     "hip_left",      "knee_left",   "ankle_left",
+    "foot_left",       "hip_right",      "knee_right",    "ankle_right", "foot_right"};
 }  // namespace
 
 const char* to_string(SensorKind kind) {
   switch (kind) {
-    case SensorKind::kColor: return "color";
-    case SensorKind::kDepth: return "depth";
-    case SensorKind::kSkeleton: return "skeleton";
-    case SensorKind::kAudio: return "audio";
+    case SensorKind::kColor:
+      return "color";
+    case SensorKind::kDepth:
+      return "depth";
+    case SensorKind::kSkeleton:
+      return "skeleton";
+    case SensorKind::kAudio:
+      return "audio";
   }
   return "unknown";
 }
 
 std::optional<SensorKind> sensor_kind_from_string(std::string_view s) {
-  for (SensorKind k : {SensorKind::kColor, SensorKind::kDepth, SensorKind::kSkeleton,
-                       SensorKind::kAudio})
+  for (SensorKind k :
+       {SensorKind::kColor, SensorKind::kDepth, SensorKind::kSkeleton, SensorKind::kAudio})
     if (s == to_string(k)) return k;
   return std::nullopt;
 }

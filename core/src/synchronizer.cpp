@@ -56,8 +56,8 @@ Status Synchronizer::push(FramePtr frame) {
   if (options_.policy == SyncPolicy::kSettled && next_tick_ > 0) {
     // A frame that belongs before an emitted tick would make the replay order-dependent.
     const Timestamp last_emitted = tick_time(next_tick_ - 1);
-    const Timestamp limit = s.spec.mode == StreamMode::kFrame ? last_emitted - options_.tolerance
-                                                              : last_emitted;
+    const Timestamp limit =
+        s.spec.mode == StreamMode::kFrame ? last_emitted - options_.tolerance : last_emitted;
     if (frame->stamp < limit)
       return make_error(ErrorCode::kCorruptData,
                         "{}: frame at {} arrived after tick {} was settled (stamps out of order "
@@ -102,8 +102,7 @@ void Synchronizer::evict_before(Stream& s, Timestamp t) {
   }
 }
 
-int Synchronizer::best_match(const Stream& s, Timestamp t, Timestamp not_after,
-                             bool newest) const {
+int Synchronizer::best_match(const Stream& s, Timestamp t, Timestamp not_after, bool newest) const {
   int best = -1;
   Duration best_dist;
   for (size_t i = 0; i < s.buffer.size(); ++i) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <map>
 #include <mutex>
 #include <numeric>
 #include <random>
@@ -117,22 +118,12 @@ double sabine_reflection_coefficient(const cv::Vec3d& size_m, double rt60_s) {
   return std::sqrt(1.0 - alpha);
 }
 
-Result<Channels> room_impulse_responses(const RoomOptions& options,
-                                        const AcousticPlacement& placement) {
-  if (auto st = options.check(); !st) return tl::unexpected(st.error());
-  const cv::Vec3d& L = options.size_m;
-  if (!inside(placement.source_m, L))
-    return make_error(ErrorCode::kInvalidArgument, "source ({}, {}, {}) m is outside the room",
-                      placement.source_m[0], placement.source_m[1], placement.source_m[2]);
-  if (placement.mics_m.empty())
-    return make_error(ErrorCode::kInvalidArgument, "no microphones in the placement");
-  for (const auto& m : placement.mics_m)
-    if (!inside(m, L))
-      return make_error(ErrorCode::kInvalidArgument, "microphone ({}, {}, {}) m is outside the room",
-                        m[0], m[1], m[2]);
+namespace {
 
+Channels image_source_rirs(const RoomOptions& options, const AcousticPlacement& placement,
+                           double beta) {
+  const cv::Vec3d& L = options.size_m;
   const double fs = options.sample_rate_hz, c = options.speed_of_sound_m_s;
-  const double beta = sabine_reflection_coefficient(L, options.rt60_s);
   const double diagonal = cv::norm(L);
   double max_dist = options.max_image_distance_m > 0 ? options.max_image_distance_m
                                                      : std::max(c * options.rt60_s, 1.5 * diagonal);
@@ -159,7 +150,8 @@ Result<Channels> room_impulse_responses(const RoomOptions& options,
 
   Channels rirs(placement.mics_m.size(), std::vector<double>(length, 0.0));
   std::array<int, 3> N{};
-  for (int d = 0; d < 3; ++d) N[d] = anechoic ? 0 : static_cast<int>(std::ceil(max_dist / (2 * L[d]))) + 1;
+  for (int d = 0; d < 3; ++d)
+    N[d] = anechoic ? 0 : static_cast<int>(std::ceil(max_dist / (2 * L[d]))) + 1;
   const cv::Vec3d& s = placement.source_m;
 
   for (size_t m = 0; m < placement.mics_m.size(); ++m) {
@@ -197,6 +189,62 @@ Result<Channels> room_impulse_responses(const RoomOptions& options,
       }
   }
   return rirs;
+}
+
+}  // namespace
+
+double matched_reflection_coefficient(const RoomOptions& options) {
+  const cv::Vec3d& L = options.size_m;
+  if (options.rt60_s <= 0) return 0.0;
+  using Key = std::array<double, 6>;
+  static std::mutex cache_mutex;
+  static std::map<Key, double> cache;
+  const Key key{
+      L[0], L[1], L[2], options.rt60_s, options.sample_rate_hz, options.speed_of_sound_m_s};
+  {
+    std::lock_guard lock(cache_mutex);
+    if (auto it = cache.find(key); it != cache.end()) return it->second;
+  }
+  // Canonical placement away from walls and symmetry planes.
+  const AcousticPlacement pl{cv::Vec3d(0.31 * L[0], 0.37 * L[1], 0.41 * L[2]),
+                             {cv::Vec3d(0.67 * L[0], 0.61 * L[1], 0.56 * L[2])}};
+  RoomOptions o = options;
+  o.max_order = -1;
+  o.max_image_distance_m = 1.3 * options.speed_of_sound_m_s * options.rt60_s;
+  o.sinc_half_width = 4;
+  const double V = L[0] * L[1] * L[2];
+  const double S = 2 * (L[0] * L[1] + L[0] * L[2] + L[1] * L[2]);
+  double alpha = std::clamp(0.161 * V / (S * options.rt60_s), 1e-4, 0.99);  // Sabine start
+  for (int it = 0; it < 8; ++it) {
+    const Channels h = image_source_rirs(o, pl, std::sqrt(1 - alpha));
+    const auto t30 = schroeder_rt60(h.front(), o.sample_rate_hz, -5.0, -35.0);
+    if (!t30) break;
+    const double ratio = *t30 / options.rt60_s;
+    if (std::abs(ratio - 1) < 0.01) break;
+    alpha = std::clamp(alpha * ratio, 1e-4, 0.99);  // T60 ~ 1/alpha
+  }
+  const double beta = std::sqrt(1 - alpha);
+  std::lock_guard lock(cache_mutex);
+  cache[key] = beta;
+  return beta;
+}
+
+Result<Channels> room_impulse_responses(const RoomOptions& options,
+                                        const AcousticPlacement& placement) {
+  if (auto st = options.check(); !st) return tl::unexpected(st.error());
+  const cv::Vec3d& L = options.size_m;
+  if (!inside(placement.source_m, L))
+    return make_error(ErrorCode::kInvalidArgument, "source ({}, {}, {}) m is outside the room",
+                      placement.source_m[0], placement.source_m[1], placement.source_m[2]);
+  if (placement.mics_m.empty())
+    return make_error(ErrorCode::kInvalidArgument, "no microphones in the placement");
+  for (const auto& m : placement.mics_m)
+    if (!inside(m, L))
+      return make_error(ErrorCode::kInvalidArgument,
+                        "microphone ({}, {}, {}) m is outside the room", m[0], m[1], m[2]);
+  const double beta = options.match_rt60 ? matched_reflection_coefficient(options)
+                                         : sabine_reflection_coefficient(L, options.rt60_s);
+  return image_source_rirs(options, placement, beta);
 }
 
 std::vector<double> fft_convolve(std::span<const double> a, std::span<const double> b) {

@@ -11,7 +11,8 @@ constexpr double kNear = 0.02;  // metres
 
 struct Pinhole {
   double fx, fy, cx, cy;
-  explicit Pinhole(const CameraModel& c) : fx(c.K(0, 0)), fy(c.K(1, 1)), cx(c.K(0, 2)), cy(c.K(1, 2)) {}
+  explicit Pinhole(const CameraModel& c)
+      : fx(c.K(0, 0)), fy(c.K(1, 1)), cx(c.K(0, 2)), cy(c.K(1, 2)) {}
   cv::Vec3d ray(int u, int v) const { return {(u - cx) / fx, (v - cy) / fy, 1.0}; }
 };
 
@@ -102,61 +103,124 @@ void render_capsule(const CameraModel& cam, const Pinhole& ph, const Capsule& c,
   const double baba = ba.dot(ba), baoa = ba.dot(oa), oaoa = oa.dot(oa);
   const double rr = c.radius * c.radius;
   const cv::Vec3d light_cam = cam.R * light.direction;
-  for_pixels(r, [&](int u, int v) {
-    cv::Vec3d rd = ph.ray(u, v);
-    const double inv = 1.0 / cv::norm(rd);
-    rd *= inv;
-    const double bard = ba.dot(rd), rdoa = rd.dot(oa);
-    const double qa = baba - bard * bard;
-    double qb = baba * rdoa - baoa * bard;
-    double qc = baba * oaoa - baoa * baoa - rr * baba;
-    double h = qb * qb - qa * qc;
-    if (h < 0) return;
-    double dist = -1;
-    if (qa > 1e-12) {
-      const double tt = (-qb - std::sqrt(h)) / qa;
-      const double y = baoa + tt * bard;
-      if (y > 0 && y < baba) dist = tt;
-    }
-    if (dist < 0) {
-      // End caps: nearest of the two spheres.
-      for (const cv::Vec3d& centre : {pa, pb}) {
-        const cv::Vec3d oc = -centre;
-        const double b2 = rd.dot(oc), c2 = oc.dot(oc) - rr;
-        const double h2 = b2 * b2 - c2;
-        if (h2 <= 0) continue;
-        const double tt = -b2 - std::sqrt(h2);
-        if (tt > 0 && (dist < 0 || tt < dist)) dist = tt;
+  // Cheap 2-D early out: distance from the pixel to the projected axis segment. The projected
+  // outline of the capsule lies within a (conservative) pixel radius of that segment.
+  const bool early_out = pa[2] - c.radius > kNear && pb[2] - c.radius > kNear;
+  cv::Point2d a2, b2;
+  double radius_px = 0;
+  if (early_out) {
+    a2 = {ph.fx * pa[0] / pa[2] + ph.cx, ph.fy * pa[1] / pa[2] + ph.cy};
+    b2 = {ph.fx * pb[0] / pb[2] + ph.cx, ph.fy * pb[1] / pb[2] + ph.cy};
+    radius_px = 1.5 * std::max(ph.fx, ph.fy) * c.radius / (std::min(pa[2], pb[2]) - c.radius) + 2;
+  }
+  // Row span of the projected stadium (hull of the two end discs and the band between them).
+  auto row_span = [&](int v, int& u0, int& u1) {
+    double lo = 1e18, hi = -1e18;
+    for (const cv::Point2d& p : {a2, b2}) {
+      const double dy = v - p.y;
+      if (std::abs(dy) <= radius_px) {
+        const double w = std::sqrt(radius_px * radius_px - dy * dy);
+        lo = std::min(lo, p.x - w);
+        hi = std::max(hi, p.x + w);
       }
     }
-    if (dist <= 0) return;
-    const cv::Vec3d p = dist * rd;
-    const double z = p[2];
-    float& zb = t.depth.at<float>(v, u);
-    if (z <= kNear || z >= zb) return;
-    const double s = std::clamp((p - pa).dot(ba) / std::max(baba, 1e-12), 0.0, 1.0);
-    const cv::Vec3d n = (p - (pa + s * ba)) / c.radius;
-    const double shade = light.ambient + light.diffuse * std::max(0.0, -n.dot(light_cam) /
-                                                                         cv::norm(light_cam));
-    t.bgr.at<cv::Vec3b>(v, u) = to_bgr(c.bgr, shade);
-    zb = static_cast<float>(z);
-  });
+    const cv::Point2d d = b2 - a2;
+    const double len = std::sqrt(d.dot(d));
+    if (len > 1e-9) {
+      // Constraints linear in u: |n . (p - a)| <= R and 0 <= t . (p - a) <= len (unit n, t).
+      const cv::Point2d t(d.x / len, d.y / len), n(-t.y, t.x);
+      double blo = -1e18, bhi = 1e18;
+      auto clip = [&](double coef, double offset, double min_v, double max_v) {
+        // min_v <= coef * u + offset <= max_v
+        if (std::abs(coef) < 1e-12) {
+          if (offset < min_v || offset > max_v) blo = 1e18;
+          return;
+        }
+        double x0 = (min_v - offset) / coef, x1 = (max_v - offset) / coef;
+        if (x0 > x1) std::swap(x0, x1);
+        blo = std::max(blo, x0);
+        bhi = std::min(bhi, x1);
+      };
+      const double dy = v - a2.y;
+      clip(n.x, n.y * dy - n.x * a2.x, -radius_px, radius_px);
+      clip(t.x, t.y * dy - t.x * a2.x, 0.0, len);
+      if (blo <= bhi) {
+        lo = std::min(lo, blo);
+        hi = std::max(hi, bhi);
+      }
+    }
+    if (lo > hi) {
+      u0 = 1;
+      u1 = 0;
+      return;
+    }
+    u0 = std::max(r.x, static_cast<int>(std::floor(lo)));
+    u1 = std::min(r.x + r.width - 1, static_cast<int>(std::ceil(hi)));
+  };
+  for (int v = r.y; v < r.y + r.height; ++v) {
+    int u0 = r.x, u1 = r.x + r.width - 1;
+    if (early_out) row_span(v, u0, u1);
+    for (int u = u0; u <= u1; ++u) {
+      cv::Vec3d rd = ph.ray(u, v);
+      const double inv = 1.0 / cv::norm(rd);
+      rd *= inv;
+      const double bard = ba.dot(rd), rdoa = rd.dot(oa);
+      const double qa = baba - bard * bard;
+      double qb = baba * rdoa - baoa * bard;
+      double qc = baba * oaoa - baoa * baoa - rr * baba;
+      double h = qb * qb - qa * qc;
+      if (h < 0) continue;
+      double dist = -1;
+      if (qa > 1e-12) {
+        const double tt = (-qb - std::sqrt(h)) / qa;
+        const double y = baoa + tt * bard;
+        if (y > 0 && y < baba) dist = tt;
+      }
+      if (dist < 0) {
+        // End caps: nearest of the two spheres.
+        for (const cv::Vec3d& centre : {pa, pb}) {
+          const cv::Vec3d oc = -centre;
+          const double b2 = rd.dot(oc), c2 = oc.dot(oc) - rr;
+          const double h2 = b2 * b2 - c2;
+          if (h2 <= 0) continue;
+          const double tt = -b2 - std::sqrt(h2);
+          if (tt > 0 && (dist < 0 || tt < dist)) dist = tt;
+        }
+      }
+      if (dist <= 0) continue;
+      const cv::Vec3d p = dist * rd;
+      const double z = p[2];
+      float& zb = t.depth.at<float>(v, u);
+      if (z <= kNear || z >= zb) continue;
+      const double s = std::clamp((p - pa).dot(ba) / std::max(baba, 1e-12), 0.0, 1.0);
+      const cv::Vec3d n = (p - (pa + s * ba)) / c.radius;
+      const double shade =
+          light.ambient + light.diffuse * std::max(0.0, -n.dot(light_cam) / cv::norm(light_cam));
+      t.bgr.at<cv::Vec3b>(v, u) = to_bgr(c.bgr, shade);
+      zb = static_cast<float>(z);
+    }
+  }
 }
 
 void render_ellipsoid(const CameraModel& cam, const Pinhole& ph, const Ellipsoid& e,
                       const Lighting& light, RenderTarget& t) {
-  const double rmax = std::max({e.radii[0], e.radii[1], e.radii[2]});
-  const cv::Rect r = projected_bounds(
-      cam, box_corners(e.centre - cv::Vec3d::all(rmax), e.centre + cv::Vec3d::all(rmax)),
-      t.bgr.size());
+  // Exact world-axis-aligned half extents of the rotated ellipsoid.
+  cv::Vec3d half;
+  for (int i = 0; i < 3; ++i)
+    half[i] =
+        std::sqrt(std::pow(e.axes(i, 0) * e.radii[0], 2) + std::pow(e.axes(i, 1) * e.radii[1], 2) +
+                  std::pow(e.axes(i, 2) * e.radii[2], 2));
+  const cv::Rect r =
+      projected_bounds(cam, box_corners(e.centre - half, e.centre + half), t.bgr.size());
   // Local (unit sphere) coordinates: q = S^-1 * A^T * R^T * (x_cam - c_cam).
-  const cv::Matx33d M = cv::Matx33d::diag(cv::Vec3d(1 / e.radii[0], 1 / e.radii[1], 1 / e.radii[2])) *
-                        e.axes.t() * cam.R.t();
+  const cv::Matx33d M =
+      cv::Matx33d::diag(cv::Vec3d(1 / e.radii[0], 1 / e.radii[1], 1 / e.radii[2])) * e.axes.t() *
+      cam.R.t();
   const cv::Vec3d ro = M * (-cam.to_camera(e.centre));
   const double roro = ro.dot(ro);
   const cv::Vec3d light_cam = cam.R * light.direction;
-  const cv::Matx33d normal_to_cam = cam.R * e.axes *
-      cv::Matx33d::diag(cv::Vec3d(1 / e.radii[0], 1 / e.radii[1], 1 / e.radii[2]));
+  const cv::Matx33d normal_to_cam =
+      cam.R * e.axes * cv::Matx33d::diag(cv::Vec3d(1 / e.radii[0], 1 / e.radii[1], 1 / e.radii[2]));
   for_pixels(r, [&](int u, int v) {
     const cv::Vec3d d = ph.ray(u, v);
     const cv::Vec3d rd = M * d;
@@ -169,8 +233,8 @@ void render_ellipsoid(const CameraModel& cam, const Pinhole& ph, const Ellipsoid
     const cv::Vec3d q = ro + z * rd;
     cv::Vec3d n = normal_to_cam * q;
     n /= cv::norm(n);
-    const double shade = light.ambient + light.diffuse * std::max(0.0, -n.dot(light_cam) /
-                                                                         cv::norm(light_cam));
+    const double shade =
+        light.ambient + light.diffuse * std::max(0.0, -n.dot(light_cam) / cv::norm(light_cam));
     t.bgr.at<cv::Vec3b>(v, u) = to_bgr(e.bgr, shade);
     zb = static_cast<float>(z);
   });

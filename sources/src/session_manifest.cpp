@@ -1,19 +1,18 @@
 // session.yaml: reading, validation and atomic writing (format v1, docs/session_format.md).
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstring>
-#include <fstream>
-#include <set>
-#include <sstream>
-#include <string>
+#include "dreamsense/sources/session.hpp"
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "dreamsense/sources/session.hpp"
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <unistd.h>
 
 namespace dreamsense::sources {
 namespace {
@@ -65,11 +64,11 @@ Result<T> optional(const YAML::Node& map, const std::string& context, const char
 }
 
 // Assigns the value of an expression returning Result<T>, or returns its error.
-#define DS_ASSIGN(lhs, expr)              \
-  do {                                    \
-    auto ds_r_ = (expr);                  \
+#define DS_ASSIGN(lhs, expr)                          \
+  do {                                                \
+    auto ds_r_ = (expr);                              \
     if (!ds_r_) return tl::unexpected(ds_r_.error()); \
-    lhs = std::move(*ds_r_);              \
+    lhs = std::move(*ds_r_);                          \
   } while (0)
 
 bool is_safe_relative(const std::string& file) {
@@ -164,7 +163,8 @@ Result<SessionManifest> parse_manifest(const YAML::Node& root) {
   DS_ASSIGN(m.complete, (optional<bool>(root, "", "complete", "true or false", true)));
   DS_ASSIGN(m.truth, (optional<std::string>(root, "", "truth", "a string", "")));
   if (const YAML::Node md = root["metadata"]; md && !md.IsNull()) {
-    if (!md.IsMap()) return manifest_error(ErrorCode::kCorruptData, "key 'metadata': expected a map");
+    if (!md.IsMap())
+      return manifest_error(ErrorCode::kCorruptData, "key 'metadata': expected a map");
     for (const auto& kv : md) {
       const std::string key = kv.first.as<std::string>();
       if (!kv.second.IsScalar() && !kv.second.IsNull())
@@ -240,7 +240,7 @@ void fill_stream_defaults(StreamEntry& s) {
   if (s.encoding == "mjpeg") {
     s.file = s.id + ".mjpg";
     if (s.index.empty()) s.index = s.id + ".idx";
-  } else if (s.encoding == "raw16") {
+  } else if (s.encoding == "raw16" || s.encoding == "png16") {
     s.file = s.id + ".depth";
     if (s.index.empty()) s.index = s.id + ".idx";
   } else if (s.encoding == "jsonl") {
@@ -278,14 +278,22 @@ Status check_manifest(const SessionManifest& m) {
                             fmt::format("duplicate stream id '{}' (streams[{}])", s.id, i));
     const char* expected = "";
     switch (s.kind) {
-      case SensorKind::kColor: expected = "mjpeg or video"; break;
-      case SensorKind::kDepth: expected = "raw16"; break;
-      case SensorKind::kSkeleton: expected = "jsonl"; break;
-      case SensorKind::kAudio: expected = "wav"; break;
+      case SensorKind::kColor:
+        expected = "mjpeg or video";
+        break;
+      case SensorKind::kDepth:
+        expected = "raw16 or png16";
+        break;
+      case SensorKind::kSkeleton:
+        expected = "jsonl";
+        break;
+      case SensorKind::kAudio:
+        expected = "wav";
+        break;
     }
     const bool encoding_ok =
         (s.kind == SensorKind::kColor && (s.encoding == "mjpeg" || s.encoding == "video")) ||
-        (s.kind == SensorKind::kDepth && s.encoding == "raw16") ||
+        (s.kind == SensorKind::kDepth && (s.encoding == "raw16" || s.encoding == "png16")) ||
         (s.kind == SensorKind::kSkeleton && s.encoding == "jsonl") ||
         (s.kind == SensorKind::kAudio && s.encoding == "wav");
     if (!encoding_ok)
@@ -293,10 +301,11 @@ Status check_manifest(const SessionManifest& m) {
                  fmt::format("key 'encoding': unknown encoding '{}' for kind {} (expected {})",
                              s.encoding, to_string(s.kind), expected));
     if (!is_safe_relative(s.file))
-      return bad(ErrorCode::kInvalidArgument,
-                 fmt::format("key 'file': '{}' is not a relative path inside the session folder",
-                             s.file));
-    const bool indexed = s.encoding == "mjpeg" || s.encoding == "raw16" || s.encoding == "video";
+      return bad(
+          ErrorCode::kInvalidArgument,
+          fmt::format("key 'file': '{}' is not a relative path inside the session folder", s.file));
+    const bool indexed = s.encoding == "mjpeg" || s.encoding == "raw16" || s.encoding == "png16" ||
+                         s.encoding == "video";
     if (indexed && s.index.empty())
       return bad(ErrorCode::kInvalidArgument,
                  fmt::format("missing required key 'index' (encoding {})", s.encoding));
@@ -317,9 +326,9 @@ Status check_manifest(const SessionManifest& m) {
     }
     if (s.kind == SensorKind::kColor || s.kind == SensorKind::kDepth) {
       if (s.width <= 0 || s.height <= 0)
-        return bad(ErrorCode::kInvalidArgument,
-                   fmt::format("keys 'width', 'height': must be > 0, got {}x{}", s.width,
-                               s.height));
+        return bad(
+            ErrorCode::kInvalidArgument,
+            fmt::format("keys 'width', 'height': must be > 0, got {}x{}", s.width, s.height));
     }
     if (s.kind == SensorKind::kAudio) {
       if (s.sample_rate <= 0)
@@ -347,8 +356,7 @@ Result<SessionManifest> read_manifest(const std::filesystem::path& session_dir) 
                       kManifestName, session_dir.string());
   std::ifstream in(path);
   if (!in)
-    return make_error(ErrorCode::kIoError, "{}: cannot read: {}", kManifestName,
-                      errno_text(errno));
+    return make_error(ErrorCode::kIoError, "{}: cannot read: {}", kManifestName, errno_text(errno));
   std::stringstream text;
   text << in.rdbuf();
   YAML::Node root;
@@ -404,8 +412,7 @@ Status write_manifest(const std::filesystem::path& session_dir, const SessionMan
       out << YAML::Key << "channels" << YAML::Value << s.channels;
       out << YAML::Key << "start_ns" << YAML::Value << static_cast<long long>(s.start_ns);
     }
-    if (!s.calibration.empty())
-      out << YAML::Key << "calibration" << YAML::Value << s.calibration;
+    if (!s.calibration.empty()) out << YAML::Key << "calibration" << YAML::Value << s.calibration;
     if (!s.frame.empty()) out << YAML::Key << "frame" << YAML::Value << s.frame;
     out << YAML::EndMap;
   }

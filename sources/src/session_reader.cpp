@@ -1,29 +1,28 @@
 // SessionReader: validates a session folder up front, then replays its streams merged by stamp.
 
-#include <fcntl.h>
+#include "dreamsense/core/log.hpp"
+#include "dreamsense/sources/session.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #include <sndfile.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
+#include <fcntl.h>
 #include <fstream>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <vector>
-
-#include <fmt/format.h>
-#include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/videoio.hpp>
-
-#include "dreamsense/core/log.hpp"
-#include "dreamsense/sources/session.hpp"
 
 namespace dreamsense::sources {
 namespace {
@@ -64,7 +63,7 @@ Result<std::string> read_text(const Context& ctx, const std::string& name) {
 }
 
 struct Line {
-  int number = 0;        // 1-based
+  int number = 0;  // 1-based
   std::string_view text;
   bool terminated = true;  // ends with '\n'
 };
@@ -134,7 +133,10 @@ class StreamReader {
   StreamEntry entry_;
 };
 
-// mjpeg (colour) and raw16 (depth): data file + index "sequence,stamp_ns,offset,size".
+// The 8-byte signature every PNG starts with.
+constexpr unsigned char kPngSignature[8] = {0x89, 0x50, 0x4E, 0x47, 0x0D, 0x0A, 0x1A, 0x0A};
+
+// mjpeg (colour), raw16 and png16 (depth): data file + index "sequence,stamp_ns,offset,size".
 class IndexedReader : public StreamReader {
  public:
   using StreamReader::StreamReader;
@@ -148,14 +150,13 @@ class IndexedReader : public StreamReader {
     if (!text) return tl::unexpected(text.error());
     fd_ = ::open((ctx.dir / entry_.file).c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0)
-      return make_error(ErrorCode::kIoError, "{}: cannot read: {}", entry_.file,
-                        errno_text(errno));
+      return make_error(ErrorCode::kIoError, "{}: cannot read: {}", entry_.file, errno_text(errno));
     struct stat st {};
     if (::fstat(fd_, &st) != 0)
-      return make_error(ErrorCode::kIoError, "{}: cannot stat: {}", entry_.file,
-                        errno_text(errno));
+      return make_error(ErrorCode::kIoError, "{}: cannot stat: {}", entry_.file, errno_text(errno));
     const uint64_t data_size = static_cast<uint64_t>(st.st_size);
-    const bool depth = entry_.encoding == "raw16";
+    const bool raw16 = entry_.encoding == "raw16";
+    const bool png16 = entry_.encoding == "png16";
     const uint64_t depth_bytes = static_cast<uint64_t>(entry_.width) * entry_.height * 2;
 
     const auto lines = split_lines(*text);
@@ -164,8 +165,8 @@ class IndexedReader : public StreamReader {
       const std::string_view t = trim(l.text);
       if (t.empty() || t.front() == '#') continue;
       if (!l.terminated && ctx.tolerate_tail) {
-        log::warn("{}: line {}: ignoring the partial last line (incomplete session)",
-                  entry_.index, l.number);
+        log::warn("{}: line {}: ignoring the partial last line (incomplete session)", entry_.index,
+                  l.number);
         break;
       }
       Entry e;
@@ -195,18 +196,17 @@ class IndexedReader : public StreamReader {
       if (!entries_.empty() && e.stamp_ns <= entries_.back().stamp_ns)
         return make_error(ErrorCode::kCorruptData, "{}: line {}: stamp {} not after previous {}",
                           entry_.index, l.number, e.stamp_ns, entries_.back().stamp_ns);
-      if (depth && e.size != depth_bytes)
+      if (raw16 && e.size != depth_bytes)
         return make_error(ErrorCode::kCorruptData,
                           "{}: line {}: frame of {} bytes, a {}x{} raw16 frame has {}",
-                          entry_.index, l.number, e.size, entry_.width, entry_.height,
-                          depth_bytes);
+                          entry_.index, l.number, e.size, entry_.width, entry_.height, depth_bytes);
       entries_.push_back(e);
     }
 
     // Truncation: an index entry past the end of the data.
     for (size_t k = 0; k < entries_.size(); ++k) {
       const Entry& e = entries_[k];
-      if (e.offset + e.size <= data_size) continue;
+      if (e.offset <= data_size && e.size <= data_size - e.offset) continue;
       if (ctx.tolerate_tail) {
         log::warn("{}: incomplete session: index has {} frames, data holds {}; reading {}",
                   entry_.file, entries_.size(), k, k);
@@ -214,28 +214,36 @@ class IndexedReader : public StreamReader {
         break;
       }
       return make_error(ErrorCode::kCorruptData,
-                        "{}: truncated: index has {} frames but data ends {} frame {}",
-                        entry_.file, entries_.size(), e.offset < data_size ? "inside" : "before",
-                        k);
+                        "{}: truncated: index has {} frames but data ends {} frame {}", entry_.file,
+                        entries_.size(), e.offset < data_size ? "inside" : "before", k);
     }
 
-    // Cheap integrity check of every JPEG: SOI at the start, EOI at the end. In an incomplete
-    // session, broken frames at the very end (a torn tail) are dropped with a warning.
-    if (!depth) {
+    // Cheap integrity check of every frame: a JPEG has SOI at the start and EOI at the end, a PNG
+    // its 8-byte signature at the start (its CRCs are checked when it is decoded). In an
+    // incomplete session, broken frames at the very end (a torn tail) are dropped with a warning.
+    if (!raw16) {
+      const auto frame_ok = [&](const Entry& e) {
+        return png16 ? png_signature_ok(e) : jpeg_markers_ok(e);
+      };
       if (ctx.tolerate_tail) {
         const size_t before = entries_.size();
-        while (!entries_.empty() && !jpeg_markers_ok(entries_.back())) entries_.pop_back();
+        while (!entries_.empty() && !frame_ok(entries_.back())) entries_.pop_back();
         if (entries_.size() != before)
           log::warn("{}: incomplete session: dropping {} torn frame(s) at the end", entry_.file,
                     before - entries_.size());
       }
       for (size_t k = 0; k < entries_.size(); ++k) {
         const Entry& e = entries_[k];
-        if (!jpeg_markers_ok(e))
+        if (frame_ok(e)) continue;
+        if (png16)
           return make_error(ErrorCode::kCorruptData,
-                            "{}: corrupt: frame {} (offset {}, {} bytes) is not a complete JPEG "
-                            "(no SOI/EOI marker)",
+                            "{}: corrupt: frame {} (offset {}, {} bytes) is not a PNG (no PNG "
+                            "signature)",
                             entry_.file, k, e.offset, e.size);
+        return make_error(ErrorCode::kCorruptData,
+                          "{}: corrupt: frame {} (offset {}, {} bytes) is not a complete JPEG "
+                          "(no SOI/EOI marker)",
+                          entry_.file, k, e.offset, e.size);
       }
     }
     return ok_status();
@@ -260,12 +268,12 @@ class IndexedReader : public StreamReader {
     buffer_.resize(e.size);
     size_t done = 0;
     while (done < e.size) {
-      const ssize_t n = ::pread(fd_, buffer_.data() + done, e.size - done,
-                                static_cast<off_t>(e.offset + done));
+      const ssize_t n =
+          ::pread(fd_, buffer_.data() + done, e.size - done, static_cast<off_t>(e.offset + done));
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0)
-        return make_error(ErrorCode::kCorruptData, "{}: frame {}: read failed: {}", entry_.file,
-                          k, n < 0 ? errno_text(errno) : "unexpected end of file");
+        return make_error(ErrorCode::kCorruptData, "{}: frame {}: read failed: {}", entry_.file, k,
+                          n < 0 ? errno_text(errno) : "unexpected end of file");
       done += static_cast<size_t>(n);
     }
     const Timestamp stamp = Timestamp::from_ns(e.stamp_ns);
@@ -281,6 +289,7 @@ class IndexedReader : public StreamReader {
       d.depth_mm = depth;
       return make_frame(entry_.id, stamp, e.sequence, std::move(d));
     }
+    if (entry_.encoding == "png16") return read_png16(k, e, stamp);
     cv::Mat image;
     try {
       image = cv::imdecode(buffer_, cv::IMREAD_UNCHANGED);
@@ -288,8 +297,9 @@ class IndexedReader : public StreamReader {
       image.release();
     }
     if (image.empty())
-      return make_error(ErrorCode::kCorruptData, "{}: corrupt: frame {} (offset {}) does not decode",
-                        entry_.file, k, e.offset);
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: corrupt: frame {} (offset {}) does not decode", entry_.file, k,
+                        e.offset);
     if (image.cols != entry_.width || image.rows != entry_.height)
       return make_error(ErrorCode::kCorruptData,
                         "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, k,
@@ -308,6 +318,35 @@ class IndexedReader : public StreamReader {
     int64_t stamp_ns = 0;
     uint64_t offset = 0, size = 0;
   };
+  Result<FramePtr> read_png16(size_t k, const Entry& e, Timestamp stamp) {
+    cv::Mat depth;
+    try {
+      depth = cv::imdecode(buffer_, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception&) {
+      depth.release();
+    }
+    if (depth.empty())
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: corrupt: frame {} (offset {}) does not decode", entry_.file, k,
+                        e.offset);
+    if (depth.type() != CV_16UC1)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: corrupt: frame {} (offset {}) is not a 16-bit grey PNG (decodes to "
+                        "OpenCV type {})",
+                        entry_.file, k, e.offset, depth.type());
+    if (depth.cols != entry_.width || depth.rows != entry_.height)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, k,
+                        depth.cols, depth.rows, entry_.width, entry_.height);
+    DepthImage d;
+    d.depth_mm = depth;
+    return make_frame(entry_.id, stamp, e.sequence, std::move(d));
+  }
+  bool png_signature_ok(const Entry& e) const {
+    unsigned char head[8] = {};
+    return e.size >= 8 && ::pread(fd_, head, 8, static_cast<off_t>(e.offset)) == 8 &&
+           std::memcmp(head, kPngSignature, 8) == 0;
+  }
   bool jpeg_markers_ok(const Entry& e) const {
     unsigned char head[2] = {0, 0}, tail[2] = {0, 0};
     return e.size >= 4 && ::pread(fd_, head, 2, static_cast<off_t>(e.offset)) == 2 &&
@@ -351,8 +390,8 @@ class VideoReader : public StreamReader {
                         entry_.file);
     const auto count = static_cast<int64_t>(capture_.get(cv::CAP_PROP_FRAME_COUNT));
     if (count > 0 && count != static_cast<int64_t>(stamps_.size()))
-      return make_error(ErrorCode::kCorruptData,
-                        "{}: {}: video has {} frames but {} has {} stamps", entry_.file,
+      return make_error(ErrorCode::kCorruptData, "{}: {}: video has {} frames but {} has {} stamps",
+                        entry_.file,
                         count < static_cast<int64_t>(stamps_.size()) ? "truncated" : "mismatch",
                         count, entry_.index, stamps_.size());
     const int w = static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_WIDTH));
@@ -420,8 +459,7 @@ class SkeletonReader : public StreamReader {
       if (!frame) return tl::unexpected(frame.error());
       if (!frames_.empty() && (*frame)->stamp <= frames_.back()->stamp)
         return make_error(ErrorCode::kCorruptData, "{}: line {}: stamp {} not after previous {}",
-                          entry_.file, l.number, (*frame)->stamp.ns(),
-                          frames_.back()->stamp.ns());
+                          entry_.file, l.number, (*frame)->stamp.ns(), frames_.back()->stamp.ns());
       frames_.push_back(std::move(*frame));
     }
     return ok_status();
@@ -457,7 +495,8 @@ class SkeletonReader : public StreamReader {
     const int64_t stamp = j["stamp_ns"].get<int64_t>();
     uint64_t sequence = frames_.size();
     if (j.contains("sequence")) {
-      if (!j["sequence"].is_number_unsigned()) return bad("'sequence' is not a non-negative integer");
+      if (!j["sequence"].is_number_unsigned())
+        return bad("'sequence' is not a non-negative integer");
       sequence = j["sequence"].get<uint64_t>();
     }
     Skeleton sk;
@@ -470,7 +509,8 @@ class SkeletonReader : public StreamReader {
         SkeletonBody body;
         body.body_id = static_cast<int>(b);
         if (jb.contains("id")) {
-          if (!jb["id"].is_number_integer()) return bad(fmt::format("bodies[{}].id is not an integer", b));
+          if (!jb["id"].is_number_integer())
+            return bad(fmt::format("bodies[{}].id is not an integer", b));
           body.body_id = jb["id"].get<int>();
         }
         if (jb.contains("joints")) {
@@ -481,8 +521,8 @@ class SkeletonReader : public StreamReader {
             if (!id) return bad(fmt::format("bodies[{}]: unknown joint '{}'", b, name));
             if (!v.is_array() || (v.size() != 3 && v.size() != 4) ||
                 !std::all_of(v.begin(), v.end(), [](const auto& x) { return x.is_number(); }))
-              return bad(fmt::format("bodies[{}].joints.{}: expected [x, y, z, confidence]", b,
-                                     name));
+              return bad(
+                  fmt::format("bodies[{}].joints.{}: expected [x, y, z, confidence]", b, name));
             JointObservation& o = body.joint(*id);
             o.position_m = {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
             o.confidence = v.size() == 4 ? v[3].get<float>() : 1.f;
@@ -497,6 +537,29 @@ class SkeletonReader : public StreamReader {
   std::vector<FramePtr> frames_;
   size_t next_ = 0;
 };
+
+// The byte length the "data" chunk of a RIFF/WAVE file declares (nullopt: not RIFF, not found, or
+// the "unknown length" values 0 / 0xFFFFFFFF that streaming writers use).
+std::optional<int64_t> riff_data_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char header[12];
+  if (!in.read(reinterpret_cast<char*>(header), 12)) return std::nullopt;
+  if (std::memcmp(header, "RIFF", 4) != 0 || std::memcmp(header + 8, "WAVE", 4) != 0)
+    return std::nullopt;
+  for (int i = 0; i < 64; ++i) {
+    unsigned char chunk[8];
+    if (!in.read(reinterpret_cast<char*>(chunk), 8)) return std::nullopt;
+    const uint32_t size = static_cast<uint32_t>(chunk[4]) | static_cast<uint32_t>(chunk[5]) << 8 |
+                          static_cast<uint32_t>(chunk[6]) << 16 |
+                          static_cast<uint32_t>(chunk[7]) << 24;
+    if (std::memcmp(chunk, "data", 4) == 0) {
+      if (size == 0 || size == 0xFFFFFFFFu) return std::nullopt;
+      return static_cast<int64_t>(size);
+    }
+    in.seekg(static_cast<std::streamoff>(size + (size & 1)), std::ios::cur);
+  }
+  return std::nullopt;
+}
 
 // Audio "wav": delivered in chunks of options.audio_chunk.
 class WavReader : public StreamReader {
@@ -519,11 +582,24 @@ class WavReader : public StreamReader {
     if (info.channels != entry_.channels)
       return make_error(ErrorCode::kCorruptData, "{}: {} channels, {} declares {}", entry_.file,
                         info.channels, kManifestName, entry_.channels);
+    // libsndfile silently shortens a WAV whose data chunk runs past the end of the file: check
+    // the declared length ourselves.
+    if (auto declared = riff_data_bytes(ctx.dir / entry_.file)) {
+      const int64_t frame_bytes = static_cast<int64_t>(info.channels) *
+                                  ((info.format & SF_FORMAT_SUBMASK) == SF_FORMAT_PCM_16 ? 2 : 0);
+      if (frame_bytes > 0 && *declared / frame_bytes > info.frames) {
+        if (!ctx.tolerate_tail)
+          return make_error(ErrorCode::kCorruptData,
+                            "{}: truncated: header declares {} samples but the data holds {}",
+                            entry_.file, *declared / frame_bytes, info.frames);
+        log::warn("{}: incomplete session: header declares {} samples, data holds {}; reading {}",
+                  entry_.file, *declared / frame_bytes, info.frames, info.frames);
+      }
+    }
     pcm16_ = (info.format & SF_FORMAT_SUBMASK) == SF_FORMAT_PCM_16;
     if (!pcm16_) sf_command(file_, SFC_SET_NORM_FLOAT, nullptr, SF_TRUE);
     total_ = info.frames;
-    chunk_ = std::max<int64_t>(
-        1, ctx.options.audio_chunk.ns() * entry_.sample_rate / 1000000000LL);
+    chunk_ = std::max<int64_t>(1, ctx.options.audio_chunk.ns() * entry_.sample_rate / 1000000000LL);
     return ok_status();
   }
   std::optional<int64_t> peek() const override {
@@ -652,10 +728,14 @@ Result<std::unique_ptr<SessionReader>> SessionReader::open(const std::filesystem
       if (auto st = require_file(ctx, s.calibration); !st) return tl::unexpected(st.error());
     }
     std::unique_ptr<StreamReader> r;
-    if (s.encoding == "mjpeg" || s.encoding == "raw16") r = std::make_unique<IndexedReader>(s);
-    else if (s.encoding == "video") r = std::make_unique<VideoReader>(s);
-    else if (s.encoding == "jsonl") r = std::make_unique<SkeletonReader>(s);
-    else if (s.encoding == "wav") r = std::make_unique<WavReader>(s);
+    if (s.encoding == "mjpeg" || s.encoding == "raw16" || s.encoding == "png16")
+      r = std::make_unique<IndexedReader>(s);
+    else if (s.encoding == "video")
+      r = std::make_unique<VideoReader>(s);
+    else if (s.encoding == "jsonl")
+      r = std::make_unique<SkeletonReader>(s);
+    else if (s.encoding == "wav")
+      r = std::make_unique<WavReader>(s);
     else
       return make_error(ErrorCode::kUnsupported, "{}: stream {}: unknown encoding '{}'",
                         kManifestName, s.id, s.encoding);

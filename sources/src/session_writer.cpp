@@ -5,24 +5,23 @@
 // disk never points past data on disk, even after a power cut; after a kill (or power cut)
 // everything up to the last flush reads back, and data past the last index line is ignored.
 
-#include <fcntl.h>
+#include "dreamsense/core/log.hpp"
+#include "dreamsense/sources/session.hpp"
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
 #include <sndfile.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <fcntl.h>
 #include <functional>
 #include <string>
+#include <unistd.h>
 #include <vector>
-
-#include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
-
-#include "dreamsense/core/log.hpp"
-#include "dreamsense/sources/session.hpp"
 
 namespace dreamsense::sources {
 namespace {
@@ -112,17 +111,18 @@ class StreamWriter {
   Timestamp last_stamp_ = Timestamp::unset();
 };
 
-// mjpeg (colour) and raw16 (depth): data file + index file with buffered index lines.
+// mjpeg (colour), raw16 and png16 (depth): data file + index file with buffered index lines.
 class IndexedWriter : public StreamWriter {
  public:
-  IndexedWriter(const StreamEntry& entry, int jpeg_quality)
-      : StreamWriter(entry), jpeg_quality_(jpeg_quality) {}
+  IndexedWriter(const StreamEntry& entry, const SessionWriterOptions& options)
+      : StreamWriter(entry),
+        jpeg_quality_(options.jpeg_quality),
+        png_compression_(options.png_compression) {}
 
   Status open(const std::filesystem::path& dir) override {
     if (auto st = data_.open(dir / entry_.file, entry_.file); !st) return st;
     if (auto st = index_.open(dir / entry_.index, entry_.index); !st) return st;
-    pending_ = entry_.encoding == "mjpeg" ? "# dreamsense mjpeg index v1\n"
-                                          : "# dreamsense raw16 index v1\n";
+    pending_ = fmt::format("# dreamsense {} index v1\n", entry_.encoding);
     return ok_status();
   }
 
@@ -134,8 +134,8 @@ class IndexedWriter : public StreamWriter {
       image = &c->image;
       if (image->depth() != CV_8U || (image->channels() != 3 && image->channels() != 1))
         return make_error(ErrorCode::kInvalidArgument,
-                          "stream {}: colour image must be CV_8UC3 or CV_8UC1 (type {})",
-                          entry_.id, image->type());
+                          "stream {}: colour image must be CV_8UC3 or CV_8UC1 (type {})", entry_.id,
+                          image->type());
     } else {
       const auto* d = frame.as<DepthImage>();
       if (d == nullptr) return wrong_payload(frame);
@@ -156,6 +156,20 @@ class IndexedWriter : public StreamWriter {
       buffer_.clear();
       if (!cv::imencode(".jpg", *image, buffer_, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality_}))
         return make_error(ErrorCode::kInternal, "stream {}: JPEG encoding failed", entry_.id);
+      if (auto st = data_.append(buffer_.data(), buffer_.size()); !st) return st;
+    } else if (entry_.encoding == "png16") {
+      // Lossless 16-bit grey PNG (OpenCV writes the samples big-endian, as PNG requires).
+      buffer_.clear();
+      bool encoded = false;
+      try {
+        encoded =
+            cv::imencode(".png", *image, buffer_, {cv::IMWRITE_PNG_COMPRESSION, png_compression_});
+      } catch (const cv::Exception& e) {
+        return make_error(ErrorCode::kInternal, "stream {}: PNG encoding failed: {}", entry_.id,
+                          e.err);
+      }
+      if (!encoded || buffer_.empty())
+        return make_error(ErrorCode::kInternal, "stream {}: PNG encoding failed", entry_.id);
       if (auto st = data_.append(buffer_.data(), buffer_.size()); !st) return st;
     } else {
       cv::Mat m = image->isContinuous() ? *image : image->clone();
@@ -198,6 +212,7 @@ class IndexedWriter : public StreamWriter {
                       entry_.id, to_string(frame.kind()), to_string(entry_.kind));
   }
   int jpeg_quality_;
+  int png_compression_;
   AppendFile data_, index_;
   std::string pending_;  // index lines not yet written (the data is not yet fsync'ed)
   std::vector<uchar> buffer_;
@@ -215,9 +230,8 @@ class SkeletonWriter : public StreamWriter {
       return make_error(ErrorCode::kInvalidArgument, "stream {}: got a {} frame, declared {}",
                         entry_.id, to_string(frame.kind()), to_string(entry_.kind));
     if (auto st = check_stamp(frame.stamp); !st) return st;
-    std::string line =
-        fmt::format("{{\"stamp_ns\":{},\"sequence\":{},\"bodies\":[", frame.stamp.ns(),
-                    frame.sequence);
+    std::string line = fmt::format("{{\"stamp_ns\":{},\"sequence\":{},\"bodies\":[",
+                                   frame.stamp.ns(), frame.sequence);
     for (size_t b = 0; b < sk->bodies.size(); ++b) {
       const SkeletonBody& body = sk->bodies[b];
       if (b > 0) line += ',';
@@ -234,9 +248,9 @@ class SkeletonWriter : public StreamWriter {
                             joint_name(static_cast<JointId>(j)), body.body_id);
         if (!first) line += ',';
         first = false;
-        line += fmt::format("\"{}\":[{:.7f},{:.7f},{:.7f},{:.4f}]",
-                            joint_name(static_cast<JointId>(j)), p[0], p[1], p[2],
-                            static_cast<double>(o.confidence));
+        line +=
+            fmt::format("\"{}\":[{:.7f},{:.7f},{:.7f},{:.4f}]", joint_name(static_cast<JointId>(j)),
+                        p[0], p[1], p[2], static_cast<double>(o.confidence));
       }
       line += "}}";
     }
@@ -288,8 +302,8 @@ class WavWriter : public StreamWriter {
                         entry_.channels);
     if (a->samples.size() % static_cast<size_t>(a->channels) != 0)
       return make_error(ErrorCode::kInvalidArgument,
-                        "stream {}: chunk has {} samples, not a multiple of {} channels",
-                        entry_.id, a->samples.size(), a->channels);
+                        "stream {}: chunk has {} samples, not a multiple of {} channels", entry_.id,
+                        a->samples.size(), a->channels);
     if (a->samples.empty()) return ok_status();
     if (frames_written_ == 0) {
       if (!frame.stamp.is_set() || frame.stamp.is_special())
@@ -359,6 +373,8 @@ Status SessionWriterOptions::check() const {
   std::vector<std::string> bad;
   if (jpeg_quality < 1 || jpeg_quality > 100)
     bad.push_back(fmt::format("jpeg_quality must be in [1, 100], got {}", jpeg_quality));
+  if (png_compression < 0 || png_compression > 9)
+    bad.push_back(fmt::format("png_compression must be in [0, 9], got {}", png_compression));
   if (flush_interval.ns() <= 0)
     bad.push_back(fmt::format("flush_interval must be > 0, got {} s", flush_interval.seconds()));
   if (bad.empty()) return ok_status();
@@ -387,8 +403,8 @@ SessionWriter::SessionWriter() : impl_(std::make_unique<Impl>()) {}
 
 SessionWriter::~SessionWriter() {
   if (impl_ && impl_->open) {
-    if (auto st = close(); !st) log::error("session writer {}: {}", impl_->dir.string(),
-                                           st.error().message);
+    if (auto st = close(); !st)
+      log::error("session writer {}: {}", impl_->dir.string(), st.error().message);
   }
 }
 
@@ -400,12 +416,12 @@ Result<std::unique_ptr<SessionWriter>> SessionWriter::create(
   if (auto st = options.check(); !st) return tl::unexpected(st.error());
   manifest.format_version = kSessionFormatVersion;
   manifest.complete = false;
-  for (auto& s : manifest.streams) fill_stream_defaults(s);
-  if (auto st = check_manifest(manifest); !st) return tl::unexpected(st.error());
   for (const auto& s : manifest.streams)
     if (s.encoding == "video")
       return make_error(ErrorCode::kUnsupported,
                         "stream {}: encoding 'video' is read-only (record colour as mjpeg)", s.id);
+  for (auto& s : manifest.streams) fill_stream_defaults(s);
+  if (auto st = check_manifest(manifest); !st) return tl::unexpected(st.error());
 
   std::error_code ec;
   std::filesystem::create_directories(session_dir, ec);
@@ -427,8 +443,8 @@ Result<std::unique_ptr<SessionWriter>> SessionWriter::create(
   impl.options = options;
   for (const auto& s : impl.manifest.streams) {
     std::unique_ptr<StreamWriter> sw;
-    if (s.encoding == "mjpeg" || s.encoding == "raw16") {
-      sw = std::make_unique<IndexedWriter>(s, options.jpeg_quality);
+    if (s.encoding == "mjpeg" || s.encoding == "raw16" || s.encoding == "png16") {
+      sw = std::make_unique<IndexedWriter>(s, options);
     } else if (s.encoding == "jsonl") {
       sw = std::make_unique<SkeletonWriter>(s);
     } else {

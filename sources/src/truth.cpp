@@ -1,11 +1,11 @@
 // truth.jsonl reader (docs/truth_format.md).
 
-#include <fstream>
-#include <string>
+#include "dreamsense/sources/truth.hpp"
 
 #include <fmt/format.h>
 
-#include "dreamsense/sources/truth.hpp"
+#include <fstream>
+#include <string>
 
 namespace dreamsense::sources {
 

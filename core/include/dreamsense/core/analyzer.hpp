@@ -3,13 +3,13 @@
 // the blackboard), calls a plain algorithm and writes typed results. What it needs and produces
 // is declared up front (AnalyzerContract) and checked when the pipeline is built.
 
-#include <string>
-#include <string_view>
-#include <vector>
-
 #include "dreamsense/core/blackboard.hpp"
 #include "dreamsense/core/multi_frame.hpp"
 #include "dreamsense/core/status.hpp"
+
+#include <string>
+#include <string_view>
+#include <vector>
 
 namespace dreamsense {
 

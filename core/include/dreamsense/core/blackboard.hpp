@@ -8,6 +8,9 @@
 // An entry whose value is null records "the analyser ran at `stamp` and found nothing", which lets
 // primitives tell no_data from stale.
 
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/core/timestamp.hpp"
+
 #include <deque>
 #include <map>
 #include <memory>
@@ -16,9 +19,6 @@
 #include <string>
 #include <typeindex>
 #include <vector>
-
-#include "dreamsense/core/status.hpp"
-#include "dreamsense/core/timestamp.hpp"
 
 namespace dreamsense {
 

@@ -8,23 +8,23 @@
 // File keys: image_width, image_height, camera_matrix (3x3), distortion_coefficients (1xN),
 // camera_from_world_R (3x3), camera_from_world_t (3x1, metres), frame (string).
 
+#include "dreamsense/core/status.hpp"
+
+#include <opencv2/core.hpp>
+
 #include <filesystem>
 #include <optional>
 #include <string>
 
-#include <opencv2/core.hpp>
-
-#include "dreamsense/core/status.hpp"
-
 namespace dreamsense {
 
 struct CameraModel {
-  std::string frame;                    // e.g. "camera_left"
+  std::string frame;  // e.g. "camera_left"
   cv::Size image_size;
   cv::Matx33d K = cv::Matx33d::eye();
   cv::Mat distortion = cv::Mat::zeros(1, 5, CV_64F);
-  cv::Matx33d R = cv::Matx33d::eye();   // camera_from_world rotation
-  cv::Vec3d t{0, 0, 0};                 // camera_from_world translation (m)
+  cv::Matx33d R = cv::Matx33d::eye();  // camera_from_world rotation
+  cv::Vec3d t{0, 0, 0};                // camera_from_world translation (m)
 
   cv::Vec3d to_camera(const cv::Vec3d& world) const { return R * world + t; }
   cv::Vec3d to_world(const cv::Vec3d& cam) const { return R.t() * (cam - t); }

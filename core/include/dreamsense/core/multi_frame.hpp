@@ -1,16 +1,16 @@
 #pragma once
 // The synchronised set of sensor frames for one tick of the pipeline clock.
 
+#include "dreamsense/core/sensor_frame.hpp"
+
 #include <map>
 #include <vector>
-
-#include "dreamsense/core/sensor_frame.hpp"
 
 namespace dreamsense {
 
 struct MultiFrame {
-  Timestamp stamp;        // the tick time
-  uint64_t tick = 0;      // tick index since the start of the run
+  Timestamp stamp;    // the tick time
+  uint64_t tick = 0;  // tick index since the start of the run
   // Frame streams (cameras, depth, skeleton): the frame matched to this tick, if any.
   std::map<SensorId, FramePtr> frames;
   // Continuous streams (audio): every chunk whose first sample falls in (previous tick, tick].

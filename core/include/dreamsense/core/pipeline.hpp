@@ -2,15 +2,15 @@
 // Runs analysers over a Source: frames -> synchroniser -> analysers (in order, each seeing the
 // commits of those before it) -> blackboard -> per-tick callback (primitives, outputs).
 
-#include <functional>
-#include <memory>
-#include <string>
-#include <vector>
-
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/core/blackboard.hpp"
 #include "dreamsense/core/source.hpp"
 #include "dreamsense/core/synchronizer.hpp"
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
 
 namespace dreamsense {
 
@@ -26,16 +26,16 @@ struct PipelineOptions {
 struct AnalyzerStats {
   std::string name;
   uint64_t calls = 0;
-  uint64_t errors = 0;            // process() returned an error or broke a check
-  std::vector<double> latency_ms; // one sample per call
+  uint64_t errors = 0;             // process() returned an error or broke a check
+  std::vector<double> latency_ms;  // one sample per call
 };
 
 struct PipelineStats {
   uint64_t ticks = 0;
   uint64_t frames = 0;
   double wall_seconds = 0;
-  double media_seconds = 0;                 // span of session time processed
-  std::vector<double> tick_latency_ms;      // per tick: from MultiFrame ready to callback done
+  double media_seconds = 0;             // span of session time processed
+  std::vector<double> tick_latency_ms;  // per tick: from MultiFrame ready to callback done
   std::vector<AnalyzerStats> analyzers;
   SyncStats sync;
 };
@@ -48,7 +48,7 @@ class Pipeline {
   // Checks the wiring: every required input is a sensor of the source, every key read is written
   // by an analyser earlier in the list, no key has two writers, names are unique.
   static Result<std::unique_ptr<Pipeline>> build(PipelineOptions options, SourceInfo source_info,
-                                                  std::vector<std::unique_ptr<Analyzer>> analyzers);
+                                                 std::vector<std::unique_ptr<Analyzer>> analyzers);
 
   // Processes the whole source. Stops at the first source error (returned) or callback error.
   Status run(Source& source, const TickCallback& on_tick,

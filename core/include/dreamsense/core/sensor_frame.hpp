@@ -3,6 +3,10 @@
 // A frame is created once by a Source and never modified afterwards: the cv::Mat inside must not
 // be written through by anyone (its buffer is shared by every consumer).
 
+#include "dreamsense/core/timestamp.hpp"
+
+#include <opencv2/core.hpp>
+
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -11,10 +15,6 @@
 #include <string_view>
 #include <variant>
 #include <vector>
-
-#include <opencv2/core.hpp>
-
-#include "dreamsense/core/timestamp.hpp"
 
 namespace dreamsense {
 
@@ -32,15 +32,32 @@ struct ColorImage {
 // Depth image: CV_16UC1 in millimetres, 0 = no measurement.
 struct DepthImage {
   cv::Mat depth_mm;
-  bool registered_to_color = false;  // pixel (u,v) corresponds to the same pixel of the colour image
+  bool registered_to_color =
+      false;  // pixel (u,v) corresponds to the same pixel of the colour image
 };
 
 // Kinect v1 joint set; the first ten are the DREAM joints in the legacy getBodyPose order.
 enum class JointId : int {
-  kShoulderCenter = 0, kHead, kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft,
-  kShoulderRight, kElbowRight, kWristRight, kHandRight,
-  kSpine, kHipCenter, kHipLeft, kKneeLeft, kAnkleLeft, kFootLeft,
-  kHipRight, kKneeRight, kAnkleRight, kFootRight,
+  kShoulderCenter = 0,
+  kHead,
+  kShoulderLeft,
+  kElbowLeft,
+  kWristLeft,
+  kHandLeft,
+  kShoulderRight,
+  kElbowRight,
+  kWristRight,
+  kHandRight,
+  kSpine,
+  kHipCenter,
+  kHipLeft,
+  kKneeLeft,
+  kAnkleLeft,
+  kFootLeft,
+  kHipRight,
+  kKneeRight,
+  kAnkleRight,
+  kFootRight,
 };
 inline constexpr int kJointCount = 20;
 inline constexpr int kDreamJointCount = 10;
@@ -50,7 +67,7 @@ std::optional<JointId> joint_from_name(std::string_view name);
 
 struct JointObservation {
   cv::Vec3d position_m{0, 0, 0};  // in the skeleton sensor's frame (metres)
-  float confidence = 0.f;          // 0 = not tracked, 0.5 = inferred, 1 = tracked (Kinect states)
+  float confidence = 0.f;         // 0 = not tracked, 0.5 = inferred, 1 = tracked (Kinect states)
   bool valid() const { return confidence > 0.f; }
 };
 
@@ -71,7 +88,9 @@ struct AudioChunk {
   int sample_rate = 16000;
   int channels = 1;
   std::vector<float> samples;  // frames() * channels values
-  int64_t frames() const { return channels > 0 ? static_cast<int64_t>(samples.size()) / channels : 0; }
+  int64_t frames() const {
+    return channels > 0 ? static_cast<int64_t>(samples.size()) / channels : 0;
+  }
   Duration duration() const {
     return Duration::from_ns(frames() * 1000000000LL / (sample_rate > 0 ? sample_rate : 1));
   }
@@ -87,7 +106,9 @@ struct SensorFrame {
 
   SensorKind kind() const;
   template <typename T>
-  const T* as() const { return std::get_if<T>(&payload); }
+  const T* as() const {
+    return std::get_if<T>(&payload);
+  }
 };
 
 using FramePtr = std::shared_ptr<const SensorFrame>;

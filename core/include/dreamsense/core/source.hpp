@@ -1,24 +1,24 @@
 #pragma once
 // A Source yields timestamped sensor frames: a recorded session or live devices, same interface.
 
+#include "dreamsense/core/sensor_frame.hpp"
+#include "dreamsense/core/status.hpp"
+
 #include <optional>
 #include <string>
 #include <vector>
-
-#include "dreamsense/core/sensor_frame.hpp"
-#include "dreamsense/core/status.hpp"
 
 namespace dreamsense {
 
 struct SensorDescription {
   SensorId id;
   SensorKind kind = SensorKind::kColor;
-  double rate_hz = 0;          // nominal frame rate (audio: chunks per second)
-  int width = 0, height = 0;   // images
-  int sample_rate = 0;         // audio
-  int channels = 0;            // audio
-  std::string calibration;     // path of the calibration file, if any
-  std::string frame;           // name of the sensor's frame in the transform tree
+  double rate_hz = 0;         // nominal frame rate (audio: chunks per second)
+  int width = 0, height = 0;  // images
+  int sample_rate = 0;        // audio
+  int channels = 0;           // audio
+  std::string calibration;    // path of the calibration file, if any
+  std::string frame;          // name of the sensor's frame in the transform tree
 };
 
 struct SourceInfo {

@@ -2,23 +2,23 @@
 // Errors as values: Result<T> = tl::expected<T, Error>; Status = Result<void>.
 // "Nothing detected" is never an Error; an Error means the input or configuration is bad.
 
-#include <string>
-#include <utility>
-
 #include <fmt/format.h>
 #include <tl/expected.hpp>
+
+#include <string>
+#include <utility>
 
 namespace dreamsense {
 
 enum class ErrorCode {
-  kInvalidArgument,   // bad option or flag
-  kNotFound,          // missing file, stream or key
-  kCorruptData,       // unreadable, truncated or inconsistent data
-  kUnsupported,       // unknown format version, unsupported codec or layout
-  kIoError,           // cannot read or write (permissions, disk full)
-  kEndOfStream,       // a source has no more frames (not a failure)
-  kFailedPrecondition,// wiring or call-order error (pipeline contract)
-  kInternal,          // a bug; carries the values that broke the check
+  kInvalidArgument,     // bad option or flag
+  kNotFound,            // missing file, stream or key
+  kCorruptData,         // unreadable, truncated or inconsistent data
+  kUnsupported,         // unknown format version, unsupported codec or layout
+  kIoError,             // cannot read or write (permissions, disk full)
+  kEndOfStream,         // a source has no more frames (not a failure)
+  kFailedPrecondition,  // wiring or call-order error (pipeline contract)
+  kInternal,            // a bug; carries the values that broke the check
 };
 
 const char* to_string(ErrorCode code);
@@ -57,11 +57,11 @@ class CheckFailure : public std::exception {
 }  // namespace dreamsense
 
 // Always-on precondition checks that print the values involved.
-#define DS_CHECK(cond)                                                                         \
-  do {                                                                                         \
-    if (!(cond))                                                                               \
-      throw ::dreamsense::CheckFailure(fmt::format("{}:{}: check failed: {}", __FILE__,       \
-                                                   __LINE__, #cond));                          \
+#define DS_CHECK(cond)                                                        \
+  do {                                                                        \
+    if (!(cond))                                                              \
+      throw ::dreamsense::CheckFailure(                                       \
+          fmt::format("{}:{}: check failed: {}", __FILE__, __LINE__, #cond)); \
   } while (0)
 #define DS_CHECK_OP(a, op, b)                                                                  \
   do {                                                                                         \

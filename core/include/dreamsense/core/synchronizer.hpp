@@ -11,12 +11,12 @@
 //    limiter is dropped. Every frame that is never delivered is counted as dropped.
 // Frames of one stream must arrive in increasing stamp order.
 
+#include "dreamsense/core/multi_frame.hpp"
+#include "dreamsense/core/status.hpp"
+
 #include <deque>
 #include <map>
 #include <vector>
-
-#include "dreamsense/core/multi_frame.hpp"
-#include "dreamsense/core/status.hpp"
 
 namespace dreamsense {
 
@@ -39,8 +39,8 @@ struct SynchronizerOptions {
   Duration tolerance = Duration::from_ms(20);    // max |frame stamp - tick| for a match
   // Tick 0 time. Unset: the stamp of the first frame pushed.
   Timestamp start = Timestamp::unset();
-  int max_in_flight = 1;                          // live flow limiter
-  size_t max_buffered_per_stream = 256;           // live: older frames are dropped (and counted)
+  int max_in_flight = 1;                 // live flow limiter
+  size_t max_buffered_per_stream = 256;  // live: older frames are dropped (and counted)
   Status check() const;
 };
 
@@ -95,7 +95,7 @@ class Synchronizer {
     std::deque<Buffered> buffer;  // not yet released
     Timestamp last_stamp = Timestamp::unset();
     bool ended = false;
-    FramePtr last_delivered;      // live: may be reused while within tolerance
+    FramePtr last_delivered;  // live: may be reused while within tolerance
   };
   Timestamp tick_time(uint64_t k) const;
   bool settled(uint64_t k) const;

@@ -31,8 +31,14 @@ class Duration {
   constexpr Duration operator*(int64_t k) const { return Duration(ns_ * k); }
   constexpr Duration operator/(int64_t k) const { return Duration(ns_ / k); }
   constexpr int64_t operator/(Duration o) const { return ns_ / o.ns_; }
-  constexpr Duration& operator+=(Duration o) { ns_ += o.ns_; return *this; }
-  constexpr Duration& operator-=(Duration o) { ns_ -= o.ns_; return *this; }
+  constexpr Duration& operator+=(Duration o) {
+    ns_ += o.ns_;
+    return *this;
+  }
+  constexpr Duration& operator-=(Duration o) {
+    ns_ -= o.ns_;
+    return *this;
+  }
   constexpr Duration abs() const { return Duration(ns_ < 0 ? -ns_ : ns_); }
 
  private:
@@ -52,7 +58,9 @@ class Timestamp {
   // Named specials (MediaPipe's idea): before/after every real stamp of a stream.
   static constexpr Timestamp unset() { return Timestamp(kUnsetNs); }
   static constexpr Timestamp pre_stream() { return Timestamp(kUnsetNs + 1); }
-  static constexpr Timestamp post_stream() { return Timestamp(std::numeric_limits<int64_t>::max()); }
+  static constexpr Timestamp post_stream() {
+    return Timestamp(std::numeric_limits<int64_t>::max());
+  }
 
   constexpr int64_t ns() const { return ns_; }
   constexpr double seconds() const { return static_cast<double>(ns_) * 1e-9; }
@@ -65,7 +73,10 @@ class Timestamp {
   constexpr Timestamp operator+(Duration d) const { return Timestamp(ns_ + d.ns()); }
   constexpr Timestamp operator-(Duration d) const { return Timestamp(ns_ - d.ns()); }
   constexpr Duration operator-(Timestamp o) const { return Duration::from_ns(ns_ - o.ns_); }
-  constexpr Timestamp& operator+=(Duration d) { ns_ += d.ns(); return *this; }
+  constexpr Timestamp& operator+=(Duration d) {
+    ns_ += d.ns();
+    return *this;
+  }
 
   // "12.345678901s", or "unset" / "pre_stream" / "post_stream".
   std::string to_string() const;

@@ -7,13 +7,13 @@
 // pre-filled with a cached static background and then receive the moving primitives.
 // Only the pixels inside each primitive's projected bounding box are visited.
 
-#include <memory>
-#include <variant>
-#include <vector>
+#include "dreamsense/core/camera_model.hpp"
 
 #include <opencv2/core.hpp>
 
-#include "dreamsense/core/camera_model.hpp"
+#include <memory>
+#include <variant>
+#include <vector>
 
 namespace dreamsense::sim {
 
@@ -56,7 +56,7 @@ struct RenderTarget {
 
 struct Lighting {
   cv::Vec3d direction{0.3, 1.0, 0.5};  // direction the light travels (world), normalised inside
-  double ambient = 0.55;                // final shade = ambient + diffuse * max(0, n . -dir)
+  double ambient = 0.55;               // final shade = ambient + diffuse * max(0, n . -dir)
   double diffuse = 0.45;
 };
 

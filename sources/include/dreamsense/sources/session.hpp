@@ -1,16 +1,23 @@
 #pragma once
-// Session format v1: a folder with session.yaml and one entry per stream. See docs/session_format.md.
+// Session format v1: a folder with session.yaml and one entry per stream. See
+// docs/session_format.md.
 //
 //   session.yaml            manifest (format, format_version, streams, metadata, complete flag)
 //   <id>.mjpg + <id>.idx    colour stream "mjpeg": concatenated JPEG frames + index lines
 //                           "sequence,stamp_ns,offset,size" (crash-safe: append-only)
 //   <id>.avi/.mp4 + <id>.stamps  colour stream "video": any OpenCV-readable container +
 //                           one stamp_ns per line (read-only support, e.g. imported recordings)
-//   <id>.depth + <id>.idx   depth stream "raw16": concatenated little-endian uint16 frames (mm)
+//   <id>.depth + <id>.idx   depth stream "raw16": concatenated little-endian uint16 frames (mm),
+//                           or "png16": concatenated lossless 16-bit grey PNG frames (mm); same
+//                           index lines and crash-safety rules as mjpeg
 //   <id>.jsonl              skeleton stream: one JSON object per frame
 //   <id>.wav                audio stream: multichannel PCM WAV; first-sample stamp in manifest
 //   calib/<id>.yaml         CameraModel files (dreamsense/core/camera_model.hpp)
 //   truth.jsonl             optional ground truth (docs/truth_format.md)
+
+#include "dreamsense/core/sensor_frame.hpp"
+#include "dreamsense/core/source.hpp"
+#include "dreamsense/core/status.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -20,10 +27,6 @@
 #include <string>
 #include <vector>
 
-#include "dreamsense/core/sensor_frame.hpp"
-#include "dreamsense/core/source.hpp"
-#include "dreamsense/core/status.hpp"
-
 namespace dreamsense::sources {
 
 inline constexpr int kSessionFormatVersion = 1;
@@ -32,10 +35,11 @@ inline constexpr const char* kManifestName = "session.yaml";
 struct StreamEntry {
   SensorId id;
   SensorKind kind = SensorKind::kColor;
-  std::string encoding;     // colour: "mjpeg" | "video"; depth: "raw16"; skeleton: "jsonl"; audio: "wav"
-  std::string file;         // data file, relative to the session folder
-  std::string index;        // index/stamps file (colour, depth), relative
-  double rate_hz = 0;       // nominal
+  std::string encoding;  // colour: "mjpeg" | "video"; depth: "raw16" | "png16";
+                         // skeleton: "jsonl"; audio: "wav"
+  std::string file;      // data file, relative to the session folder
+  std::string index;     // index/stamps file (colour, depth), relative
+  double rate_hz = 0;    // nominal
   int width = 0, height = 0;
   int sample_rate = 0, channels = 0;
   int64_t start_ns = 0;     // audio: stamp of the first sample
@@ -54,12 +58,12 @@ struct SessionManifest {
   std::string name;
   int64_t clock_origin_unix_ns = 0;  // wall-clock time of session stamp 0 (for exports)
   Participant participant;
-  std::string condition;             // "RET" | "SHT" | ""
-  std::string task;                  // e.g. "TT", "JA", "IM"
+  std::string condition;  // "RET" | "SHT" | ""
+  std::string task;       // e.g. "TT", "JA", "IM"
   double frame_rate = 25.0;
-  bool complete = false;             // set by SessionWriter::close(); false after a crash
+  bool complete = false;  // set by SessionWriter::close(); false after a crash
   std::vector<StreamEntry> streams;
-  std::string truth;                 // "truth.jsonl" when the session has ground truth
+  std::string truth;                            // "truth.jsonl" when the session has ground truth
   std::map<std::string, std::string> metadata;  // free key/values (e.g. generator, seed)
 
   const StreamEntry* find(const SensorId& id) const;
@@ -73,8 +77,9 @@ Status write_manifest(const std::filesystem::path& session_dir, const SessionMan
 // encoding valid for the kind, relative file paths); errors name session.yaml and the key.
 Status check_manifest(const SessionManifest& manifest);
 // The default data/index file names of a stream ("<id>.mjpg" + "<id>.idx", "<id>.depth" +
-// "<id>.idx", "<id>.jsonl", "<id>.wav"); SessionWriter::create fills empty `file`/`index`
-// (and an empty `frame` with the id) with these.
+// "<id>.idx" for both raw16 and png16, "<id>.jsonl", "<id>.wav"); SessionWriter::create fills
+// empty `file`/`index` (and an empty `frame` with the id) with these. The encoding itself is the
+// caller's choice and is never changed.
 void fill_stream_defaults(StreamEntry& stream);
 
 struct SessionReaderOptions {
@@ -109,6 +114,11 @@ class SessionReader : public Source {
 
 struct SessionWriterOptions {
   int jpeg_quality = 92;
+  // zlib level (0-9) of "png16" depth streams; lossless at every level. 1 is fast and gets most
+  // of the gain (640x480: a smooth/simulated frame ~23x smaller than raw16, a noisy Kinect-like
+  // one ~2x, in ~8-20 ms); higher levels cost much more time for a few % of raw16 (measurements in
+  // docs/session_format.md). 0 stores the PNG uncompressed.
+  int png_compression = 1;
   Duration flush_interval = Duration::from_seconds(1.0);  // of session time
   Status check() const;
 };

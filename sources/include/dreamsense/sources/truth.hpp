@@ -2,12 +2,12 @@
 // Ground truth of a session (truth.jsonl): one JSON object per line, each with a "type".
 // The record types are documented in docs/truth_format.md.
 
-#include <filesystem>
-#include <vector>
+#include "dreamsense/core/status.hpp"
 
 #include <nlohmann/json.hpp>
 
-#include "dreamsense/core/status.hpp"
+#include <filesystem>
+#include <vector>
 
 namespace dreamsense::sources {
 

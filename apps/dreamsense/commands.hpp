@@ -1,0 +1,35 @@
+#pragma once
+// Each verb is a thin layer: flags -> library options -> run -> exit code.
+
+#include "dreamsense/core/status.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace dreamsense::app {
+
+struct GlobalFlags {
+  bool quiet = false;
+  bool verbose = false;
+};
+
+// Exit codes.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;  // bad input or a failed run (one-line reason on stderr)
+
+// Prints "error: <message>" on one line and returns kExitFailure.
+int fail(const Error& e);
+int fail(const std::string& message);
+
+// Writes JSON to a file, or to stdout for "-". Empty target: does nothing.
+Status write_json(const std::string& target, const nlohmann::json& j);
+
+void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code);
+void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code);
+void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code);
+void add_bench(CLI::App& app, const GlobalFlags& g, int& exit_code);
+
+}  // namespace dreamsense::app

@@ -1,0 +1,259 @@
+// Whole-pipeline tests through the `dreamsense` executable, as a user runs it.
+// One short demo session is generated once per test binary and copied for the bad-input cases.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string err;  // stderr
+};
+
+RunResult run(const std::string& args) {
+  const fs::path err_file =
+      fs::temp_directory_path() / ("ds_cli_err_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(DREAMSENSE_EXE) + " -q " + args + " 2> " + err_file.string();
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err_file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  r.err = ss.str();
+  fs::remove(err_file);
+  return r;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<json> read_jsonl(const fs::path& p) {
+  std::vector<json> out;
+  std::ifstream in(p);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) out.push_back(json::parse(line));
+  return out;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  static fs::path root() {
+    static const fs::path r = fs::temp_directory_path() / ("ds_cli_" + std::to_string(::getpid()));
+    return r;
+  }
+  // A 4-second demo (seed 3), generated and analysed once.
+  static const fs::path& demo() {
+    static const fs::path d = [] {
+      fs::remove_all(root());
+      fs::create_directories(root());
+      const fs::path out = root() / "demo";
+      RunResult r = run("demo --out " + out.string() + " --seed 3 --duration 4");
+      EXPECT_EQ(r.exit_code, 0) << r.err;
+      return out;
+    }();
+    return d;
+  }
+  // A copy of the demo made of hard links (cheap); `damaged` is a real copy, safe to modify.
+  static fs::path copy_of_demo(const std::string& name, const std::string& damaged = "") {
+    const fs::path dst = root() / name;
+    fs::remove_all(dst);
+    fs::copy(demo(), dst, fs::copy_options::recursive | fs::copy_options::create_hard_links);
+    for (const char* f : {"session.yaml", "primitives.jsonl"}) {  // edited by some tests
+      fs::remove(dst / f);
+      fs::copy_file(demo() / f, dst / f);
+    }
+    if (!damaged.empty()) {
+      fs::remove(dst / damaged);
+      fs::copy_file(demo() / damaged, dst / damaged);
+    }
+    return dst;
+  }
+  void SetUp() override { demo(); }  // before any test writes into root()
+  static void TearDownTestSuite() { fs::remove_all(root()); }
+};
+
+TEST_F(Cli, DemoLeavesSessionTruthAndAllOutputs) {
+  for (const char* f : {"session.yaml", "truth.jsonl", "primitives.jsonl", "events.log",
+                        "dream.json", "summary.json"})
+    EXPECT_TRUE(fs::exists(demo() / f)) << f;
+  const auto records = read_jsonl(demo() / "primitives.jsonl");
+  std::set<std::string> names;
+  for (const auto& r : records) {
+    names.insert(r["primitive"].get<std::string>());
+    for (const char* k : {"stamp_ns", "status", "confidence", "value", "legacy", "source"}) {
+      ASSERT_TRUE(r.contains(k)) << k;
+    }
+    if (r["status"] != "ok") {
+      EXPECT_TRUE(r["value"].is_null()) << "no value without data";
+    }
+  }
+  EXPECT_EQ(names.size(), 25u);
+  EXPECT_EQ(records.size() % 25, 0u);
+  EXPECT_GE(records.size() / 25, 99u) << "4 s at 25 Hz";
+  // The skeleton is in the demo, so the body primitives answer.
+  int body_ok = 0;
+  for (const auto& r : records)
+    if (r["primitive"] == "getBodyPose" && r["status"] == "ok") {
+      ++body_ok;
+      EXPECT_EQ(r["legacy"].size(), 30u);
+    }
+  EXPECT_GE(body_ok, 95);
+  EXPECT_NE(slurp(demo() / "events.log").find("getBodyPose:o;"), std::string::npos);
+}
+
+TEST_F(Cli, DreamJsonValidatesAgainstSchema11) {
+  const fs::path schema =
+      fs::path(DREAMSENSE_SOURCE_DIR) / "../shared/data/dream_dataset_format/dream.1.1.json";
+  if (!fs::exists(schema)) GTEST_SKIP() << "DREAM schema not found at " << schema;
+  const std::string cmd = "/usr/bin/python3 " + std::string(DREAMSENSE_SOURCE_DIR) +
+                          "/tools/validate_json_schema.py " + schema.string() + " " +
+                          (demo() / "dream.json").string();
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const json d = json::parse(slurp(demo() / "dream.json"));
+  EXPECT_EQ(d["skeleton"]["head"]["x"].size(), d["head_gaze"]["rx"].size());
+  EXPECT_FALSE(d["skeleton"]["sholder_center"]["z"][10].is_null());
+}
+
+TEST_F(Cli, EvalSessionMeasuresTheBodyAgainstTruth) {
+  const fs::path out = root() / "eval.json";
+  RunResult r = run("eval session " + demo().string() + " --analysis " + demo().string() +
+                    " --json " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j["task"], "session");
+  // Joint noise in the demo is 5 mm per axis: the median 3-D error must be of that order.
+  ASSERT_TRUE(j["metrics"]["body_joint_median_error_m"].is_number());
+  EXPECT_LT(j["metrics"]["body_joint_median_error_m"].get<double>(), 0.02);
+  EXPECT_GT(j["metrics"]["body_joint_median_error_m"].get<double>(), 0.0);
+  EXPECT_TRUE(j["metrics"]["face_recall"].is_null()) << "no face analyser yet: not a zero";
+  EXPECT_TRUE(j["not_evaluated"].contains("face_recall"));
+}
+
+TEST_F(Cli, SameSeedGivesIdenticalTruthAndAnalysis) {
+  const fs::path again = root() / "again";
+  RunResult r = run("demo --out " + again.string() + " --seed 3 --duration 4");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(slurp(again / "truth.jsonl"), slurp(demo() / "truth.jsonl"));
+  EXPECT_EQ(slurp(again / "primitives.jsonl"), slurp(demo() / "primitives.jsonl"));
+  EXPECT_EQ(slurp(again / "camera_left.mjpg"), slurp(demo() / "camera_left.mjpg"));
+  fs::remove_all(again);
+}
+
+TEST_F(Cli, TruncatedCameraVideoIsAOneLineErrorNamingTheFile) {
+  const fs::path s = copy_of_demo("truncated", "camera_left.mjpg");
+  const fs::path video = s / "camera_left.mjpg";
+  ASSERT_TRUE(fs::exists(video));
+  fs::resize_file(video, fs::file_size(video) / 2);
+  const fs::path out = root() / "truncated_out";
+  RunResult r = run("analyze " + s.string() + " --out " + out.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("camera_left.mjpg"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(out / "primitives.jsonl")) << "no half-written output";
+}
+
+TEST_F(Cli, MissingStreamFileIsNamed) {
+  const fs::path s = copy_of_demo("missing");
+  fs::remove(s / "mic_array.wav");
+  RunResult r = run("analyze " + s.string() + " --out " + (root() / "missing_out").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("mic_array.wav"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, UnknownFormatVersionIsRejected) {
+  const fs::path s = copy_of_demo("version");
+  std::string yaml = slurp(s / "session.yaml");
+  const auto pos = yaml.find("format_version: 1");
+  ASSERT_NE(pos, std::string::npos);
+  yaml.replace(pos, 17, "format_version: 99");
+  std::ofstream(s / "session.yaml") << yaml;
+  RunResult r = run("analyze " + s.string() + " --out " + (root() / "version_out").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("format_version"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, UnwritableOutputFolderIsRejected) {
+  std::ofstream(root() / "a_file") << "x";
+  RunResult r =
+      run("analyze " + demo().string() + " --out " + (root() / "a_file" / "out").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("a_file/out"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, BenchPipelineReportsTheContractKeys) {
+  const fs::path out = root() / "bench.json";
+  RunResult r = run("bench pipeline " + demo().string() + " --no-live --json " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j["task"], "pipeline");
+  for (const char* k : {"fps", "realtime_factor", "latency_p95_ms", "dropped_frames"})
+    EXPECT_TRUE(j["metrics"].contains(k)) << k;
+  EXPECT_GT(j["metrics"]["fps"].get<double>(), 25.0);
+}
+
+// Numbers within `tol`, everything else equal.
+void expect_json_near(const json& a, const json& b, double tol, const std::string& where) {
+  if (a.is_number() && b.is_number()) {
+    EXPECT_NEAR(a.get<double>(), b.get<double>(), tol) << where;
+    return;
+  }
+  ASSERT_EQ(a.type(), b.type()) << where;
+  if (a.is_object()) {
+    ASSERT_EQ(a.size(), b.size()) << where;
+    for (const auto& [k, v] : a.items()) {
+      ASSERT_TRUE(b.contains(k)) << where << "/" << k;
+      expect_json_near(v, b[k], tol, where + "/" + k);
+    }
+  } else if (a.is_array()) {
+    ASSERT_EQ(a.size(), b.size()) << where;
+    for (size_t i = 0; i < a.size(); ++i)
+      expect_json_near(a[i], b[i], tol, where + "/" + std::to_string(i));
+  } else {
+    EXPECT_EQ(a, b) << where;
+  }
+}
+
+// Golden output of the whole pipeline on demo seed 3 (4 s): every record that is not
+// `disabled`. Regenerate deliberately with DREAMSENSE_UPDATE_GOLDEN=1 after an intended change.
+TEST_F(Cli, EnabledPrimitivesMatchGoldenOutput) {
+  const fs::path golden =
+      fs::path(DREAMSENSE_SOURCE_DIR) / "data/fixtures/golden/demo-seed3-4s.enabled.jsonl";
+  std::vector<json> actual;
+  for (auto& r : read_jsonl(demo() / "primitives.jsonl"))
+    if (r["status"] != "disabled") actual.push_back(r);
+  ASSERT_FALSE(actual.empty());
+  if (std::getenv("DREAMSENSE_UPDATE_GOLDEN") != nullptr) {
+    fs::create_directories(golden.parent_path());
+    std::ofstream out(golden);
+    for (const auto& r : actual) out << r.dump() << "\n";
+    GTEST_SKIP() << "golden output rewritten: " << golden;
+  }
+  ASSERT_TRUE(fs::exists(golden)) << golden << " (run with DREAMSENSE_UPDATE_GOLDEN=1)";
+  const auto expected = read_jsonl(golden);
+  ASSERT_EQ(actual.size(), expected.size());
+  for (size_t i = 0; i < actual.size(); ++i)
+    expect_json_near(actual[i], expected[i], 1e-6, "record " + std::to_string(i));
+}
+
+TEST_F(Cli, HelpAndUsageErrors) {
+  EXPECT_EQ(run("analyze --help").exit_code, 0);
+  EXPECT_NE(run("analyze").exit_code, 0) << "missing SESSION";
+  EXPECT_NE(run("no-such-verb").exit_code, 0);
+}
+
+}  // namespace

@@ -1,0 +1,14 @@
+#include "dreamsense/export/writers.hpp"
+
+namespace dreamsense::exporters {
+
+Status PrimitivesJsonlWriter::write(const std::vector<primitives::PrimitiveRecord>& records) {
+  std::string text;
+  for (const auto& r : records) {
+    text += primitives::to_json(r).dump();
+    text += '\n';
+  }
+  return file_.write(text);
+}
+
+}  // namespace dreamsense::exporters

@@ -1,0 +1,169 @@
+#include "dreamsense/primitives/evaluator.hpp"
+
+#include "dreamsense/body/arm_geometry.hpp"
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/primitives/body_primitives.hpp"
+
+namespace dreamsense::primitives {
+namespace {
+using nlohmann::json;
+
+json vec_json(const cv::Vec3d& v) { return json::array({v[0], v[1], v[2]}); }
+void append_mm(std::vector<double>& out, const cv::Vec3d& v) {
+  for (int i = 0; i < 3; ++i) out.push_back(v[i] * 1000.0);
+}
+json arm_json(const std::optional<body::ArmAngle>& a) {
+  if (!a) return nullptr;
+  return {{"azimuth_deg", a->azimuth_deg}, {"elevation_deg", a->elevation_deg}};
+}
+}  // namespace
+
+Status EvaluatorOptions::check() const {
+  std::string bad;
+  if (freshness.ns() <= 0) bad += " freshness must be > 0;";
+  if (offline_after <= freshness) bad += " offline_after must exceed freshness;";
+  if (!(track_hand_dt_s >= 0)) bad += " track_hand_dt_s must be >= 0;";
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "EvaluatorOptions:" + bad);
+  return ok_status();
+}
+
+Evaluator::Evaluator(EvaluatorOptions options, SensorId body_sensor)
+    : options_(std::move(options)), body_sensor_(std::move(body_sensor)) {}
+
+PrimitiveRecord Evaluator::base(PrimitiveId id, Timestamp stamp) const {
+  PrimitiveRecord r;
+  r.stamp = stamp;
+  r.id = id;
+  r.status = PrimitiveStatus::kDisabled;
+  r.value = nullptr;
+  return r;
+}
+
+std::vector<PrimitiveRecord> Evaluator::evaluate(const MultiFrame& tick,
+                                                 const BlackboardView& view) {
+  if (!first_tick_.is_set()) first_tick_ = tick.stamp;
+  for (const auto& [id, f] : tick.frames) last_seen_[id] = f->stamp;
+  for (const auto& [id, c] : tick.chunks)
+    if (!c.empty()) last_seen_[id] = c.back()->stamp;
+
+  std::vector<PrimitiveRecord> out;
+  out.reserve(kPrimitiveCount);
+  for (const auto& i : catalogue()) out.push_back(base(i.id, tick.stamp));
+  if (!body_sensor_.empty()) evaluate_body(tick, view, out);
+  return out;
+}
+
+void Evaluator::evaluate_body(const MultiFrame& tick, const BlackboardView& view,
+                              std::vector<PrimitiveRecord>& out) {
+  const auto entry = view.get(keys::kChildBody);
+  PrimitiveStatus status = PrimitiveStatus::kOk;
+  auto seen = last_seen_.find(body_sensor_);
+  const Timestamp last = seen == last_seen_.end() ? first_tick_ : seen->second;
+  if (tick.stamp - last > options_.offline_after)
+    status = PrimitiveStatus::kSensorOffline;
+  else if (!entry)
+    status = PrimitiveStatus::kNoData;
+  else if (tick.stamp - entry->stamp > options_.freshness)
+    status = PrimitiveStatus::kStale;
+  else if (!entry->present())
+    status = PrimitiveStatus::kNoData;
+
+  const PrimitiveId ids[] = {PrimitiveId::kGetArmAngle, PrimitiveId::kGetBody,
+                             PrimitiveId::kGetBodyPose, PrimitiveId::kGetHands,
+                             PrimitiveId::kTrackHand};
+  for (PrimitiveId id : ids) {
+    PrimitiveRecord& r = out[static_cast<int>(id) - 1];
+    r.status = status;
+    r.source = body_sensor_;
+    if (entry) r.data_stamp = entry->stamp;
+  }
+  if (status != PrimitiveStatus::kOk) return;
+
+  const SkeletonBody& b = entry->value->body;
+  const double conf = entry->confidence;
+  auto ok = [&](PrimitiveId id, json value, std::optional<std::vector<double>> legacy) {
+    PrimitiveRecord& r = out[static_cast<int>(id) - 1];
+    r.value = std::move(value);
+    r.legacy = std::move(legacy);
+    r.confidence = conf;
+  };
+  auto none = [&](PrimitiveId id) {
+    out[static_cast<int>(id) - 1].status = PrimitiveStatus::kNoData;
+  };
+
+  // F2 getArmAngle
+  const body::ArmAngles arms = body::arm_angles(b);
+  if (arms.left || arms.right) {
+    std::optional<std::vector<double>> legacy;
+    if (arms.left && arms.right)
+      legacy = std::vector<double>{arms.left->elevation_deg, arms.left->azimuth_deg,
+                                   arms.right->elevation_deg, arms.right->azimuth_deg};
+    ok(PrimitiveId::kGetArmAngle, {{"left", arm_json(arms.left)}, {"right", arm_json(arms.right)}},
+       legacy);
+  } else {
+    none(PrimitiveId::kGetArmAngle);
+  }
+
+  // F3 getBody
+  if (auto c = body_centre(b)) {
+    std::vector<double> legacy;
+    append_mm(legacy, *c);
+    ok(PrimitiveId::kGetBody,
+       {{"position_m", vec_json(*c)}, {"bodies_in_view", entry->value->bodies_in_view}}, legacy);
+  } else {
+    none(PrimitiveId::kGetBody);
+  }
+
+  // F4 getBodyPose
+  {
+    json joints = json::object();
+    std::vector<double> legacy;
+    for (const auto& j : body_pose(b)) {
+      joints[std::string(joint_name(j.joint))] = {{"position_m", vec_json(j.position_m)},
+                                                  {"confidence", j.confidence}};
+      append_mm(legacy, j.position_m);
+    }
+    ok(PrimitiveId::kGetBodyPose, {{"joints", joints}}, legacy);
+  }
+
+  // F9 getHands
+  const Hands h = hands(b);
+  if (h.left || h.right) {
+    std::optional<std::vector<double>> legacy;
+    if (h.left && h.right) {
+      legacy.emplace();
+      append_mm(*legacy, *h.left);
+      append_mm(*legacy, *h.right);
+    }
+    ok(PrimitiveId::kGetHands,
+       {{"left", h.left ? vec_json(*h.left) : json(nullptr)},
+        {"right", h.right ? vec_json(*h.right) : json(nullptr)}},
+       legacy);
+  } else {
+    none(PrimitiveId::kGetHands);
+  }
+
+  // F24 trackHand, default query: seed = the right hand (else left), dt = track_hand_dt_s.
+  PrimitiveRecord& th = out[static_cast<int>(PrimitiveId::kTrackHand) - 1];
+  const std::optional<cv::Vec3d> seed = h.right ? h.right : h.left;
+  if (seed) {
+    th.query = {{"seed_m", vec_json(*seed)}, {"dt_s", options_.track_hand_dt_s}};
+    auto p = predict_hand(view.history(keys::kChildBody, 16), *seed, options_.track_hand_dt_s);
+    if (p) {
+      std::vector<double> legacy;
+      append_mm(legacy, p->position_m);
+      ok(PrimitiveId::kTrackHand,
+         {{"position_m", vec_json(p->position_m)},
+          {"velocity_mps", vec_json(p->velocity_mps)},
+          {"hand", p->left ? "left" : "right"},
+          {"samples", p->samples}},
+         legacy);
+    } else {
+      none(PrimitiveId::kTrackHand);
+    }
+  } else {
+    none(PrimitiveId::kTrackHand);
+  }
+}
+
+}  // namespace dreamsense::primitives

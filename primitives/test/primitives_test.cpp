@@ -1,0 +1,120 @@
+#include "dreamsense/primitives/body_primitives.hpp"
+#include "dreamsense/primitives/evaluator.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <set>
+
+namespace dreamsense::primitives {
+namespace {
+
+Timestamp ms(int64_t v) { return Timestamp::from_ns(v * 1'000'000); }
+
+SkeletonBody child_with_right_hand(cv::Vec3d hand) {
+  SkeletonBody b;
+  for (int i = 0; i < kDreamJointCount; ++i) b.joints[i] = {{0.01 * i, -0.1, 1.1}, 1.f};
+  b.joint(JointId::kSpine) = {{0, 0.1, 1.1}, 1.f};
+  b.joint(JointId::kShoulderLeft) = {{0.15, -0.05, 1.1}, 1.f};
+  b.joint(JointId::kShoulderRight) = {{-0.15, -0.05, 1.1}, 1.f};
+  b.joint(JointId::kShoulderCenter) = {{0, -0.05, 1.1}, 1.f};
+  b.joint(JointId::kHandRight) = {hand, 1.f};
+  return b;
+}
+
+TEST(Catalogue, HasTwentyFiveDistinctNamesInTableOrder) {
+  std::set<std::string> names;
+  int n = 1;
+  for (const auto& i : catalogue()) {
+    EXPECT_EQ(static_cast<int>(i.id), n);
+    EXPECT_EQ(std::string(i.code), fmt::format("F{}", n));
+    names.insert(i.name);
+    ++n;
+  }
+  EXPECT_EQ(names.size(), 25u);
+  EXPECT_STREQ(info(PrimitiveId::kGetHeadGazePlane).name, "getHeadGaze (plane)");
+}
+
+TEST(PredictHand, ConstantVelocityIsExtrapolated) {
+  std::vector<Entry<BodyState>> history;  // newest first, hand moving +0.5 m/s in x
+  for (int i = 0; i < 8; ++i) {
+    const double t = (7 - i) * 0.04;
+    history.push_back({std::make_shared<const BodyState>(
+                           BodyState{child_with_right_hand({-0.3 + 0.5 * t, 0, 1.0})}),
+                       ms((7 - i) * 40), 1.f, "body"});
+  }
+  auto p = predict_hand(history, {-0.15, 0, 1.0}, 0.2);
+  ASSERT_TRUE(p);
+  EXPECT_FALSE(p->left);
+  EXPECT_NEAR(p->velocity_mps[0], 0.5, 1e-9);
+  EXPECT_NEAR(p->position_m[0], -0.3 + 0.5 * 0.28 + 0.1, 1e-9);
+  EXPECT_GE(p->samples, 7);
+}
+
+TEST(Evaluator, DisabledPrimitivesCarryNoValues) {
+  Evaluator ev({}, "");
+  MultiFrame tick;
+  tick.stamp = ms(0);
+  auto recs = ev.evaluate(tick, BlackboardView());
+  ASSERT_EQ(recs.size(), 25u);
+  for (const auto& r : recs) {
+    EXPECT_EQ(r.status, PrimitiveStatus::kDisabled);
+    EXPECT_TRUE(r.value.is_null());
+    EXPECT_FALSE(r.legacy.has_value());
+  }
+}
+
+TEST(Evaluator, BodyPrimitivesOkNoDataStaleAndOffline) {
+  Evaluator ev({}, "skel");
+  Blackboard bb;
+  auto tick = [&](int64_t t, bool with_frame) {
+    MultiFrame mf;
+    mf.stamp = ms(t);
+    if (with_frame) mf.frames["skel"] = make_frame("skel", ms(t), 0, Skeleton{});
+    return mf;
+  };
+  auto status = [&](const std::vector<PrimitiveRecord>& r, PrimitiveId id) {
+    return r[static_cast<int>(id) - 1].status;
+  };
+  // Nothing written yet.
+  auto r = ev.evaluate(tick(0, true), bb.snapshot());
+  EXPECT_EQ(status(r, PrimitiveId::kGetBody), PrimitiveStatus::kNoData);
+  // A body observed.
+  BlackboardWriter w("body");
+  w.set(keys::kChildBody, BodyState{child_with_right_hand({-0.3, 0, 1})}, ms(40), 0.9f);
+  bb.commit(w, ms(40));
+  r = ev.evaluate(tick(40, true), bb.snapshot());
+  EXPECT_EQ(status(r, PrimitiveId::kGetBody), PrimitiveStatus::kOk);
+  EXPECT_EQ(status(r, PrimitiveId::kGetFaces), PrimitiveStatus::kDisabled);
+  const auto& pose = r[static_cast<int>(PrimitiveId::kGetBodyPose) - 1];
+  ASSERT_TRUE(pose.legacy);
+  EXPECT_EQ(pose.legacy->size(), 30u);
+  EXPECT_NEAR((*pose.legacy)[2], 1100.0, 1e-9) << "legacy is millimetres";
+  EXPECT_NEAR(*pose.confidence, 0.9, 1e-6);
+  // 200 ms later without a new observation: stale, and no value is repeated.
+  r = ev.evaluate(tick(240, true), bb.snapshot());
+  EXPECT_EQ(status(r, PrimitiveId::kGetHands), PrimitiveStatus::kStale);
+  EXPECT_TRUE(r[static_cast<int>(PrimitiveId::kGetHands) - 1].value.is_null());
+  // The analyser looked and found nobody.
+  w.set_absent(keys::kChildBody, ms(280));
+  bb.commit(w, ms(280));
+  r = ev.evaluate(tick(280, true), bb.snapshot());
+  EXPECT_EQ(status(r, PrimitiveId::kGetBody), PrimitiveStatus::kNoData);
+  // The skeleton stream goes silent for more than a second.
+  r = ev.evaluate(tick(1400, false), bb.snapshot());
+  EXPECT_EQ(status(r, PrimitiveId::kGetBody), PrimitiveStatus::kSensorOffline);
+}
+
+TEST(Evaluator, RecordJsonHasTheContractFields) {
+  Evaluator ev({}, "");
+  MultiFrame tick;
+  tick.stamp = ms(40);
+  auto j = to_json(ev.evaluate(tick, BlackboardView())[11]);
+  EXPECT_EQ(j["stamp_ns"], 40'000'000);
+  EXPECT_EQ(j["primitive"], "getHeadGaze (plane)");
+  EXPECT_EQ(j["status"], "disabled");
+  for (const char* k : {"confidence", "value", "legacy", "source"}) EXPECT_TRUE(j.contains(k)) << k;
+}
+
+}  // namespace
+}  // namespace dreamsense::primitives

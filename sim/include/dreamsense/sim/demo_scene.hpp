@@ -1,0 +1,128 @@
+#pragma once
+// The demo scene as pure functions of (seed, time): head pose, actions, skeleton, table objects.
+// Nothing here renders; demo_session.cpp turns this script into images, audio and truth.
+// The layout is documented in docs/demo_session.md. World = front RGB-D sensor optical frame
+// (x right, y down, z forward, metres).
+
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/core/sensor_frame.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace dreamsense::sim {
+
+// 64-bit mix of a seed and a tag (splitmix64 finaliser): independent streams per component.
+uint64_t sub_seed(uint64_t seed, std::string_view tag, uint64_t index = 0);
+
+struct DemoGeometry {
+  cv::Vec3d robot_head_m{0.0, -0.05, 0.15};
+  double gaze_radius_m = 0.20;
+  cv::Vec3d head_rest_m{0.0, -0.05, 1.10};  // child's eye midpoint, mean position
+  // Table: top plane y = table_top_y_m, rectangle x in [x_min, x_max], z in [z_min, z_max].
+  double table_top_y_m = 0.30;
+  double table_x_min_m = -0.55, table_x_max_m = 0.55;
+  double table_z_min_m = 0.30, table_z_max_m = 0.95;
+  // Room (shoebox, also used by the acoustics): world x in [-2.5, 2.5], y (down) in
+  // [-2.0, 1.0] (floor at y = 1.0), z in [-1.5, 2.5] (back wall behind the child at 2.5 m).
+  cv::Vec3d room_min_m{-2.5, -2.0, -1.5};
+  cv::Vec3d room_max_m{2.5, 1.0, 2.5};
+  // Kinect v1 microphone array: mics on the array's x axis; array frame axes = world axes.
+  cv::Vec3d mic_array_m{0.0, 0.05, 0.0};
+  std::array<double, 4> mic_x_m{0.113, -0.036, -0.076, -0.113};
+  cv::Vec3d room_from_world(const cv::Vec3d& world) const { return world - room_min_m; }
+  cv::Vec3d room_size_m() const { return room_max_m - room_min_m; }
+};
+
+enum class DemoAction { kNone, kWave, kFly, kHandsOnHead };
+std::string_view action_label(DemoAction action);  // "none", "wave", "fly", "hands_on_head"
+int action_dream_id(DemoAction action);            // identifyTrajectory index: 0, 1, 4, 3
+
+struct ActionSegment {
+  double start_s = 0, end_s = 0;
+  DemoAction action = DemoAction::kNone;
+};
+
+// Rests (none, 0.8-1.6 s) alternating with actions (2-3.5 s): the first three actions are a
+// seed-dependent permutation of wave / fly / hands_on_head (so 20 s always contains all three),
+// later ones are drawn at random. Segments tile [0, duration_s).
+std::vector<ActionSegment> make_action_schedule(uint64_t seed, double duration_s);
+
+struct HeadPose {
+  cv::Vec3d position_m{0, 0, 1};  // eye midpoint (world)
+  double yaw_deg = 0, pitch_deg = 0, roll_deg = 0;
+  cv::Matx33d rotation() const;  // world_from_head = rotation_from_ypr_deg(yaw, pitch, roll)
+  cv::Vec3d gaze_dir() const;    // rotation() * (0, 0, -1)
+};
+// Yaw/pitch (degrees) that point the head gaze from `from` towards `to`.
+void look_at_angles(const cv::Vec3d& from, const cv::Vec3d& to, double& yaw_deg, double& pitch_deg);
+// Distance from `point` to the ray origin + s * dir (s >= 0).
+double ray_point_distance(const cv::Vec3d& origin, const cv::Vec3d& dir, const cv::Vec3d& point);
+
+struct TableObjectSpec {
+  int id = 0;
+  int label = 0;           // DREAM: 0 car, 1 cup, 2 flower, 3 plane
+  std::string label_name;  // "car", "cup", "flower", "plane"
+  double width_m = 0.10;   // along the object's x
+  double depth_m = 0.075;  // along the object's z
+  double height_m = 0.03;
+};
+
+struct TableObjectState {
+  int id = 0;
+  cv::Vec3d position_m{0, 0, 0};  // centre of the top face (world)
+  double yaw_deg = 0;             // rotation about the (vertical) world y axis
+  std::array<cv::Vec3d, 8>
+      corners{};  // 0-3 top face (u,v order: 0 -> +u -> +u+v -> +v), 4-7 bottom
+};
+
+class DemoScript {
+ public:
+  DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry = {});
+
+  const DemoGeometry& geometry() const { return geometry_; }
+  uint64_t seed() const { return seed_; }
+  double duration_s() const { return duration_s_; }
+
+  HeadPose head_pose(double t) const;
+  // 1 inside a "look at the robot" hold, 0 outside, smooth ramps in between.
+  double hold_weight(double t) const;
+  const std::vector<std::pair<double, double>>& holds() const { return holds_; }
+
+  const std::vector<ActionSegment>& actions() const { return actions_; }
+  DemoAction action_at(double t) const;
+  // All 20 Kinect joints (world, noise-free), consistent with head_pose(t).
+  std::array<cv::Vec3d, kJointCount> joints(double t) const;
+
+  const std::vector<TableObjectSpec>& objects() const { return objects_; }
+  std::vector<TableObjectState> object_states(double t) const;
+
+ private:
+  struct Sinusoid {
+    double amplitude, freq_hz, phase;
+  };
+  static double eval(const std::vector<Sinusoid>& s, double t);
+  std::array<cv::Vec3d, 6> arm_pose(DemoAction action, double t, const cv::Vec3d& head_centre,
+                                    const cv::Vec3d& shoulder_l, const cv::Vec3d& shoulder_r) const;
+
+  uint64_t seed_;
+  double duration_s_;
+  DemoGeometry geometry_;
+  std::vector<Sinusoid> yaw_, pitch_, roll_, pos_x_, pos_y_, pos_z_;
+  std::vector<std::pair<double, double>> holds_;  // [start, end] at full weight
+  std::vector<ActionSegment> actions_;
+  double wave_hz_ = 1.8, fly_hz_ = 0.8;
+  std::vector<TableObjectSpec> objects_;
+  struct ObjectPath {
+    double x_centre, z_centre;
+    Sinusoid x, z, yaw;
+  };
+  std::vector<ObjectPath> paths_;
+};
+
+}  // namespace dreamsense::sim

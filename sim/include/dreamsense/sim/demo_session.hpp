@@ -1,0 +1,95 @@
+#pragma once
+// The deterministic demo session (`dreamsense demo [--seed N]`): a synthetic but physically
+// consistent recording with exact ground truth (docs/truth_format.md), built only from media
+// that Debian packages ship. Scene layout: docs/demo_session.md; method: sim/README.md.
+//
+// Determinism: the same options give byte-identical data files and truth.jsonl, whatever the
+// number of threads (each frame depends only on (seed, stream, frame index)).
+
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/sim/demo_scene.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace dreamsense::sim {
+
+struct DemoOptions {
+  std::filesystem::path out_dir;  // required; must not exist, be empty, or hold an old session
+  uint64_t seed = 1;
+  double duration_s = 20;          // (0, 600]
+  double camera_rate_hz = 25;      // camera_left / camera_middle / camera_right (DREAM ~25 Hz)
+  double kinect_rate_hz = 30;      // front.color, front.depth, front.skeleton, top.color
+  int audio_sample_rate = 16000;   // must equal the clips' rate (16 kHz)
+  double audio_chunk_s = 0.1;      // length of the AudioChunk frames written
+  double rt60_s = 0.35;            // room reverberation
+  double snr_db = 20;              // speech (while active) to pink noise, per channel
+  double joint_noise_m = 0.005;    // Gaussian noise on the written skeleton joints (truth: none)
+  double image_noise_sigma = 2.0;  // Gaussian noise on colour images (grey levels)
+  int jpeg_quality = 90;
+  int threads = 2;         // render threads (>= 1); never changes the output
+  bool overwrite = false;  // replace an existing session folder (only if it has session.yaml)
+  // Media shipped by Debian packages.
+  std::filesystem::path portrait =
+      "/usr/lib/python3/dist-packages/skimage/data/astronaut.png";  // python3-skimage
+  std::filesystem::path opencv_samples_dir =
+      "/usr/share/doc/opencv-doc/examples/data";  // opencv-doc
+  std::filesystem::path pocketsphinx_data_dir =
+      "/usr/share/pocketsphinx/test/data";  // pocketsphinx-testdata
+  Status check() const;
+};
+
+struct DemoSummary {
+  std::filesystem::path out_dir;
+  std::map<std::string, int64_t> frames;  // per stream id (audio: chunks)
+  int utterances = 0;
+  int action_segments = 0;
+  int64_t truth_records = 0;
+  double generation_s = 0;  // wall-clock time of generate_demo_session
+};
+
+// Generates the session folder. `progress` (optional) receives fractions in [0, 1].
+// Missing media give one-line errors naming the file and the Debian package to install.
+Result<DemoSummary> generate_demo_session(
+    const DemoOptions& options, const std::function<void(double fraction)>& progress = nullptr);
+
+// ---- Building blocks (exposed for tests and for `dreamsense eval`) ----
+
+// All demo cameras, in manifest order: camera_left, camera_middle, camera_right, front.color,
+// front.depth (same model as front.color: registered depth), top.color.
+std::vector<CameraModel> make_demo_cameras(const DemoGeometry& geometry = {});
+
+// Kinect v1 microphone positions in the array frame (metres), Nx3 rows.
+std::vector<cv::Vec3d> demo_mic_positions(const DemoGeometry& geometry = {});
+
+// Azimuth/elevation (degrees) of a world point in the array frame: azimuth 0 = broadside
+// (+z), positive towards +x; elevation positive upwards (towards -y).
+void array_direction(const DemoGeometry& geometry, const cv::Vec3d& world, double& azimuth_deg,
+                     double& elevation_deg);
+
+struct SpeechClipInfo {
+  std::string file;     // relative to pocketsphinx_data_dir
+  std::string text;     // transcription
+  std::string speaker;  // "child" | "therapist"
+  double duration_s = 0;
+  double speech_start_s = 0, speech_end_s = 0;  // energy gate on the clean clip
+};
+
+struct PlannedUtterance {
+  size_t clip = 0;              // index into the clip list
+  double clip_start_s = 0;      // session time of the clip's first sample
+  cv::Vec3d source_m{0, 0, 0};  // world
+};
+
+// Non-overlapping placement of 3-5 utterances (fewer if the session is too short), alternating
+// speakers; child utterances come from the child's mouth, therapist ones from one side of the
+// array at 30-60 degrees azimuth and 1.2-2.0 m.
+std::vector<PlannedUtterance> plan_utterances(const DemoScript& script,
+                                              const std::vector<SpeechClipInfo>& clips);
+
+}  // namespace dreamsense::sim

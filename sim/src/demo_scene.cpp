@@ -1,0 +1,350 @@
+#include "dreamsense/sim/demo_scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace dreamsense::sim {
+namespace {
+
+constexpr double kTwoPi = 2.0 * CV_PI;
+constexpr double kUpperArm = 0.21, kForearm = 0.19, kHand = 0.07;
+constexpr double kTransitionS = 0.5;
+
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return lo + (hi - lo) * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
+}
+
+double smoothstep(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * (3 - 2 * x);
+}
+
+cv::Vec3d normalized(const cv::Vec3d& v) {
+  const double n = cv::norm(v);
+  return n > 1e-12 ? v / n : cv::Vec3d(0, 0, 0);
+}
+
+// Two-bone inverse kinematics: elbow and (reachable) wrist for a wrist target, the elbow bending
+// towards `pole`.
+std::pair<cv::Vec3d, cv::Vec3d> solve_arm(const cv::Vec3d& shoulder, cv::Vec3d wrist,
+                                          const cv::Vec3d& pole) {
+  cv::Vec3d sw = wrist - shoulder;
+  double d = cv::norm(sw);
+  const double reach = kUpperArm + kForearm - 1e-3;
+  const cv::Vec3d e = normalized(sw);
+  if (d > reach) {
+    d = reach;
+    wrist = shoulder + e * d;
+  }
+  d = std::max(d, std::abs(kUpperArm - kForearm) + 1e-3);
+  const double a = (kUpperArm * kUpperArm - kForearm * kForearm + d * d) / (2 * d);
+  const double h = std::sqrt(std::max(0.0, kUpperArm * kUpperArm - a * a));
+  cv::Vec3d q = pole - pole.dot(e) * e;
+  q = normalized(q);
+  return {shoulder + a * e + h * q, wrist};
+}
+
+}  // namespace
+
+uint64_t sub_seed(uint64_t seed, std::string_view tag, uint64_t index) {
+  uint64_t h = 1469598103934665603ULL;  // FNV-1a of the tag
+  for (char c : tag) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ULL;
+  uint64_t z = seed + 0x9E3779B97F4A7C15ULL * (h ^ (index * 0xD1B54A32D192ED03ULL) ^ 0x5bd1e995ULL);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+std::string_view action_label(DemoAction action) {
+  switch (action) {
+    case DemoAction::kNone:
+      return "none";
+    case DemoAction::kWave:
+      return "wave";
+    case DemoAction::kFly:
+      return "fly";
+    case DemoAction::kHandsOnHead:
+      return "hands_on_head";
+  }
+  return "none";
+}
+
+int action_dream_id(DemoAction action) {
+  switch (action) {
+    case DemoAction::kNone:
+      return 0;
+    case DemoAction::kWave:
+      return 1;
+    case DemoAction::kFly:
+      return 4;
+    case DemoAction::kHandsOnHead:
+      return 3;
+  }
+  return 0;
+}
+
+std::vector<ActionSegment> make_action_schedule(uint64_t seed, double duration_s) {
+  std::mt19937_64 rng(sub_seed(seed, "actions"));
+  std::vector<DemoAction> order = {DemoAction::kWave, DemoAction::kFly, DemoAction::kHandsOnHead};
+  for (size_t i = order.size() - 1; i > 0; --i)  // Fisher-Yates with our own draws (portable)
+    std::swap(order[i], order[static_cast<size_t>(rng() % (i + 1))]);
+  std::vector<ActionSegment> out;
+  double t = 0;
+  size_t k = 0;
+  while (t < duration_s) {
+    const double rest = uniform(rng, 0.8, 1.6);
+    out.push_back({t, std::min(duration_s, t + rest), DemoAction::kNone});
+    t += rest;
+    if (t >= duration_s) break;
+    const DemoAction a = k < order.size() ? order[k] : order[static_cast<size_t>(rng() % 3)];
+    ++k;
+    const double len = uniform(rng, 2.0, 3.5);
+    out.push_back({t, std::min(duration_s, t + len), a});
+    t += len;
+  }
+  return out;
+}
+
+cv::Matx33d HeadPose::rotation() const {
+  return rotation_from_ypr_deg(yaw_deg, pitch_deg, roll_deg);
+}
+cv::Vec3d HeadPose::gaze_dir() const { return rotation() * cv::Vec3d(0, 0, -1); }
+
+void look_at_angles(const cv::Vec3d& from, const cv::Vec3d& to, double& yaw_deg,
+                    double& pitch_deg) {
+  // gaze = Ry(yaw) Rx(pitch) (0,0,-1) = (-sin(yaw) cos(pitch), sin(pitch), -cos(yaw) cos(pitch))
+  const cv::Vec3d g = normalized(to - from);
+  pitch_deg = std::asin(std::clamp(g[1], -1.0, 1.0)) * 180 / CV_PI;
+  yaw_deg = std::atan2(-g[0], -g[2]) * 180 / CV_PI;
+}
+
+double ray_point_distance(const cv::Vec3d& origin, const cv::Vec3d& dir, const cv::Vec3d& point) {
+  const cv::Vec3d d = normalized(dir);
+  const double s = std::max(0.0, (point - origin).dot(d));
+  return cv::norm(origin + s * d - point);
+}
+
+double DemoScript::eval(const std::vector<Sinusoid>& s, double t) {
+  double v = 0;
+  for (const auto& x : s) v += x.amplitude * std::sin(kTwoPi * x.freq_hz * t + x.phase);
+  return v;
+}
+
+DemoScript::DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry)
+    : seed_(seed), duration_s_(duration_s), geometry_(geometry) {
+  std::mt19937_64 rng(sub_seed(seed, "head"));
+  auto two = [&](double total, double f_lo, double f_hi, double f2_lo, double f2_hi) {
+    const double split = uniform(rng, 0.55, 0.75);
+    return std::vector<Sinusoid>{
+        {total * split, uniform(rng, f_lo, f_hi), uniform(rng, 0, kTwoPi)},
+        {total * (1 - split), uniform(rng, f2_lo, f2_hi), uniform(rng, 0, kTwoPi)}};
+  };
+  yaw_ = two(55.0, 0.05, 0.10, 0.13, 0.25);
+  pitch_ = two(15.0, 0.07, 0.14, 0.18, 0.30);
+  roll_ = two(10.0, 0.06, 0.12, 0.15, 0.28);
+  pos_x_ = two(0.03, 0.04, 0.10, 0.12, 0.2);
+  pos_y_ = two(0.015, 0.05, 0.12, 0.15, 0.25);
+  pos_z_ = two(0.025, 0.04, 0.10, 0.12, 0.2);
+
+  std::mt19937_64 hold_rng(sub_seed(seed, "holds"));
+  double t = uniform(hold_rng, 0.6, 2.5);
+  while (t < duration_s) {
+    const double len = uniform(hold_rng, 1.0, 3.0);
+    holds_.emplace_back(t, t + len);
+    t += len + uniform(hold_rng, 2.5, 5.0);
+  }
+
+  actions_ = make_action_schedule(seed, duration_s);
+  std::mt19937_64 arm_rng(sub_seed(seed, "arms"));
+  wave_hz_ = uniform(arm_rng, 1.5, 2.2);
+  fly_hz_ = uniform(arm_rng, 0.6, 1.0);
+
+  // Table objects: one per x band (so paths never overlap), seed-dependent label per band.
+  static const char* kNames[] = {"car", "cup", "flower", "plane"};
+  std::mt19937_64 obj_rng(sub_seed(seed, "objects"));
+  std::vector<int> labels = {0, 1, 2, 3};
+  for (size_t i = labels.size() - 1; i > 0; --i)
+    std::swap(labels[i], labels[static_cast<size_t>(obj_rng() % (i + 1))]);
+  const int n = 4;
+  const double band = (0.9 - 0.0) / n;  // objects live in x in [-0.45, 0.45]
+  for (int i = 0; i < n; ++i) {
+    TableObjectSpec spec;
+    spec.id = i;
+    spec.label = labels[static_cast<size_t>(i)];
+    spec.label_name = kNames[spec.label];
+    objects_.push_back(spec);
+    ObjectPath p;
+    p.x_centre = -0.45 + band * (i + 0.5);
+    // Half-diagonal of the footprint is 0.0625 m; band half-width 0.1125 m: amplitude <= 0.045.
+    p.x = {uniform(obj_rng, 0.02, 0.045), uniform(obj_rng, 0.05, 0.15),
+           uniform(obj_rng, 0, kTwoPi)};
+    p.z_centre = uniform(obj_rng, 0.55, 0.62);
+    p.z = {uniform(obj_rng, 0.08, 0.12), uniform(obj_rng, 0.04, 0.12), uniform(obj_rng, 0, kTwoPi)};
+    p.yaw = {uniform(obj_rng, 10, 30), uniform(obj_rng, 0.03, 0.1), uniform(obj_rng, 0, kTwoPi)};
+    paths_.push_back(p);
+  }
+}
+
+double DemoScript::hold_weight(double t) const {
+  double w = 0;
+  for (const auto& [a, b] : holds_) {
+    if (t >= a && t <= b) return 1.0;
+    if (t < a) w = std::max(w, smoothstep((t - (a - kTransitionS)) / kTransitionS));
+    if (t > b) w = std::max(w, smoothstep(((b + kTransitionS) - t) / kTransitionS));
+  }
+  return w;
+}
+
+HeadPose DemoScript::head_pose(double t) const {
+  HeadPose p;
+  p.position_m =
+      geometry_.head_rest_m + cv::Vec3d(eval(pos_x_, t), eval(pos_y_, t), eval(pos_z_, t));
+  const double free_yaw = std::clamp(eval(yaw_, t), -55.0, 55.0);
+  const double free_pitch = std::clamp(eval(pitch_, t), -15.0, 15.0);
+  const double free_roll = std::clamp(eval(roll_, t), -10.0, 10.0);
+  double look_yaw = 0, look_pitch = 0;
+  look_at_angles(p.position_m, geometry_.robot_head_m, look_yaw, look_pitch);
+  // Small fixational jitter while looking at the robot (keeps well inside gaze_radius).
+  look_yaw += 1.5 * std::sin(kTwoPi * 0.7 * t);
+  look_pitch += 1.0 * std::sin(kTwoPi * 0.5 * t + 1.0);
+  const double w = hold_weight(t);
+  p.yaw_deg = (1 - w) * free_yaw + w * look_yaw;
+  p.pitch_deg = (1 - w) * free_pitch + w * look_pitch;
+  p.roll_deg = (1 - w) * free_roll + w * 0.3 * free_roll;
+  return p;
+}
+
+DemoAction DemoScript::action_at(double t) const {
+  for (const auto& s : actions_)
+    if (t >= s.start_s && t < s.end_s) return s.action;
+  return actions_.empty() ? DemoAction::kNone : actions_.back().action;
+}
+
+// Returns elbow, wrist, hand for the left arm then the right arm.
+std::array<cv::Vec3d, 6> DemoScript::arm_pose(DemoAction action, double t,
+                                              const cv::Vec3d& head_centre,
+                                              const cv::Vec3d& shoulder_l,
+                                              const cv::Vec3d& shoulder_r) const {
+  const double ty = geometry_.table_top_y_m;
+  auto rest = [&](const cv::Vec3d& s, double side, double phase) {
+    // Hands lying on the table in front of the body, with a few mm of fidgeting.
+    const cv::Vec3d hand(s[0] + side * 0.03 + 0.004 * std::sin(kTwoPi * 0.4 * t + phase),
+                         ty - 0.025, 0.86 + 0.005 * std::sin(kTwoPi * 0.3 * t + phase));
+    const cv::Vec3d wrist = hand + cv::Vec3d(0, 0, kHand);
+    return solve_arm(s, wrist, cv::Vec3d(side, 1.0, 0.3));
+  };
+  std::pair<cv::Vec3d, cv::Vec3d> left, right;
+  switch (action) {
+    case DemoAction::kNone:
+      left = rest(shoulder_l, 1, 0.0);
+      right = rest(shoulder_r, -1, 1.3);
+      break;
+    case DemoAction::kWave: {
+      left = rest(shoulder_l, 1, 0.0);
+      // Right hand (the child's right = world -x) raised above the shoulder, waving sideways.
+      const double swing = 0.08 * std::sin(kTwoPi * wave_hz_ * t);
+      const cv::Vec3d wrist = shoulder_r + cv::Vec3d(-0.17 + swing, -0.27, -0.07);
+      right = solve_arm(shoulder_r, wrist, cv::Vec3d(-1, 1, 0.2));
+      break;
+    }
+    case DemoAction::kFly: {
+      const double theta = 0.35 * std::sin(kTwoPi * fly_hz_ * t);  // rad, up/down flapping
+      for (double side : {1.0, -1.0}) {
+        const cv::Vec3d& s = side > 0 ? shoulder_l : shoulder_r;
+        const cv::Vec3d wrist =
+            s + 0.385 * cv::Vec3d(side * std::cos(theta), -std::sin(theta), -0.05);
+        (side > 0 ? left : right) = solve_arm(s, wrist, cv::Vec3d(0, 1, 0.2));
+      }
+      break;
+    }
+    case DemoAction::kHandsOnHead:
+      for (double side : {1.0, -1.0}) {
+        const cv::Vec3d& s = side > 0 ? shoulder_l : shoulder_r;
+        const cv::Vec3d wrist = head_centre + cv::Vec3d(side * 0.12, -0.02, 0.01) +
+                                cv::Vec3d(0, 0.005 * std::sin(kTwoPi * 0.5 * t), 0);
+        (side > 0 ? left : right) = solve_arm(s, wrist, cv::Vec3d(side, 0.3, 0.4));
+      }
+      break;
+  }
+  auto hand_of = [&](const std::pair<cv::Vec3d, cv::Vec3d>& ew, bool on_head, double side) {
+    if (on_head) return ew.second + kHand * normalized(cv::Vec3d(-side * 0.6, -0.8, 0));
+    if (action == DemoAction::kNone || (action == DemoAction::kWave && side > 0))
+      return ew.second - cv::Vec3d(0, 0, kHand);
+    return ew.second + kHand * normalized(ew.second - ew.first);
+  };
+  const bool on_head = action == DemoAction::kHandsOnHead;
+  return {left.first,  left.second,  hand_of(left, on_head, 1.0),
+          right.first, right.second, hand_of(right, on_head, -1.0)};
+}
+
+std::array<cv::Vec3d, kJointCount> DemoScript::joints(double t) const {
+  const HeadPose hp = head_pose(t);
+  const cv::Matx33d R = hp.rotation();
+  std::array<cv::Vec3d, kJointCount> j{};
+  auto at = [&](JointId id) -> cv::Vec3d& { return j[static_cast<size_t>(id)]; };
+  const cv::Vec3d head_centre = hp.position_m + R * cv::Vec3d(0, 0.0, 0.08);
+  const cv::Vec3d body =
+      hp.position_m + cv::Vec3d(0, 0, 0);  // torso follows the head's translation
+  const cv::Vec3d sc = body + cv::Vec3d(0, 0.19, 0.09);
+  at(JointId::kHead) = head_centre;
+  at(JointId::kShoulderCenter) = sc;
+  at(JointId::kShoulderLeft) = sc + cv::Vec3d(0.14, 0.03, 0);
+  at(JointId::kShoulderRight) = sc + cv::Vec3d(-0.14, 0.03, 0);
+  at(JointId::kSpine) = sc + cv::Vec3d(0, 0.20, 0.01);
+  at(JointId::kHipCenter) = sc + cv::Vec3d(0, 0.30, 0.02);
+  for (double side : {1.0, -1.0}) {
+    const cv::Vec3d hip = at(JointId::kHipCenter) + cv::Vec3d(side * 0.09, 0.03, 0);
+    const cv::Vec3d knee = hip + cv::Vec3d(side * 0.02, 0.02, -0.32);
+    const cv::Vec3d ankle = knee + cv::Vec3d(0, 0.30, 0.02);
+    const cv::Vec3d foot = ankle + cv::Vec3d(0, 0.04, -0.08);
+    at(side > 0 ? JointId::kHipLeft : JointId::kHipRight) = hip;
+    at(side > 0 ? JointId::kKneeLeft : JointId::kKneeRight) = knee;
+    at(side > 0 ? JointId::kAnkleLeft : JointId::kAnkleRight) = ankle;
+    at(side > 0 ? JointId::kFootLeft : JointId::kFootRight) = foot;
+  }
+  const cv::Vec3d sl = at(JointId::kShoulderLeft), sr = at(JointId::kShoulderRight);
+  // Blend from the previous segment's pose during the first kTransitionS of a segment.
+  std::array<cv::Vec3d, 6> arms = arm_pose(action_at(t), t, head_centre, sl, sr);
+  for (size_t i = 1; i < actions_.size(); ++i) {
+    const ActionSegment& s = actions_[i];
+    if (t >= s.start_s && t < s.start_s + kTransitionS) {
+      const double w = smoothstep((t - s.start_s) / kTransitionS);
+      const auto prev = arm_pose(actions_[i - 1].action, t, head_centre, sl, sr);
+      for (size_t k = 0; k < arms.size(); ++k) arms[k] = (1 - w) * prev[k] + w * arms[k];
+      break;
+    }
+  }
+  at(JointId::kElbowLeft) = arms[0];
+  at(JointId::kWristLeft) = arms[1];
+  at(JointId::kHandLeft) = arms[2];
+  at(JointId::kElbowRight) = arms[3];
+  at(JointId::kWristRight) = arms[4];
+  at(JointId::kHandRight) = arms[5];
+  return j;
+}
+
+std::vector<TableObjectState> DemoScript::object_states(double t) const {
+  std::vector<TableObjectState> out;
+  for (size_t i = 0; i < objects_.size(); ++i) {
+    const TableObjectSpec& s = objects_[i];
+    const ObjectPath& p = paths_[i];
+    TableObjectState st;
+    st.id = s.id;
+    st.yaw_deg = eval({p.yaw}, t);
+    const double top = geometry_.table_top_y_m - s.height_m;
+    st.position_m = cv::Vec3d(p.x_centre + eval({p.x}, t), top, p.z_centre + eval({p.z}, t));
+    const double a = st.yaw_deg * CV_PI / 180;
+    const cv::Vec3d u(std::cos(a), 0, -std::sin(a)), v(std::sin(a), 0, std::cos(a));
+    const cv::Vec3d hu = 0.5 * s.width_m * u, hv = 0.5 * s.depth_m * v;
+    const cv::Vec3d down(0, s.height_m, 0);
+    st.corners = {st.position_m - hu - hv,        st.position_m + hu - hv,
+                  st.position_m + hu + hv,        st.position_m - hu + hv,
+                  st.position_m - hu - hv + down, st.position_m + hu - hv + down,
+                  st.position_m + hu + hv + down, st.position_m - hu + hv + down};
+    out.push_back(st);
+  }
+  return out;
+}
+
+}  // namespace dreamsense::sim

@@ -1,0 +1,1071 @@
+#include "dreamsense/sim/demo_session.hpp"
+
+#include "dreamsense/core/sensor_frame.hpp"
+#include "dreamsense/sim/face_renderer.hpp"
+#include "dreamsense/sim/room_acoustics.hpp"
+#include "dreamsense/sim/scene_renderer.hpp"
+#include "dreamsense/sources/session.hpp"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sndfile.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <fstream>
+#include <mutex>
+#include <optional>
+#include <random>
+#include <thread>
+
+namespace dreamsense::sim {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+constexpr const char* kGenerator = "dreamsense-sim demo v1";
+// Session stamp 0 = 2016-01-01T00:00:00Z (fixed, so the manifest is deterministic).
+constexpr int64_t kClockOriginUnixNs = 1451606400LL * 1000000000LL;
+
+const std::vector<std::string> kCameraIds = {"camera_left", "camera_middle", "camera_right"};
+
+int64_t stamp_ns(int64_t k, double rate_hz) {
+  return static_cast<int64_t>(std::llround(static_cast<double>(k) * 1e9 / rate_hz));
+}
+int64_t frame_count(double duration_s, double rate_hz) {
+  return static_cast<int64_t>(std::ceil(duration_s * rate_hz - 1e-9));
+}
+
+double gaussian(std::mt19937_64& rng) {  // Box-Muller (portable)
+  double u1 = 0;
+  do {
+    u1 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+  } while (u1 <= 0);
+  const double u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * CV_PI * u2);
+}
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return lo + (hi - lo) * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
+}
+
+// Fixed decimal precision for truth values (stable text, no "-0").
+double q(double v, double scale = 1e6) {
+  const double r = std::round(v * scale) / scale;
+  return r == 0 ? 0.0 : r;
+}
+json vec_json(const cv::Vec3d& v, double scale = 1e6) {
+  return json::array({q(v[0], scale), q(v[1], scale), q(v[2], scale)});
+}
+json px_json(const cv::Point2d& p) { return json::array({q(p.x, 1e3), q(p.y, 1e3)}); }
+
+Error media_error(const fs::path& file, const char* package) {
+  return Error{ErrorCode::kNotFound, fmt::format("{}: missing demo media (install the Debian "
+                                                 "package {})",
+                                                 file.string(), package)};
+}
+
+// ---------------------------------------------------------------- media
+
+Result<std::vector<double>> load_clip(const fs::path& path, int expected_rate) {
+  if (!fs::exists(path)) return tl::unexpected(media_error(path, "pocketsphinx-testdata"));
+  std::vector<double> out;
+  if (path.extension() == ".raw") {  // 16-bit little-endian mono at 16 kHz
+    std::ifstream in(path, std::ios::binary);
+    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
+                                     std::istreambuf_iterator<char>());
+    out.resize(bytes.size() / 2);
+    for (size_t i = 0; i < out.size(); ++i) {
+      const auto s = static_cast<int16_t>(static_cast<uint16_t>(bytes[2 * i]) |
+                                          (static_cast<uint16_t>(bytes[2 * i + 1]) << 8));
+      out[i] = s / 32768.0;
+    }
+    if (expected_rate != 16000)
+      return make_error(ErrorCode::kUnsupported, "{}: raw clips are 16 kHz, demo rate is {}",
+                        path.string(), expected_rate);
+    return out;
+  }
+  SF_INFO info{};
+  SNDFILE* f = sf_open(path.string().c_str(), SFM_READ, &info);
+  if (!f) return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), sf_strerror(nullptr));
+  if (info.channels != 1 || info.samplerate != expected_rate) {
+    sf_close(f);
+    return make_error(ErrorCode::kUnsupported, "{}: expected mono {} Hz, got {} channels {} Hz",
+                      path.string(), expected_rate, info.channels, info.samplerate);
+  }
+  out.resize(static_cast<size_t>(info.frames));
+  const sf_count_t got = sf_readf_double(f, out.data(), info.frames);
+  sf_close(f);
+  out.resize(static_cast<size_t>(std::max<sf_count_t>(got, 0)));
+  return out;
+}
+
+// "<s> ten of clubs  </s> (001)" lines -> id -> text.
+Result<std::map<std::string, std::string>> read_transcription(const fs::path& path) {
+  if (!fs::exists(path)) return tl::unexpected(media_error(path, "pocketsphinx-testdata"));
+  std::ifstream in(path);
+  std::map<std::string, std::string> out;
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto open = line.rfind('('), close = line.rfind(')');
+    if (open == std::string::npos || close == std::string::npos || close < open) continue;
+    std::string text = line.substr(0, open);
+    for (const char* tag : {"<s>", "</s>"}) {
+      const auto p = text.find(tag);
+      if (p != std::string::npos) text.erase(p, std::string(tag).size());
+    }
+    const auto b = text.find_first_not_of(' '), e = text.find_last_not_of(' ');
+    out[line.substr(open + 1, close - open - 1)] =
+        b == std::string::npos ? "" : text.substr(b, e - b + 1);
+  }
+  return out;
+}
+
+// Speech extent by an energy gate: 20 ms frames within 30 dB of the loudest frame.
+std::pair<double, double> speech_extent(const std::vector<double>& x, double fs) {
+  const size_t win = static_cast<size_t>(0.02 * fs);
+  std::vector<double> e;
+  for (size_t i = 0; i + win <= x.size(); i += win) {
+    double s = 0;
+    for (size_t j = i; j < i + win; ++j) s += x[j] * x[j];
+    e.push_back(s / static_cast<double>(win));
+  }
+  if (e.empty()) return {0.0, static_cast<double>(x.size()) / fs};
+  const double thr = *std::max_element(e.begin(), e.end()) * std::pow(10.0, -30.0 / 10.0);
+  size_t first = 0, last = e.size() - 1;
+  while (first < e.size() && e[first] < thr) ++first;
+  while (last > first && e[last] < thr) --last;
+  return {static_cast<double>(first * win) / fs, static_cast<double>((last + 1) * win) / fs};
+}
+
+struct ClipSpec {
+  const char* file;
+  const char* transcription;  // file holding the text, or nullptr
+  const char* id;             // id in the transcription, or the literal text
+  const char* speaker;
+};
+// goforward.raw carries no transcription file; its text is the one pocketsphinx's own tests
+// expect ("go forward ten meters").
+const ClipSpec kClips[] = {
+    {"cards/001.wav", "cards/cards.transcription", "001", "child"},
+    {"cards/002.wav", "cards/cards.transcription", "002", "child"},
+    {"cards/003.wav", "cards/cards.transcription", "003", "child"},
+    {"cards/004.wav", "cards/cards.transcription", "004", "child"},
+    {"goforward.raw", nullptr, "go forward ten meters", "child"},
+    {"librivox/sense_and_sensibility_01_austen_64kb-0880.wav", "librivox/transcription",
+     "sense_and_sensibility_01_austen_64kb-0880", "therapist"},
+    {"librivox/sense_and_sensibility_01_austen_64kb-0930.wav", "librivox/transcription",
+     "sense_and_sensibility_01_austen_64kb-0930", "therapist"},
+    {"librivox/sense_and_sensibility_01_austen_64kb-0890.wav", "librivox/transcription",
+     "sense_and_sensibility_01_austen_64kb-0890", "therapist"},
+};
+
+struct Media {
+  std::unique_ptr<PlanarFaceRenderer> face;
+  std::vector<std::shared_ptr<const cv::Mat>> object_textures;  // by DREAM label 0..3
+  std::shared_ptr<const cv::Mat> poster;
+  std::vector<SpeechClipInfo> clips;
+  std::vector<std::vector<double>> clip_samples;
+};
+
+Result<std::shared_ptr<const cv::Mat>> load_texture(const fs::path& path, cv::Rect crop,
+                                                    cv::Size size) {
+  if (!fs::exists(path)) return tl::unexpected(media_error(path, "opencv-doc"));
+  cv::Mat img = cv::imread(path.string(), cv::IMREAD_COLOR);
+  if (img.empty()) return make_error(ErrorCode::kCorruptData, "{}: cannot decode", path.string());
+  crop &= cv::Rect(0, 0, img.cols, img.rows);
+  cv::Mat out;
+  cv::resize(img(crop), out, size, 0, 0, cv::INTER_AREA);
+  return std::make_shared<const cv::Mat>(out);
+}
+
+Result<Media> load_media(const DemoOptions& o) {
+  Media m;
+  if (!fs::exists(o.portrait)) return tl::unexpected(media_error(o.portrait, "python3-skimage"));
+  PlanarFaceOptions fo;
+  fo.portrait = o.portrait;
+  auto face = PlanarFaceRenderer::create(fo);
+  if (!face) return tl::unexpected(face.error());
+  m.face = std::move(*face);
+
+  // Toy textures by DREAM label: 0 car, 1 cup, 2 flower, 3 plane (the pictures are stand-ins).
+  struct Tex {
+    const char* file;
+    cv::Rect crop;
+  };
+  const Tex tex[] = {{"HappyFish.jpg", {0, 0, 259, 194}},
+                     {"fruits.jpg", {40, 60, 400, 300}},
+                     {"butterfly.jpg", {40, 20, 400, 300}},
+                     {"aero1.jpg", {0, 0, 640, 480}}};
+  for (const auto& t : tex) {
+    auto r = load_texture(o.opencv_samples_dir / t.file, t.crop, cv::Size(160, 120));
+    if (!r) return tl::unexpected(r.error());
+    m.object_textures.push_back(*r);
+  }
+  auto poster =
+      load_texture(o.opencv_samples_dir / "starry_night.jpg", {0, 0, 752, 600}, cv::Size(376, 300));
+  if (!poster) return tl::unexpected(poster.error());
+  m.poster = *poster;
+
+  std::map<std::string, std::map<std::string, std::string>> transcriptions;
+  for (const auto& c : kClips) {
+    SpeechClipInfo info;
+    info.file = c.file;
+    info.speaker = c.speaker;
+    if (c.transcription) {
+      if (!transcriptions.count(c.transcription)) {
+        auto t = read_transcription(o.pocketsphinx_data_dir / c.transcription);
+        if (!t) return tl::unexpected(t.error());
+        transcriptions[c.transcription] = *t;
+      }
+      const auto& t = transcriptions[c.transcription];
+      const auto it = t.find(c.id);
+      if (it == t.end())
+        return make_error(ErrorCode::kCorruptData, "{}: no transcription for '{}'",
+                          (o.pocketsphinx_data_dir / c.transcription).string(), c.id);
+      info.text = it->second;
+    } else {
+      info.text = c.id;
+    }
+    auto samples = load_clip(o.pocketsphinx_data_dir / c.file, o.audio_sample_rate);
+    if (!samples) return tl::unexpected(samples.error());
+    info.duration_s = static_cast<double>(samples->size()) / o.audio_sample_rate;
+    std::tie(info.speech_start_s, info.speech_end_s) = speech_extent(*samples, o.audio_sample_rate);
+    m.clips.push_back(info);
+    m.clip_samples.push_back(std::move(*samples));
+  }
+  return m;
+}
+
+// ---------------------------------------------------------------- scene
+
+const cv::Vec3f kShirt(150, 95, 45), kSkin(135, 165, 215), kHair(70, 105, 130),
+    kTrousers(70, 60, 55), kTable(80, 130, 175), kWall(195, 205, 212), kFloor(105, 115, 125),
+    kCeiling(230, 230, 230), kShoe(40, 40, 40), kTableLeg(60, 90, 120);
+
+std::vector<Primitive> static_scene(const DemoGeometry& g, const Media& media) {
+  std::vector<Primitive> p;
+  const cv::Vec3d lo = g.room_min_m, hi = g.room_max_m;
+  // Back wall (z = hi.z), side walls, floor, ceiling.
+  p.push_back(Quad{{lo[0], lo[1], hi[2]}, {hi[0] - lo[0], 0, 0}, {0, hi[1] - lo[1], 0}, kWall, {}});
+  p.push_back(
+      Quad{{lo[0], lo[1], lo[2]}, {0, 0, hi[2] - lo[2]}, {0, hi[1] - lo[1], 0}, kWall * 0.95f, {}});
+  p.push_back(
+      Quad{{hi[0], lo[1], lo[2]}, {0, 0, hi[2] - lo[2]}, {0, hi[1] - lo[1], 0}, kWall * 0.95f, {}});
+  p.push_back(
+      Quad{{lo[0], hi[1], lo[2]}, {hi[0] - lo[0], 0, 0}, {0, 0, hi[2] - lo[2]}, kFloor, {}});
+  p.push_back(
+      Quad{{lo[0], lo[1], lo[2]}, {hi[0] - lo[0], 0, 0}, {0, 0, hi[2] - lo[2]}, kCeiling, {}});
+  // Poster on the back wall, off to the side of the child's head (image right in front view).
+  p.push_back(Quad{{0.55, -1.05, hi[2] - 0.005}, {0.9, 0, 0}, {0, 0.72, 0}, kWall, media.poster});
+  // Table: top, apron on the robot side and the child side, four legs.
+  const double ty = g.table_top_y_m;
+  p.push_back(Quad{{g.table_x_min_m, ty, g.table_z_min_m},
+                   {g.table_x_max_m - g.table_x_min_m, 0, 0},
+                   {0, 0, g.table_z_max_m - g.table_z_min_m},
+                   kTable,
+                   {}});
+  for (double z : {g.table_z_min_m, g.table_z_max_m})
+    p.push_back(Quad{{g.table_x_min_m, ty, z},
+                     {g.table_x_max_m - g.table_x_min_m, 0, 0},
+                     {0, 0.05, 0},
+                     kTable * 0.8f,
+                     {}});
+  for (double x : {g.table_x_min_m + 0.04, g.table_x_max_m - 0.04})
+    for (double z : {g.table_z_min_m + 0.04, g.table_z_max_m - 0.04})
+      p.push_back(Capsule{{x, ty + 0.05, z}, {x, hi[1], z}, 0.025, kTableLeg});
+  return p;
+}
+
+std::vector<Primitive> dynamic_scene(const DemoScript& script, const Media& media, double t,
+                                     const std::array<cv::Vec3d, kJointCount>& j,
+                                     const HeadPose& hp) {
+  auto J = [&](JointId id) { return j[static_cast<size_t>(id)]; };
+  std::vector<Primitive> p;
+  const cv::Matx33d R = hp.rotation();
+  // Head: hair ellipsoid behind the photo plane (shows when the face turns away).
+  p.push_back(
+      Ellipsoid{hp.position_m + R * cv::Vec3d(0, 0.0, 0.10), R, {0.085, 0.105, 0.095}, kHair});
+  p.push_back(Capsule{J(JointId::kShoulderCenter) + cv::Vec3d(0, -0.02, 0),
+                      hp.position_m + R * cv::Vec3d(0, 0.09, 0.07), 0.04, kSkin});
+  p.push_back(Ellipsoid{
+      0.5 * (J(JointId::kShoulderCenter) + J(JointId::kHipCenter)) + cv::Vec3d(0, 0.03, 0),
+      cv::Matx33d::eye(),
+      {0.13, 0.19, 0.08},
+      kShirt});
+  p.push_back(Capsule{J(JointId::kShoulderLeft), J(JointId::kShoulderRight), 0.05, kShirt});
+  for (bool left : {true, false}) {
+    const JointId s = left ? JointId::kShoulderLeft : JointId::kShoulderRight;
+    const JointId e = left ? JointId::kElbowLeft : JointId::kElbowRight;
+    const JointId w = left ? JointId::kWristLeft : JointId::kWristRight;
+    const JointId h = left ? JointId::kHandLeft : JointId::kHandRight;
+    const JointId hip = left ? JointId::kHipLeft : JointId::kHipRight;
+    const JointId k = left ? JointId::kKneeLeft : JointId::kKneeRight;
+    const JointId a = left ? JointId::kAnkleLeft : JointId::kAnkleRight;
+    const JointId f = left ? JointId::kFootLeft : JointId::kFootRight;
+    p.push_back(Capsule{J(s), J(e), 0.037, kShirt});
+    p.push_back(Capsule{J(e), J(w), 0.03, kSkin});
+    p.push_back(Capsule{J(w), J(h), 0.033, kSkin * 0.97f});
+    p.push_back(Capsule{J(hip), J(k), 0.06, kTrousers});
+    p.push_back(Capsule{J(k), J(a), 0.045, kTrousers});
+    p.push_back(Capsule{J(a), J(f), 0.035, kShoe});
+  }
+  // Toys on the table: boxes with the picture on top.
+  const auto states = script.object_states(t);
+  for (size_t i = 0; i < states.size(); ++i) {
+    const auto& s = states[i];
+    const auto& tex = media.object_textures[static_cast<size_t>(script.objects()[i].label)];
+    const cv::Scalar mean = cv::mean(*tex);
+    const cv::Vec3f side(static_cast<float>(mean[0] * 0.6), static_cast<float>(mean[1] * 0.6),
+                         static_cast<float>(mean[2] * 0.6));
+    const auto& c = s.corners;
+    // Top face: texture u along corner1 -> corner0 so it reads unmirrored from above.
+    p.push_back(Quad{c[1], c[0] - c[1], c[2] - c[1], side, tex});
+    for (int e = 0; e < 4; ++e)
+      p.push_back(Quad{c[e], c[(e + 1) % 4] - c[e], c[e + 4] - c[e], side, {}});
+  }
+  return p;
+}
+
+FaceState face_state(const HeadPose& hp) {
+  FaceState s;
+  s.position_m = hp.position_m;
+  s.world_from_head = hp.rotation();
+  s.eye_gaze_dir = hp.gaze_dir();  // planar photo: eye gaze = head gaze
+  return s;
+}
+
+// Noise tiles shared by every frame of one image size; per frame a seeded offset picks a window.
+struct NoiseTile {
+  cv::Mat pos, neg;
+  static constexpr int kPad = 64;
+  NoiseTile(cv::Size size, double sigma, uint64_t seed) {
+    cv::Mat n(size.height + kPad, size.width + kPad, CV_32FC3);
+    cv::RNG rng(seed);
+    rng.fill(n, cv::RNG::NORMAL, 0, sigma);
+    cv::Mat p = cv::max(n, 0), m = cv::max(-n, 0);
+    p.convertTo(pos, CV_8UC3);
+    m.convertTo(neg, CV_8UC3);
+  }
+  void apply(cv::Mat& img, uint64_t frame_seed) const {
+    std::mt19937_64 rng(frame_seed);
+    const int dx = static_cast<int>(rng() % kPad), dy = static_cast<int>(rng() % kPad);
+    const cv::Rect r(dx, dy, img.cols, img.rows);
+    cv::add(img, pos(r), img);
+    cv::subtract(img, neg(r), img);
+  }
+};
+
+struct StreamPlan {
+  std::string id;
+  SensorKind kind;
+  double rate_hz;
+  int64_t count;
+  int camera = -1;  // index into cameras for image streams
+};
+
+struct Job {
+  int64_t stamp;
+  int stream;
+  int64_t index;
+};
+
+class Generator {
+ public:
+  Generator(const DemoOptions& o, Media media)
+      : o_(o),
+        media_(std::move(media)),
+        script_(o.seed, o.duration_s),
+        cameras_(make_demo_cameras()) {
+    const auto statics = static_scene(script_.geometry(), media_);
+    for (const auto& cam : cameras_) {
+      RenderTarget t = RenderTarget::empty(cam.image_size);
+      render_primitives(cam, statics, light_, t);
+      backgrounds_.push_back(std::move(t));
+      // Large images: the moving body is ray-cast at half resolution (4x fewer rays) and
+      // composited with a linearly upsampled coverage mask (smooth edges); see render().
+      CameraModel half = cam;
+      if (cam.image_size.width > 640) {
+        half.image_size = cam.image_size / 2;
+        half.K(0, 0) *= 0.5;
+        half.K(1, 1) *= 0.5;
+        half.K(0, 2) = (cam.K(0, 2) + 0.5) * 0.5 - 0.5;
+        half.K(1, 2) = (cam.K(1, 2) + 0.5) * 0.5 - 0.5;
+        RenderTarget h = RenderTarget::empty(half.image_size);
+        render_primitives(half, statics, light_, h);
+        half_backgrounds_.push_back(std::move(h));
+      } else {
+        half_backgrounds_.emplace_back();
+      }
+      half_cameras_.push_back(half);
+    }
+    noise_big_.emplace(cameras_[0].image_size, o.image_noise_sigma, sub_seed(o.seed, "noise_big"));
+    noise_small_.emplace(cameras_[3].image_size, o.image_noise_sigma,
+                         sub_seed(o.seed, "noise_small"));
+  }
+
+  const DemoScript& script() const { return script_; }
+  const std::vector<CameraModel>& cameras() const { return cameras_; }
+  const Media& media() const { return media_; }
+
+  // Colour (and optional depth) image of camera `c` at time t.
+  void render(int c, int64_t stamp, const std::string& stream, int64_t index, cv::Mat* bgr,
+              cv::Mat* depth_mm) const {
+    const double t = static_cast<double>(stamp) * 1e-9;
+    const CameraModel& cam = cameras_[static_cast<size_t>(c)];
+    RenderTarget target = backgrounds_[static_cast<size_t>(c)].clone();
+    const HeadPose hp = script_.head_pose(t);
+    const auto joints = script_.joints(t);
+    const auto dynamic = dynamic_scene(script_, media_, t, joints, hp);
+    const RenderTarget& half_bg = half_backgrounds_[static_cast<size_t>(c)];
+    if (half_bg.bgr.empty()) {
+      render_primitives(cam, dynamic, light_, target);
+    } else {
+      RenderTarget small = half_bg.clone();
+      render_primitives(half_cameras_[static_cast<size_t>(c)], dynamic, light_, small);
+      cv::Mat hit = small.depth < half_bg.depth;  // 255 where a moving primitive is in front
+      cv::Rect roi = cv::boundingRect(hit);
+      if (!roi.empty()) {
+        roi = cv::Rect(roi.x - 2, roi.y - 2, roi.width + 4, roi.height + 4) &
+              cv::Rect(cv::Point(0, 0), small.bgr.size());
+        const cv::Rect big(roi.x * 2, roi.y * 2, roi.width * 2, roi.height * 2);
+        cv::Mat colour, alpha, depth;
+        // cv::resize maps big pixel x to small (x + 0.5) / 2 - 0.5: the half camera's convention.
+        cv::resize(small.bgr(roi), colour, big.size(), 0, 0, cv::INTER_LINEAR);
+        cv::resize(hit(roi), alpha, big.size(), 0, 0, cv::INTER_LINEAR);
+        cv::resize(small.depth(roi), depth, big.size(), 0, 0, cv::INTER_NEAREST);
+        for (int v = 0; v < big.height; ++v) {
+          const cv::Vec3b* cp = colour.ptr<cv::Vec3b>(v);
+          const uchar* ap = alpha.ptr<uchar>(v);
+          const float* dp = depth.ptr<float>(v);
+          cv::Vec3b* out = target.bgr.ptr<cv::Vec3b>(v + big.y) + big.x;
+          float* zb = target.depth.ptr<float>(v + big.y) + big.x;
+          for (int u = 0; u < big.width; ++u) {
+            if (ap[u] == 0) continue;
+            const int a = ap[u];
+            for (int k = 0; k < 3; ++k)
+              out[u][k] = static_cast<uchar>((cp[u][k] * a + out[u][k] * (255 - a) + 127) / 255);
+            if (a >= 128) zb[u] = std::min(zb[u], dp[u]);
+          }
+        }
+      }
+    }
+    media_.face->render(cam, face_state(hp), light_, target);
+    if (bgr) {
+      cv::GaussianBlur(target.bgr, *bgr, cv::Size(3, 3), 0.6);
+      if (o_.image_noise_sigma > 0) {
+        const NoiseTile& tile =
+            bgr->cols == noise_big_->pos.cols - NoiseTile::kPad ? *noise_big_ : *noise_small_;
+        tile.apply(*bgr, sub_seed(o_.seed, stream, static_cast<uint64_t>(index)));
+      }
+    }
+    if (depth_mm) {
+      // Kinect v1 range 0.4 .. 4.0 m; 0 = no measurement.
+      depth_mm->create(target.depth.size(), CV_16UC1);
+      for (int v = 0; v < target.depth.rows; ++v) {
+        const float* z = target.depth.ptr<float>(v);
+        uint16_t* d = depth_mm->ptr<uint16_t>(v);
+        for (int u = 0; u < target.depth.cols; ++u)
+          d[u] = (z[u] >= 0.4f && z[u] <= 4.0f) ? static_cast<uint16_t>(std::lround(z[u] * 1000.0))
+                                                : 0;
+      }
+    }
+  }
+
+ private:
+  const DemoOptions& o_;
+  Media media_;
+  DemoScript script_;
+  std::vector<CameraModel> cameras_;
+  Lighting light_;
+  std::vector<RenderTarget> backgrounds_;
+  std::vector<RenderTarget> half_backgrounds_;  // empty for images rendered at full resolution
+  std::vector<CameraModel> half_cameras_;
+  std::optional<NoiseTile> noise_big_, noise_small_;
+};
+
+// ---------------------------------------------------------------- truth
+
+json face_record(const Generator& gen, int64_t stamp) {
+  const DemoScript& s = gen.script();
+  const DemoGeometry& g = s.geometry();
+  const double t = static_cast<double>(stamp) * 1e-9;
+  const HeadPose hp = s.head_pose(t);
+  const FaceState fs = face_state(hp);
+  const auto& face = *gen.media().face;
+  const cv::Vec3d left = fs.to_world(face.left_eye_head()),
+                  right = fs.to_world(face.right_eye_head());
+  const cv::Vec3d gaze = hp.gaze_dir();
+  const cv::Vec3d eye_gaze = fs.eye_gaze_dir;
+  const cv::Vec3d eye_mid = 0.5 * (left + right);
+  const bool mutual = ray_point_distance(eye_mid, eye_gaze, g.robot_head_m) <= g.gaze_radius_m;
+  json cams = json::object();
+  std::string best;
+  double best_yaw = 1e9;
+  for (size_t c = 0; c < kCameraIds.size(); ++c) {
+    const CameraModel& cam = gen.cameras()[c];
+    const cv::Vec3d gc = cam.R * gaze;
+    const double yaw_rel = std::atan2(-gc[0], -gc[2]) * 180 / CV_PI;
+    const cv::Vec3d to_cam = cam.centre_world() - hp.position_m;
+    const double facing = gaze.dot(to_cam) / cv::norm(to_cam);
+    const auto pl = cam.project(left), pr = cam.project(right);
+    const cv::Rect2d img(0, 0, cam.image_size.width, cam.image_size.height);
+    bool visible =
+        facing > std::cos(75 * CV_PI / 180) && pl && pr && img.contains(*pl) && img.contains(*pr);
+    json rec;
+    json box = nullptr;
+    std::vector<cv::Point2d> pts;
+    for (const auto& hpnt : face.face_region_head())
+      if (auto p = cam.project(fs.to_world(hpnt))) pts.push_back(*p);
+    if (pts.size() == 4) {
+      double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+      for (const auto& p : pts) {
+        x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x),
+        y1 = std::max(y1, p.y);
+      }
+      box = json::array({q(x0, 1e3), q(y0, 1e3), q(x1 - x0, 1e3), q(y1 - y0, 1e3)});
+    }
+    rec["visible"] = visible;
+    rec["box"] = box;
+    rec["yaw_deg"] = q(yaw_rel, 1e4);
+    rec["eyes_px"] = json{{"left", pl ? px_json(*pl) : json(nullptr)},
+                          {"right", pr ? px_json(*pr) : json(nullptr)}};
+    cams[kCameraIds[c]] = rec;
+    if (visible && std::abs(yaw_rel) < best_yaw) {
+      best_yaw = std::abs(yaw_rel);
+      best = kCameraIds[c];
+    }
+  }
+  json r;
+  r["type"] = "face";
+  r["stamp_ns"] = stamp;
+  r["head_position_m"] = vec_json(hp.position_m);
+  r["yaw_deg"] = q(hp.yaw_deg, 1e4);
+  r["pitch_deg"] = q(hp.pitch_deg, 1e4);
+  r["roll_deg"] = q(hp.roll_deg, 1e4);
+  r["head_gaze_dir"] = vec_json(gaze);
+  r["eye_gaze_dir"] = vec_json(eye_gaze);
+  r["eyes_m"] = json{{"left", vec_json(left)}, {"right", vec_json(right)}};
+  r["mutual_gaze"] = mutual;
+  r["robot_gaze_distance_m"] = q(ray_point_distance(eye_mid, eye_gaze, g.robot_head_m));
+  r["best_camera"] = best.empty() ? json(nullptr) : json(best);
+  r["cameras"] = cams;
+  return r;
+}
+
+json skeleton_json(const std::array<cv::Vec3d, kJointCount>& j) {
+  json joints = json::object();
+  for (int i = 0; i < kJointCount; ++i)
+    joints[std::string(joint_name(static_cast<JointId>(i)))] = vec_json(j[static_cast<size_t>(i)]);
+  return joints;
+}
+
+Status write_mic_calibration(const fs::path& path, const DemoGeometry& g, int sample_rate) {
+  try {
+    cv::FileStorage f(path.string(), cv::FileStorage::WRITE);
+    if (!f.isOpened()) return make_error(ErrorCode::kIoError, "{}: cannot write", path.string());
+    const auto mics = demo_mic_positions(g);
+    cv::Mat m(static_cast<int>(mics.size()), 3, CV_64F);
+    for (int i = 0; i < m.rows; ++i)
+      for (int k = 0; k < 3; ++k) m.at<double>(i, k) = mics[static_cast<size_t>(i)][k];
+    f << "frame"
+      << "mic_array";
+    f << "sample_rate" << sample_rate;
+    f.writeComment("Microphone positions in the array frame (metres), one row per channel");
+    f << "mic_positions_m" << m;
+    f.writeComment("Extrinsics: array_from_world, X_array = R * X_world + t (metres)");
+    f << "array_from_world_R" << cv::Mat(cv::Matx33d::eye());
+    f << "array_from_world_t" << cv::Mat(cv::Vec3d(-g.mic_array_m));
+    f.writeComment("azimuth 0 = broadside (+z), positive towards +x; elevation positive up (-y)");
+    return ok_status();
+  } catch (const cv::Exception& e) {
+    return make_error(ErrorCode::kIoError, "{}: {}", path.string(), e.msg);
+  }
+}
+
+}  // namespace
+
+// ================================================================= public
+
+Status DemoOptions::check() const {
+  std::string bad;
+  if (out_dir.empty()) bad += " out_dir is required;";
+  if (!(duration_s > 0 && duration_s <= 600)) bad += " duration_s must be in (0, 600];";
+  if (!(camera_rate_hz > 0 && camera_rate_hz <= 120)) bad += " camera_rate_hz must be in (0, 120];";
+  if (!(kinect_rate_hz > 0 && kinect_rate_hz <= 120)) bad += " kinect_rate_hz must be in (0, 120];";
+  if (audio_sample_rate != 16000) bad += " audio_sample_rate must be 16000 (the clips' rate);";
+  if (!(audio_chunk_s > 0 && audio_chunk_s <= 1)) bad += " audio_chunk_s must be in (0, 1];";
+  if (!(rt60_s >= 0 && rt60_s <= 2)) bad += " rt60_s must be in [0, 2];";
+  if (!(snr_db > -20 && snr_db < 100)) bad += " snr_db must be in (-20, 100);";
+  if (!(joint_noise_m >= 0 && joint_noise_m < 0.1)) bad += " joint_noise_m must be in [0, 0.1);";
+  if (!(image_noise_sigma >= 0 && image_noise_sigma <= 40))
+    bad += " image_noise_sigma must be in [0, 40];";
+  if (jpeg_quality < 1 || jpeg_quality > 100) bad += " jpeg_quality must be in [1, 100];";
+  if (threads < 1 || threads > 64) bad += " threads must be in [1, 64];";
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "DemoOptions:{}", bad);
+  return ok_status();
+}
+
+std::vector<CameraModel> make_demo_cameras(const DemoGeometry& g) {
+  std::vector<CameraModel> out;
+  auto colour = [&](const std::string& id, double azimuth_deg, double fx, double cx, double cy) {
+    CameraModel m;
+    m.frame = id;
+    m.image_size = cv::Size(1280, 960);
+    m.K = cv::Matx33d(fx, 0, cx, 0, fx, cy, 0, 0, 1);
+    const double a = azimuth_deg * CV_PI / 180, d = 0.80;
+    // Seen from the child (who faces -z): negative azimuth = world -x side.
+    const cv::Vec3d eye = g.head_rest_m + cv::Vec3d(d * std::sin(a), -0.12, -d * std::cos(a));
+    look_at(eye, g.head_rest_m, cv::Vec3d(0, 1, 0), m.R, m.t);
+    out.push_back(m);
+  };
+  colour("camera_left", -35, 1050, 641.5, 478.0);
+  colour("camera_middle", 0, 1075, 638.0, 482.5);
+  colour("camera_right", 35, 1040, 636.5, 480.5);
+  CameraModel front;
+  front.frame = "front.color";
+  front.image_size = cv::Size(640, 480);
+  front.K = cv::Matx33d(525, 0, 319.5, 0, 525, 239.5, 0, 0, 1);  // Kinect v1-like; world frame
+  out.push_back(front);
+  front.frame = "front.depth";
+  out.push_back(front);
+  CameraModel top;
+  top.frame = "top.color";
+  top.image_size = cv::Size(640, 480);
+  top.K = cv::Matx33d(525, 0, 319.5, 0, 525, 239.5, 0, 0, 1);
+  const double zc = 0.5 * (g.table_z_min_m + g.table_z_max_m) - 0.03;
+  // 1 m above the table, looking straight down; image down = world +z (the child at the bottom).
+  look_at(cv::Vec3d(0, g.table_top_y_m - 1.0, zc), cv::Vec3d(0, g.table_top_y_m, zc),
+          cv::Vec3d(0, 0, 1), top.R, top.t);
+  out.push_back(top);
+  return out;
+}
+
+std::vector<cv::Vec3d> demo_mic_positions(const DemoGeometry& g) {
+  std::vector<cv::Vec3d> out;
+  for (double x : g.mic_x_m) out.emplace_back(x, 0, 0);
+  return out;
+}
+
+void array_direction(const DemoGeometry& g, const cv::Vec3d& world, double& azimuth_deg,
+                     double& elevation_deg) {
+  const cv::Vec3d p = world - g.mic_array_m;  // array axes = world axes
+  azimuth_deg = std::atan2(p[0], p[2]) * 180 / CV_PI;
+  elevation_deg = std::atan2(-p[1], std::hypot(p[0], p[2])) * 180 / CV_PI;
+}
+
+std::vector<PlannedUtterance> plan_utterances(const DemoScript& script,
+                                              const std::vector<SpeechClipInfo>& clips) {
+  std::mt19937_64 rng(sub_seed(script.seed(), "speech"));
+  std::vector<size_t> pools[2];  // 0 child, 1 therapist
+  for (size_t i = 0; i < clips.size(); ++i) pools[clips[i].speaker == "child" ? 0 : 1].push_back(i);
+  for (auto& pool : pools)
+    for (size_t i = pool.size(); i > 1; --i)
+      std::swap(pool[i - 1], pool[static_cast<size_t>(rng() % i)]);
+  const int target = 3 + static_cast<int>(rng() % 3);
+  int speaker = static_cast<int>(rng() % 2);
+  const double side = (rng() % 2) ? 1.0 : -1.0;
+  const double min_gap = 0.3, tail = 0.5;
+  std::vector<size_t> chosen;
+  size_t next[2] = {0, 0};
+  double total = 0;
+  for (int i = 0; i < target; ++i, speaker = 1 - speaker) {
+    const auto& pool = pools[speaker];
+    if (pool.empty()) continue;
+    const size_t c = pool[next[speaker]++ % pool.size()];
+    const double need =
+        total + clips[c].duration_s + min_gap * static_cast<double>(chosen.size() + 1);
+    if (need > script.duration_s() - tail) continue;
+    chosen.push_back(c);
+    total += clips[c].duration_s;
+  }
+  std::vector<PlannedUtterance> out;
+  if (chosen.empty()) return out;
+  const double free_s =
+      script.duration_s() - tail - total - min_gap * static_cast<double>(chosen.size());
+  std::vector<double> w(chosen.size() + 1);
+  double wsum = 0;
+  for (double& x : w) wsum += (x = uniform(rng, 0.3, 1.5));
+  double t = 0;
+  const DemoGeometry& g = script.geometry();
+  for (size_t i = 0; i < chosen.size(); ++i) {
+    t += min_gap + free_s * w[i] / wsum;
+    PlannedUtterance u;
+    u.clip = chosen[i];
+    u.clip_start_s = t;
+    const SpeechClipInfo& clip = clips[chosen[i]];
+    if (clip.speaker == "child") {
+      const HeadPose hp = script.head_pose(t + 0.5 * (clip.speech_start_s + clip.speech_end_s));
+      u.source_m = hp.position_m + hp.rotation() * cv::Vec3d(0, 0.065, -0.01);  // mouth
+    } else {
+      const double az = side * uniform(rng, 30, 60) * CV_PI / 180;
+      const double dist = uniform(rng, 1.2, 2.0);
+      const double y = uniform(rng, -0.35, -0.15);
+      u.source_m =
+          g.mic_array_m + cv::Vec3d(dist * std::sin(az), y - g.mic_array_m[1], dist * std::cos(az));
+    }
+    out.push_back(u);
+    t += clip.duration_s;
+  }
+  return out;
+}
+
+Result<DemoSummary> generate_demo_session(const DemoOptions& options,
+                                          const std::function<void(double)>& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (auto st = options.check(); !st) return tl::unexpected(st.error());
+  const fs::path& dir = options.out_dir;
+  std::error_code ec;
+  if (fs::exists(dir) && !fs::is_empty(dir, ec)) {
+    if (!options.overwrite)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "{}: output folder exists and is not empty (use overwrite)", dir.string());
+    if (!fs::exists(dir / sources::kManifestName))
+      return make_error(ErrorCode::kInvalidArgument,
+                        "{}: refusing to overwrite a folder that is not a session", dir.string());
+    fs::remove_all(dir, ec);
+    if (ec)
+      return make_error(ErrorCode::kIoError, "{}: cannot remove ({})", dir.string(), ec.message());
+  }
+
+  auto media = load_media(options);
+  if (!media) return tl::unexpected(media.error());
+  const Generator gen(options, std::move(*media));
+  const DemoScript& script = gen.script();
+  const DemoGeometry& g = script.geometry();
+  const double dur = options.duration_s;
+
+  // ---- streams
+  std::vector<StreamPlan> plans = {
+      {"camera_left", SensorKind::kColor, options.camera_rate_hz, 0, 0},
+      {"camera_middle", SensorKind::kColor, options.camera_rate_hz, 0, 1},
+      {"camera_right", SensorKind::kColor, options.camera_rate_hz, 0, 2},
+      {"front.color", SensorKind::kColor, options.kinect_rate_hz, 0, 3},
+      {"front.depth", SensorKind::kDepth, options.kinect_rate_hz, 0, 4},
+      {"front.skeleton", SensorKind::kSkeleton, options.kinect_rate_hz, 0, -1},
+      {"top.color", SensorKind::kColor, options.kinect_rate_hz, 0, 5},
+      {"mic_array", SensorKind::kAudio, 1.0 / options.audio_chunk_s, 0, -1}};
+  for (auto& p : plans) p.count = frame_count(dur, p.rate_hz);
+
+  sources::SessionManifest manifest;
+  manifest.name = fmt::format("demo-seed-{}", options.seed);
+  manifest.clock_origin_unix_ns = kClockOriginUnixNs;
+  manifest.participant.id = 0;
+  manifest.condition = "RET";
+  manifest.task = "TT";
+  manifest.frame_rate = options.camera_rate_hz;
+  manifest.truth = "truth.jsonl";
+  manifest.metadata = {{"generator", kGenerator}, {"seed", std::to_string(options.seed)}};
+  const int channels = static_cast<int>(g.mic_x_m.size());
+  for (const auto& p : plans) {
+    sources::StreamEntry e;
+    e.id = p.id;
+    e.kind = p.kind;
+    e.rate_hz = p.rate_hz;
+    if (p.kind == SensorKind::kColor || p.kind == SensorKind::kDepth) {
+      const CameraModel& cam = gen.cameras()[static_cast<size_t>(p.camera)];
+      e.width = cam.image_size.width;
+      e.height = cam.image_size.height;
+      e.encoding = p.kind == SensorKind::kColor ? "mjpeg" : "png16";
+      e.file = p.id + (p.kind == SensorKind::kColor ? ".mjpg" : ".depth");
+      e.index = p.id + ".idx";
+      e.calibration = "calib/" + p.id + ".yaml";
+    } else if (p.kind == SensorKind::kSkeleton) {
+      e.encoding = "jsonl";
+      e.file = p.id + ".jsonl";
+      e.calibration = "calib/front.depth.yaml";  // joints are in the front sensor's frame
+      e.frame = "front.depth";
+    } else {
+      e.encoding = "wav";
+      e.file = p.id + ".wav";
+      e.sample_rate = options.audio_sample_rate;
+      e.channels = channels;
+      e.start_ns = 0;
+      e.calibration = "calib/mic_array.yaml";
+    }
+    manifest.streams.push_back(e);
+  }
+
+  sources::SessionWriterOptions wopt;
+  wopt.jpeg_quality = options.jpeg_quality;
+  auto writer = sources::SessionWriter::create(dir, manifest, wopt);
+  if (!writer) return tl::unexpected(writer.error());
+
+  // ---- calibration
+  fs::create_directories(dir / "calib", ec);
+  for (const auto& cam : gen.cameras())
+    if (auto st = write_camera_model(dir / "calib" / (cam.frame + ".yaml"), cam); !st)
+      return tl::unexpected(st.error());
+  if (auto st =
+          write_mic_calibration(dir / "calib" / "mic_array.yaml", g, options.audio_sample_rate);
+      !st)
+    return tl::unexpected(st.error());
+
+  // ---- audio: image-source room + pink noise
+  const auto& clips = gen.media().clips;
+  const auto utterances = plan_utterances(script, clips);
+  const double fs_hz = options.audio_sample_rate;
+  const size_t n_samples = static_cast<size_t>(frame_count(dur, fs_hz));
+  Channels mix(static_cast<size_t>(channels), std::vector<double>(n_samples, 0.0));
+  RoomOptions room;
+  room.size_m = g.room_size_m();
+  room.rt60_s = options.rt60_s;
+  room.sample_rate_hz = fs_hz;
+  std::vector<cv::Vec3d> mics_room;
+  for (const auto& m : demo_mic_positions(g))
+    mics_room.push_back(g.room_from_world(m + g.mic_array_m));
+  std::vector<std::pair<size_t, size_t>> active;
+  std::vector<json> speech_truth;
+  for (const auto& u : utterances) {
+    const auto& clip = clips[u.clip];
+    auto wet = simulate(gen.media().clip_samples[u.clip], room,
+                        AcousticPlacement{g.room_from_world(u.source_m), mics_room});
+    if (!wet) return tl::unexpected(wet.error());
+    const size_t off = static_cast<size_t>(std::llround(u.clip_start_s * fs_hz));
+    for (size_t c = 0; c < mix.size(); ++c)
+      for (size_t i = 0; i < (*wet)[c].size() && off + i < n_samples; ++i)
+        mix[c][off + i] += (*wet)[c][i];
+    const double delay = cv::norm(u.source_m - g.mic_array_m) / room.speed_of_sound_m_s;
+    const double s0 = u.clip_start_s + clip.speech_start_s + delay;
+    const double s1 = u.clip_start_s + clip.speech_end_s + delay;
+    active.emplace_back(static_cast<size_t>(s0 * fs_hz),
+                        std::min(n_samples, static_cast<size_t>(s1 * fs_hz)));
+    double az = 0, el = 0;
+    array_direction(g, u.source_m, az, el);
+    json r;
+    r["type"] = "speech";
+    r["start_ns"] = static_cast<int64_t>(std::llround(s0 * 1e9));
+    r["end_ns"] = static_cast<int64_t>(std::llround(s1 * 1e9));
+    r["text"] = clip.text;
+    r["source_file"] = clip.file;
+    r["speaker"] = clip.speaker;
+    r["azimuth_deg"] = q(az, 1e4);
+    r["elevation_deg"] = q(el, 1e4);
+    r["source_position_m"] = vec_json(u.source_m);
+    r["distance_m"] = q(cv::norm(u.source_m - g.mic_array_m));
+    speech_truth.push_back(r);
+  }
+  double speech_power = 0;
+  size_t speech_samples = 0;
+  for (const auto& [a, b] : active) {
+    speech_power += mean_power(mix, a, b) * static_cast<double>(b - a);
+    speech_samples += b - a;
+  }
+  speech_power = speech_samples ? speech_power / static_cast<double>(speech_samples) : 1e-4;
+  add_noise(mix, options.snr_db, NoiseColor::kPink, sub_seed(options.seed, "audio_noise"),
+            speech_power);
+  double peak = 1e-12;
+  for (const auto& ch : mix)
+    for (double v : ch) peak = std::max(peak, std::abs(v));
+  const double gain = 0.5 / peak;
+
+  // ---- truth
+  std::vector<std::pair<std::pair<int64_t, int>, json>> truth;  // ((stamp, order), record)
+  {
+    for (int64_t k = 0; k < plans[0].count; ++k) {
+      const int64_t s = stamp_ns(k, options.camera_rate_hz);
+      truth.push_back({{s, 1}, face_record(gen, s)});
+    }
+    for (int64_t k = 0; k < plans[5].count; ++k) {
+      const int64_t s = stamp_ns(k, options.kinect_rate_hz);
+      json r;
+      r["type"] = "skeleton";
+      r["stamp_ns"] = s;
+      r["joints"] = skeleton_json(script.joints(static_cast<double>(s) * 1e-9));
+      truth.push_back({{s, 2}, r});
+    }
+    const CameraModel& top = gen.cameras()[5];
+    for (int64_t k = 0; k < plans[6].count; ++k) {
+      const int64_t s = stamp_ns(k, options.kinect_rate_hz);
+      const auto states = script.object_states(static_cast<double>(s) * 1e-9);
+      for (size_t i = 0; i < states.size(); ++i) {
+        const auto& st = states[i];
+        const auto& spec = script.objects()[i];
+        double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+        for (const auto& c : st.corners)
+          if (auto p = top.project(c)) {
+            x0 = std::min(x0, p->x), y0 = std::min(y0, p->y);
+            x1 = std::max(x1, p->x), y1 = std::max(y1, p->y);
+          }
+        json r;
+        r["type"] = "object";
+        r["stamp_ns"] = s;
+        r["id"] = spec.id;
+        r["label"] = spec.label;
+        r["label_name"] = spec.label_name;
+        r["position_m"] = vec_json(st.position_m);
+        r["yaw_deg"] = q(st.yaw_deg, 1e4);
+        r["size_m"] = vec_json(cv::Vec3d(spec.width_m, spec.height_m, spec.depth_m));
+        r["top_box"] = json::array({q(x0, 1e3), q(y0, 1e3), q(x1 - x0, 1e3), q(y1 - y0, 1e3)});
+        truth.push_back({{s, 3}, r});
+      }
+    }
+    for (const auto& a : script.actions()) {
+      json r;
+      r["type"] = "action";
+      r["start_ns"] = static_cast<int64_t>(std::llround(a.start_s * 1e9));
+      r["end_ns"] = static_cast<int64_t>(std::llround(a.end_s * 1e9));
+      r["label"] = std::string(action_label(a.action));
+      r["id"] = action_dream_id(a.action);
+      truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});
+    }
+    for (auto& r : speech_truth) truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});
+    std::stable_sort(truth.begin(), truth.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    json meta;
+    meta["type"] = "meta";
+    meta["truth_version"] = 1;
+    meta["generator"] = kGenerator;
+    meta["seed"] = options.seed;
+    meta["duration_ns"] = static_cast<int64_t>(std::llround(dur * 1e9));
+    meta["frame_rate"] = options.camera_rate_hz;
+    meta["robot_head_m"] = vec_json(g.robot_head_m);
+    meta["gaze_radius_m"] = g.gaze_radius_m;
+    std::ofstream out(dir / "truth.jsonl", std::ios::binary | std::ios::trunc);
+    if (!out)
+      return make_error(ErrorCode::kIoError, "{}: cannot write", (dir / "truth.jsonl").string());
+    out << meta.dump() << '\n';
+    for (const auto& [key, r] : truth) out << r.dump() << '\n';
+    if (!out)
+      return make_error(ErrorCode::kIoError, "{}: write failed", (dir / "truth.jsonl").string());
+  }
+
+  // ---- frames: rendered ahead by worker threads, written in stamp order by this thread
+  std::vector<Job> jobs;
+  for (int s = 0; s < static_cast<int>(plans.size()); ++s)
+    for (int64_t k = 0; k < plans[static_cast<size_t>(s)].count; ++k)
+      jobs.push_back({stamp_ns(k, plans[static_cast<size_t>(s)].rate_hz), s, k});
+  std::stable_sort(jobs.begin(), jobs.end(), [](const Job& a, const Job& b) {
+    return a.stamp != b.stamp ? a.stamp < b.stamp : a.stream < b.stream;
+  });
+
+  auto make = [&](const Job& job) -> Result<FramePtr> {
+    const StreamPlan& p = plans[static_cast<size_t>(job.stream)];
+    const Timestamp ts = Timestamp::from_ns(job.stamp);
+    const auto seq = static_cast<uint64_t>(job.index);
+    switch (p.kind) {
+      case SensorKind::kColor: {
+        cv::Mat bgr;
+        gen.render(p.camera, job.stamp, p.id, job.index, &bgr, nullptr);
+        return make_frame(p.id, ts, seq, ColorImage{bgr});
+      }
+      case SensorKind::kDepth: {
+        cv::Mat depth;
+        gen.render(p.camera, job.stamp, p.id, job.index, nullptr, &depth);
+        return make_frame(p.id, ts, seq, DepthImage{depth, true});
+      }
+      case SensorKind::kSkeleton: {
+        std::mt19937_64 rng(sub_seed(options.seed, p.id, seq));
+        const auto j = script.joints(static_cast<double>(job.stamp) * 1e-9);
+        Skeleton sk;
+        SkeletonBody body;
+        body.body_id = 0;
+        for (int i = 0; i < kJointCount; ++i) {
+          auto& o = body.joints[static_cast<size_t>(i)];
+          for (int k = 0; k < 3; ++k)
+            o.position_m[k] = j[static_cast<size_t>(i)][k] + options.joint_noise_m * gaussian(rng);
+          const auto id = static_cast<JointId>(i);
+          // Legs are under the table: reported as "inferred", like a Kinect would.
+          o.confidence = (id >= JointId::kKneeLeft && id <= JointId::kFootLeft) ||
+                                 (id >= JointId::kKneeRight && id <= JointId::kFootRight)
+                             ? 0.5f
+                             : 1.0f;
+        }
+        sk.bodies.push_back(body);
+        return make_frame(p.id, ts, seq, std::move(sk));
+      }
+      case SensorKind::kAudio: {
+        AudioChunk a;
+        a.sample_rate = options.audio_sample_rate;
+        a.channels = channels;
+        const size_t chunk = static_cast<size_t>(std::llround(options.audio_chunk_s * fs_hz));
+        const size_t b = static_cast<size_t>(job.index) * chunk, e = std::min(n_samples, b + chunk);
+        a.samples.reserve((e - b) * static_cast<size_t>(channels));
+        for (size_t i = b; i < e; ++i)
+          for (int c = 0; c < channels; ++c)
+            a.samples.push_back(static_cast<float>(mix[static_cast<size_t>(c)][i] * gain));
+        return make_frame(p.id,
+                          Timestamp::from_ns(static_cast<int64_t>(std::llround(b * 1e9 / fs_hz))),
+                          seq, std::move(a));
+      }
+    }
+    return make_error(ErrorCode::kInternal, "unknown stream kind");
+  };
+
+  const size_t n_jobs = jobs.size();
+  const size_t window = 48;
+  std::vector<std::optional<Result<FramePtr>>> slots(n_jobs);
+  std::mutex mu;
+  std::condition_variable cv_ready, cv_space;
+  size_t written = 0;
+  std::atomic<size_t> next_job{0};
+  std::atomic<bool> abort{false};
+  auto worker = [&]() {
+    for (;;) {
+      const size_t i = next_job.fetch_add(1);
+      if (i >= n_jobs) return;
+      {
+        std::unique_lock lock(mu);
+        cv_space.wait(lock, [&] { return abort || i < written + window; });
+        if (abort) return;
+      }
+      Result<FramePtr> r = make_error(ErrorCode::kInternal, "not rendered");
+      try {
+        r = make(jobs[i]);
+      } catch (const std::exception& e) {
+        r = make_error(ErrorCode::kInternal, "demo frame {}: {}", i, e.what());
+      }
+      std::lock_guard lock(mu);
+      slots[i] = std::move(r);
+      cv_ready.notify_all();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 0; i < options.threads; ++i) pool.emplace_back(worker);
+  Status status = ok_status();
+  DemoSummary summary;
+  for (size_t i = 0; i < n_jobs && status; ++i) {
+    Result<FramePtr> r = make_error(ErrorCode::kInternal, "");
+    {
+      std::unique_lock lock(mu);
+      cv_ready.wait(lock, [&] { return slots[i].has_value(); });
+      r = std::move(*slots[i]);
+      slots[i].reset();
+    }
+    if (!r) {
+      status = tl::unexpected(r.error());
+    } else {
+      status = (*writer)->write(**r);
+      ++summary.frames[(*r)->sensor];
+    }
+    {
+      std::lock_guard lock(mu);
+      written = i + 1;
+    }
+    cv_space.notify_all();
+    if (progress && (i % 64 == 0 || i + 1 == n_jobs))
+      progress(static_cast<double>(i + 1) / static_cast<double>(n_jobs));
+  }
+  {
+    std::lock_guard lock(mu);
+    abort = !status;
+  }
+  cv_space.notify_all();
+  for (auto& t : pool) t.join();
+  if (!status) return tl::unexpected(status.error());
+  if (auto st = (*writer)->close(); !st) return tl::unexpected(st.error());
+
+  summary.out_dir = dir;
+  summary.utterances = static_cast<int>(utterances.size());
+  summary.action_segments = static_cast<int>(script.actions().size());
+  summary.truth_records = static_cast<int64_t>(truth.size()) + 1;
+  summary.generation_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+}  // namespace dreamsense::sim

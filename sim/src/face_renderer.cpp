@@ -1,0 +1,157 @@
+#include "dreamsense/sim/face_renderer.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace dreamsense::sim {
+
+Status PlanarFaceOptions::check() const {
+  std::string bad;
+  if (!(face_width_px > 0)) bad += " face_width_px must be > 0;";
+  if (!(face_width_m > 0)) bad += " face_width_m must be > 0;";
+  if (crop_px.width < 8 || crop_px.height < 8) bad += " crop_px too small;";
+  if (!(mask_axes_px.width > 0 && mask_axes_px.height > 0)) bad += " mask_axes_px must be > 0;";
+  if (cv::norm(left_eye_px - right_eye_px) < 1) bad += " eyes coincide;";
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "PlanarFaceOptions:{}", bad);
+  return ok_status();
+}
+
+PlanarFaceRenderer::PlanarFaceRenderer(PlanarFaceOptions options) : options_(std::move(options)) {
+  metres_per_px_ = options_.face_width_m / options_.face_width_px;
+  origin_px_ = 0.5 * (options_.left_eye_px + options_.right_eye_px);
+}
+
+Result<std::unique_ptr<PlanarFaceRenderer>> PlanarFaceRenderer::create(
+    const PlanarFaceOptions& options) {
+  if (auto st = options.check(); !st) return tl::unexpected(st.error());
+  if (!std::filesystem::exists(options.portrait))
+    return make_error(ErrorCode::kNotFound,
+                      "{}: portrait image not found (install the Debian package python3-skimage)",
+                      options.portrait.string());
+  cv::Mat img = cv::imread(options.portrait.string(), cv::IMREAD_COLOR);
+  if (img.empty())
+    return make_error(ErrorCode::kCorruptData, "{}: cannot decode the portrait image",
+                      options.portrait.string());
+  if ((options.crop_px & cv::Rect(0, 0, img.cols, img.rows)) != options.crop_px)
+    return make_error(ErrorCode::kInvalidArgument, "{}: crop {}x{}+{}+{} outside the {}x{} image",
+                      options.portrait.string(), options.crop_px.width, options.crop_px.height,
+                      options.crop_px.x, options.crop_px.y, img.cols, img.rows);
+  std::unique_ptr<PlanarFaceRenderer> r(new PlanarFaceRenderer(options));
+  const cv::Rect& c = options.crop_px;
+  cv::Mat crop = img(c).clone();
+  cv::Mat alpha(crop.size(), CV_8U, cv::Scalar(0));
+  cv::ellipse(alpha,
+              cv::RotatedRect(cv::Point2f(static_cast<float>(options.mask_centre_px.x - c.x),
+                                          static_cast<float>(options.mask_centre_px.y - c.y)),
+                              cv::Size2f(static_cast<float>(2 * options.mask_axes_px.width),
+                                         static_cast<float>(2 * options.mask_axes_px.height)),
+                              0.f),
+              cv::Scalar(255), cv::FILLED, cv::LINE_AA);
+  cv::GaussianBlur(alpha, alpha, cv::Size(0, 0), 2.5);
+  cv::Mat bgra;
+  cv::merge(std::vector<cv::Mat>{crop, alpha}, bgra);
+  // Pre-blurred levels for minification (texture pixels per image pixel > 1).
+  for (double sigma : {0.0, 0.7, 1.2, 2.0, 3.0}) {
+    if (sigma == 0) {
+      r->texture_levels_.push_back(bgra);
+    } else {
+      cv::Mat b;
+      cv::GaussianBlur(bgra, b, cv::Size(0, 0), sigma);
+      r->texture_levels_.push_back(b);
+    }
+  }
+  return r;
+}
+
+cv::Vec3d PlanarFaceRenderer::head_point(const cv::Point2d& px) const {
+  return {(px.x - origin_px_.x) * metres_per_px_, (px.y - origin_px_.y) * metres_per_px_, 0.0};
+}
+cv::Vec3d PlanarFaceRenderer::left_eye_head() const { return head_point(options_.left_eye_px); }
+cv::Vec3d PlanarFaceRenderer::right_eye_head() const { return head_point(options_.right_eye_px); }
+
+std::vector<cv::Vec3d> PlanarFaceRenderer::face_region_head() const {
+  const cv::Rect2d& f = options_.face_region_px;
+  return {head_point(f.tl()), head_point({f.x + f.width, f.y}), head_point(f.br()),
+          head_point({f.x, f.y + f.height})};
+}
+
+cv::Matx33d PlanarFaceRenderer::homography(const CameraModel& camera,
+                                           const FaceState& state) const {
+  // Crop pixel (x, y) -> portrait pixel (x + crop.x, y + crop.y) -> head point -> camera.
+  const cv::Matx33d A = camera.R * state.world_from_head;
+  const double s = metres_per_px_;
+  const cv::Vec3d a0(A(0, 0), A(1, 0), A(2, 0)), a1(A(0, 1), A(1, 1), A(2, 1));
+  const cv::Vec3d c = camera.to_camera(state.position_m) +
+                      s * (options_.crop_px.x - origin_px_.x) * a0 +
+                      s * (options_.crop_px.y - origin_px_.y) * a1;
+  const cv::Matx33d M(s * a0[0], s * a1[0], c[0], s * a0[1], s * a1[1], c[1], s * a0[2], s * a1[2],
+                      c[2]);
+  const cv::Matx33d from_portrait(1, 0, -options_.crop_px.x, 0, 1, -options_.crop_px.y, 0, 0, 1);
+  return camera.K * M * from_portrait;
+}
+
+void PlanarFaceRenderer::render(const CameraModel& camera, const FaceState& state,
+                                const Lighting& lighting, RenderTarget& target) const {
+  DS_CHECK(target.bgr.size() == camera.image_size);
+  const cv::Vec3d n_world = state.world_from_head * cv::Vec3d(0, 0, -1);  // face normal (front)
+  const cv::Vec3d to_cam = camera.centre_world() - state.position_m;
+  const double facing = n_world.dot(to_cam) / cv::norm(to_cam);
+  if (facing < 0.05) return;  // seen from behind or edge-on: the head ellipsoid shows instead
+
+  const cv::Rect& c = options_.crop_px;
+  std::vector<cv::Vec3d> corners = {
+      state.to_world(head_point({double(c.x), double(c.y)})),
+      state.to_world(head_point({double(c.x + c.width), double(c.y)})),
+      state.to_world(head_point({double(c.x + c.width), double(c.y + c.height)})),
+      state.to_world(head_point({double(c.x), double(c.y + c.height)}))};
+  const cv::Rect roi = projected_bounds(camera, corners, target.bgr.size(), 2);
+  if (roi.empty()) return;
+
+  // Texture level from the magnification at the face centre.
+  const double z = camera.to_camera(state.position_m)[2];
+  if (z <= 0.05) return;
+  const double scale = camera.K(0, 0) * metres_per_px_ / z * std::sqrt(std::max(facing, 0.1));
+  int level = 0;
+  if (scale < 0.85) level = 1;
+  if (scale < 0.6) level = 2;
+  if (scale < 0.4) level = 3;
+  if (scale < 0.25) level = 4;
+  const cv::Mat& tex = texture_levels_[static_cast<size_t>(level)];
+
+  const cv::Matx33d H_crop = homography(camera, state) *
+                             cv::Matx33d(1, 0, c.x, 0, 1, c.y, 0, 0, 1);  // crop px -> image px
+  const cv::Matx33d to_roi(1, 0, -roi.x, 0, 1, -roi.y, 0, 0, 1);
+  cv::Mat patch;
+  cv::warpPerspective(tex, patch, cv::Mat(to_roi * H_crop), roi.size(), cv::INTER_LINEAR,
+                      cv::BORDER_CONSTANT, cv::Scalar::all(0));
+
+  // Plane depth per pixel: z = (n . o) / (n . d) in camera coordinates, d = (x', y', 1).
+  const cv::Vec3d n_cam = camera.R * n_world;
+  const double no = n_cam.dot(camera.to_camera(state.position_m));
+  const double shade = lambert_shade(n_world, -to_cam, lighting);
+  const double fx = camera.K(0, 0), fy = camera.K(1, 1), cx = camera.K(0, 2), cy = camera.K(1, 2);
+  for (int v = 0; v < roi.height; ++v) {
+    const cv::Vec4b* prow = patch.ptr<cv::Vec4b>(v);
+    cv::Vec3b* out = target.bgr.ptr<cv::Vec3b>(v + roi.y) + roi.x;
+    float* zb = target.depth.ptr<float>(v + roi.y) + roi.x;
+    const double dy = (v + roi.y - cy) / fy;
+    for (int u = 0; u < roi.width; ++u) {
+      const cv::Vec4b& p = prow[u];
+      if (p[3] == 0) continue;
+      const double dx = (u + roi.x - cx) / fx;
+      const double den = n_cam[0] * dx + n_cam[1] * dy + n_cam[2];
+      if (std::abs(den) < 1e-12) continue;
+      const double zp = no / den;
+      if (zp <= 0.02 || zp >= zb[u]) continue;
+      const double a = p[3] / 255.0;
+      for (int k = 0; k < 3; ++k)
+        out[u][k] = cv::saturate_cast<uchar>(a * p[k] * shade + (1 - a) * out[u][k]);
+      if (p[3] >= 128) zb[u] = static_cast<float>(zp);
+    }
+  }
+}
+
+}  // namespace dreamsense::sim

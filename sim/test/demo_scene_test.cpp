@@ -1,0 +1,155 @@
+#include "dreamsense/sim/demo_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+namespace dreamsense::sim {
+namespace {
+
+TEST(DemoScene, ActionScheduleTilesTheSessionAndHasEveryActionIn20s) {
+  for (uint64_t seed = 0; seed < 200; ++seed) {
+    const auto s = make_action_schedule(seed, 20.0);
+    ASSERT_FALSE(s.empty());
+    EXPECT_DOUBLE_EQ(s.front().start_s, 0.0);
+    EXPECT_DOUBLE_EQ(s.back().end_s, 20.0);
+    std::set<DemoAction> seen;
+    for (size_t i = 0; i < s.size(); ++i) {
+      if (i > 0) {
+        EXPECT_DOUBLE_EQ(s[i].start_s, s[i - 1].end_s);
+      }
+      const double len = s[i].end_s - s[i].start_s;
+      if (i + 1 < s.size()) {
+        if (s[i].action == DemoAction::kNone) {
+          EXPECT_GE(len, 0.8);
+        } else {
+          EXPECT_GE(len, 2.0);
+          EXPECT_LE(len, 3.5);
+        }
+      }
+      if (s[i].end_s - s[i].start_s >= 2.0) seen.insert(s[i].action);
+    }
+    EXPECT_TRUE(seen.count(DemoAction::kWave)) << "seed " << seed;
+    EXPECT_TRUE(seen.count(DemoAction::kFly)) << "seed " << seed;
+    EXPECT_TRUE(seen.count(DemoAction::kHandsOnHead)) << "seed " << seed;
+  }
+}
+
+TEST(DemoScene, SeedsChangeTheScript) {
+  const DemoScript a(1, 20), b(2, 20);
+  EXPECT_NE(a.head_pose(3.0).yaw_deg, b.head_pose(3.0).yaw_deg);
+  const auto sa = make_action_schedule(1, 20), sb = make_action_schedule(2, 20);
+  EXPECT_NE(sa[1].end_s, sb[1].end_s);
+  EXPECT_NE(a.object_states(1.0)[0].position_m, b.object_states(1.0)[0].position_m);
+}
+
+TEST(DemoScene, HeadPoseStaysInRangeAndMutualGazeHappens) {
+  for (uint64_t seed : {1, 2, 3, 7, 42}) {
+    const DemoScript s(seed, 20);
+    const auto& g = s.geometry();
+    int mutual = 0, n = 0;
+    cv::Vec3d prev_pos;
+    double prev_yaw = 0;
+    for (double t = 0; t < 20; t += 0.04, ++n) {
+      const HeadPose hp = s.head_pose(t);
+      EXPECT_LE(std::abs(hp.yaw_deg), 55.0 + 1e-9);
+      EXPECT_LE(std::abs(hp.pitch_deg), 15.0 + 1e-9);
+      EXPECT_LE(std::abs(hp.roll_deg), 10.0 + 1e-9);
+      EXPECT_LT(cv::norm(hp.position_m - g.head_rest_m), 0.06);
+      if (n > 0) {  // smooth: < 200 deg/s, < 0.3 m/s
+        EXPECT_LT(std::abs(hp.yaw_deg - prev_yaw), 8.0);
+        EXPECT_LT(cv::norm(hp.position_m - prev_pos), 0.012);
+      }
+      prev_yaw = hp.yaw_deg;
+      prev_pos = hp.position_m;
+      if (ray_point_distance(hp.position_m, hp.gaze_dir(), g.robot_head_m) <= g.gaze_radius_m)
+        ++mutual;
+    }
+    EXPECT_GT(mutual, n / 10) << "seed " << seed;
+    EXPECT_LT(mutual, n * 9 / 10) << "seed " << seed;
+  }
+}
+
+TEST(DemoScene, HeadPoseZeroLooksAlongMinusZ) {
+  HeadPose hp;
+  const cv::Vec3d g = hp.gaze_dir();
+  EXPECT_NEAR(g[2], -1.0, 1e-12);
+  double yaw = 0, pitch = 0;
+  look_at_angles({0, -0.05, 1.1}, {0, -0.05, 0.15}, yaw, pitch);
+  EXPECT_NEAR(yaw, 0, 1e-9);
+  EXPECT_NEAR(pitch, 0, 1e-9);
+  look_at_angles({0, 0, 1}, {-1, 0, 0}, yaw, pitch);  // towards -x and -z
+  hp.yaw_deg = yaw;
+  EXPECT_NEAR(hp.gaze_dir()[0], -std::sqrt(0.5), 1e-9);
+}
+
+TEST(DemoScene, SkeletonIsConsistent) {
+  const DemoScript s(5, 20);
+  for (double t = 0.05; t < 20; t += 0.1) {
+    const auto j = s.joints(t);
+    auto J = [&](JointId id) { return j[static_cast<size_t>(id)]; };
+    const HeadPose hp = s.head_pose(t);
+    EXPECT_LT(cv::norm(J(JointId::kHead) - hp.position_m), 0.12);
+    EXPECT_GT(J(JointId::kShoulderCenter)[1], J(JointId::kHead)[1]);  // below the head
+    bool transition = false;
+    for (const auto& seg : s.actions())
+      if (t >= seg.start_s && t < seg.start_s + 0.5) transition = true;
+    if (transition) continue;
+    for (bool left : {true, false}) {
+      const auto sh = J(left ? JointId::kShoulderLeft : JointId::kShoulderRight);
+      const auto el = J(left ? JointId::kElbowLeft : JointId::kElbowRight);
+      const auto wr = J(left ? JointId::kWristLeft : JointId::kWristRight);
+      EXPECT_NEAR(cv::norm(el - sh), 0.21, 0.005) << t;
+      EXPECT_NEAR(cv::norm(wr - el), 0.19, 0.005) << t;
+    }
+    const DemoAction a = s.action_at(t);
+    const auto hl = J(JointId::kHandLeft), hr = J(JointId::kHandRight);
+    const auto sl = J(JointId::kShoulderLeft), sr = J(JointId::kShoulderRight);
+    switch (a) {
+      case DemoAction::kNone:
+        EXPECT_NEAR(hl[1], s.geometry().table_top_y_m, 0.05);
+        EXPECT_NEAR(hr[1], s.geometry().table_top_y_m, 0.05);
+        break;
+      case DemoAction::kWave:
+        EXPECT_LT(hr[1], sr[1] - 0.15);  // right hand well above the shoulder
+        break;
+      case DemoAction::kFly:
+        EXPECT_GT(hl[0] - sl[0], 0.3);
+        EXPECT_LT(hr[0] - sr[0], -0.3);
+        break;
+      case DemoAction::kHandsOnHead:
+        EXPECT_LT(cv::norm(hl - J(JointId::kHead)), 0.16);
+        EXPECT_LT(cv::norm(hr - J(JointId::kHead)), 0.16);
+        break;
+    }
+  }
+}
+
+TEST(DemoScene, TableObjectsNeverOverlapAndStayOnTheTable) {
+  for (uint64_t seed : {1, 9, 123}) {
+    const DemoScript s(seed, 20);
+    const auto& g = s.geometry();
+    for (double t = 0; t < 20; t += 0.05) {
+      const auto st = s.object_states(t);
+      ASSERT_GE(st.size(), 2u);
+      for (size_t i = 0; i < st.size(); ++i) {
+        for (const auto& c : st[i].corners) {
+          EXPECT_GT(c[0], g.table_x_min_m);
+          EXPECT_LT(c[0], g.table_x_max_m);
+          EXPECT_GT(c[2], g.table_z_min_m);
+          EXPECT_LT(c[2], g.table_z_max_m);
+        }
+        for (size_t k = i + 1; k < st.size(); ++k) {
+          // Bounding discs (half-diagonal 0.0625 m) are disjoint.
+          cv::Vec3d d = st[i].position_m - st[k].position_m;
+          d[1] = 0;
+          EXPECT_GT(cv::norm(d), 0.125);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace dreamsense::sim

@@ -1,0 +1,312 @@
+// Session format: every kind of bad input gives a one-line error naming the file and the problem.
+
+#include "dreamsense/sources/session.hpp"
+
+#include <gtest/gtest.h>
+#include <sndfile.h>
+
+#include <fstream>
+#include <vector>
+
+#include "session_test_util.hpp"
+
+namespace dreamsense::sources {
+namespace {
+
+using namespace test_util;
+
+// A valid closed session of 10 ticks in <tmp>/s.
+class SessionBadInput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = tmp_.path() / "s";
+    write_session(dir_, 10);
+  }
+  // Opens the session and returns its error (fails the test if it opens).
+  Error open_error(SessionReaderOptions options = {}) {
+    auto r = SessionReader::open(dir_, options);
+    if (r) {
+      ADD_FAILURE() << "session opened";
+      return Error{};
+    }
+    EXPECT_EQ(r.error().message.find('\n'), std::string::npos) << "message is not one line";
+    return r.error();
+  }
+  TempDir tmp_;
+  std::filesystem::path dir_;
+};
+
+#define EXPECT_MESSAGE_HAS(error, text) \
+  EXPECT_NE((error).message.find(text), std::string::npos) << (error).message
+
+TEST_F(SessionBadInput, MissingStreamFile) {
+  std::filesystem::remove(dir_ / "cam.mjpg");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kNotFound);
+  EXPECT_MESSAGE_HAS(e, "cam.mjpg: missing (declared in session.yaml)");
+}
+
+TEST_F(SessionBadInput, MissingIndexFile) {
+  std::filesystem::remove(dir_ / "depth.idx");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kNotFound);
+  EXPECT_MESSAGE_HAS(e, "depth.idx: missing");
+}
+
+TEST_F(SessionBadInput, MissingCalibrationFile) {
+  replace_in_file(dir_ / kManifestName, "frame: cam",
+                  "frame: cam\n    calibration: calib/cam.yaml");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kNotFound);
+  EXPECT_MESSAGE_HAS(e, "calib/cam.yaml: missing");
+}
+
+TEST_F(SessionBadInput, MissingManifest) {
+  std::filesystem::remove(dir_ / kManifestName);
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kNotFound);
+  EXPECT_MESSAGE_HAS(e, "session.yaml");
+}
+
+TEST_F(SessionBadInput, UnknownFormatVersion) {
+  replace_in_file(dir_ / kManifestName, "format_version: 1", "format_version: 7");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kUnsupported);
+  EXPECT_MESSAGE_HAS(e, "session.yaml: unknown format_version 7 (this build reads 1)");
+}
+
+TEST_F(SessionBadInput, NotASessionManifest) {
+  replace_in_file(dir_ / kManifestName, "format: dreamsense-session", "format: something-else");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kUnsupported);
+  EXPECT_MESSAGE_HAS(e, "session.yaml");
+}
+
+TEST_F(SessionBadInput, InvalidYaml) {
+  write_file(dir_ / kManifestName, "format: dreamsense-session\nstreams: [\n  {id: x\n");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "session.yaml: line");
+}
+
+TEST_F(SessionBadInput, MissingRequiredKey) {
+  replace_in_file(dir_ / kManifestName, "    encoding: raw16\n", "");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "session.yaml: missing required key 'streams[1] (depth).encoding'");
+}
+
+TEST_F(SessionBadInput, WrongTypeOfValue) {
+  replace_in_file(dir_ / kManifestName, "width: 64", "width: wide");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "session.yaml: key 'streams[0] (cam).width': expected an integer");
+}
+
+TEST_F(SessionBadInput, DuplicateStreamId) {
+  replace_in_file(dir_ / kManifestName, "id: depth", "id: cam");
+  const Error e = open_error();
+  EXPECT_MESSAGE_HAS(e, "session.yaml: duplicate stream id 'cam'");
+}
+
+TEST_F(SessionBadInput, UnknownKind) {
+  replace_in_file(dir_ / kManifestName, "kind: skeleton", "kind: thermal");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "session.yaml");
+  EXPECT_MESSAGE_HAS(e, "unknown kind 'thermal'");
+}
+
+TEST_F(SessionBadInput, UnknownEncoding) {
+  replace_in_file(dir_ / kManifestName, "encoding: jsonl", "encoding: csv");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kUnsupported);
+  EXPECT_MESSAGE_HAS(e, "session.yaml");
+  EXPECT_MESSAGE_HAS(e, "unknown encoding 'csv'");
+}
+
+TEST_F(SessionBadInput, UnknownStreamInOnly) {
+  const Error e = open_error({.only = {"camera_left"}});
+  EXPECT_EQ(e.code, ErrorCode::kNotFound);
+  EXPECT_MESSAGE_HAS(e, "no stream 'camera_left'");
+}
+
+TEST_F(SessionBadInput, TruncatedMjpegData) {
+  const auto path = dir_ / "cam.mjpg";
+  const auto size = std::filesystem::file_size(path);
+  std::filesystem::resize_file(path, size / 2);
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "cam.mjpg: truncated: index has 10 frames but data ends inside frame");
+}
+
+TEST_F(SessionBadInput, TruncatedDepthData) {
+  const auto path = dir_ / "depth.depth";
+  std::filesystem::resize_file(path, 3 * kWidth * kHeight * 2);
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "depth.depth: truncated: index has 10 frames but data ends before frame 3");
+}
+
+TEST_F(SessionBadInput, CorruptJpegBytes) {
+  // Frame 3 keeps its SOI/EOI markers but everything between is zeros: fails to decode.
+  const std::string idx = read_file(dir_ / "cam.idx");
+  size_t line_start = 0;
+  for (int skip = 0; skip < 4; ++skip) line_start = idx.find('\n', line_start) + 1;  // header+3
+  unsigned long long seq = 0, stamp = 0, offset = 0, size = 0;
+  ASSERT_EQ(
+      std::sscanf(idx.c_str() + line_start, "%llu,%llu,%llu,%llu", &seq, &stamp, &offset, &size),
+      4);
+  ASSERT_EQ(seq, 3u);
+  {
+    std::fstream f(dir_ / "cam.mjpg", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(offset + 2));
+    const std::string zeros(size - 4, '\0');
+    f.write(zeros.data(), static_cast<std::streamsize>(zeros.size()));
+  }
+  auto reader = SessionReader::open(dir_, {.only = {"cam"}});
+  ASSERT_TRUE(reader) << reader.error().message;
+  for (int k = 0; k < 3; ++k) ASSERT_TRUE((*reader)->next());
+  auto bad = (*reader)->next();
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.error().code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(bad.error(), "cam.mjpg: corrupt: frame 3");
+  // The reader goes on after a bad frame.
+  EXPECT_TRUE((*reader)->next());
+}
+
+TEST_F(SessionBadInput, CorruptJpegMarker) {
+  // Overwrite the first bytes of frame 0: no SOI marker, caught at open.
+  {
+    std::fstream f(dir_ / "cam.mjpg", std::ios::in | std::ios::out | std::ios::binary);
+    f.write("\0\0\0\0", 4);
+  }
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "cam.mjpg: corrupt: frame 0");
+}
+
+TEST_F(SessionBadInput, UnreadableWav) {
+  write_file(dir_ / "mic.wav", std::string(4096, 'x'));
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "mic.wav: unreadable: ");
+}
+
+TEST_F(SessionBadInput, TruncatedWav) {
+  const auto path = dir_ / "mic.wav";
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) - 1000);
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "mic.wav: truncated: header declares 6400 samples");
+  // In an incomplete session, what is there is read.
+  replace_in_file(dir_ / kManifestName, "complete: true", "complete: false");
+  auto reader = SessionReader::open(dir_, {.only = {"mic"}});
+  ASSERT_TRUE(reader) << reader.error().message;
+  int64_t samples = 0;
+  for (auto f = (*reader)->next(); f; f = (*reader)->next())
+    samples += (*f)->as<AudioChunk>()->frames();
+  EXPECT_EQ(samples, 6400 - 250);
+}
+
+void write_wav(const std::filesystem::path& path, int rate, int channels) {
+  SF_INFO info{};
+  info.samplerate = rate;
+  info.channels = channels;
+  info.format = SF_FORMAT_WAV | SF_FORMAT_PCM_16;
+  SNDFILE* f = sf_open(path.c_str(), SFM_WRITE, &info);
+  ASSERT_NE(f, nullptr);
+  std::vector<short> zeros(static_cast<size_t>(rate / 10 * channels), 0);
+  sf_writef_short(f, zeros.data(), rate / 10);
+  sf_close(f);
+}
+
+TEST_F(SessionBadInput, WrongRateWav) {
+  write_wav(dir_ / "mic.wav", 44100, kChannels);
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "mic.wav: sample rate 44100 Hz, session.yaml declares 16000 Hz");
+}
+
+TEST_F(SessionBadInput, WrongChannelCountWav) {
+  write_wav(dir_ / "mic.wav", kSampleRate, 4);
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "mic.wav: 4 channels, session.yaml declares 2");
+}
+
+TEST_F(SessionBadInput, NonIncreasingStampsInIndex) {
+  // Frame 2 (line 4, after the header line) goes back in time.
+  replace_in_file(dir_ / "cam.idx", "2,80000000,", "2,30000000,");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "cam.idx: line 4: stamp 30000000 not after previous 40000000");
+}
+
+TEST_F(SessionBadInput, MalformedIndexLine) {
+  replace_in_file(dir_ / "depth.idx", "\n5,", "\n5;");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "depth.idx: line 7: malformed index line");
+}
+
+TEST_F(SessionBadInput, MalformedSkeletonLine) {
+  replace_in_file(dir_ / "skel.jsonl", "{\"stamp_ns\":120000000", "{\"stamp_ns\":120000000,,");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "skel.jsonl: line 4: malformed JSON");
+}
+
+TEST_F(SessionBadInput, UnknownSkeletonJoint) {
+  replace_in_file(dir_ / "skel.jsonl", "\"head\"", "\"tail\"");
+  const Error e = open_error();
+  EXPECT_MESSAGE_HAS(e, "skel.jsonl: line 1: bodies[0]: unknown joint 'tail'");
+}
+
+TEST_F(SessionBadInput, ClockMismatch) {
+  // The microphone claims to start an hour later than the other streams.
+  replace_in_file(dir_ / kManifestName, "start_ns: 0", "start_ns: 3600000000000");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "mic.wav: clock mismatch");
+}
+
+TEST_F(SessionBadInput, IncompleteSessionWhenNotAllowed) {
+  replace_in_file(dir_ / kManifestName, "complete: true", "complete: false");
+  const Error e = open_error({.allow_incomplete = false});
+  EXPECT_MESSAGE_HAS(e, "session.yaml: incomplete session");
+  EXPECT_TRUE(SessionReader::open(dir_));
+}
+
+TEST(SessionWriterBadInput, UnwritableOutputFolder) {
+  TempDir tmp;
+  // Tests may run as root, so "unwritable" is a parent that is a regular file.
+  write_file(tmp.path() / "file", "not a folder");
+  const auto dir = tmp.path() / "file" / "session";
+  auto w = SessionWriter::create(dir, make_manifest());
+  ASSERT_FALSE(w);
+  EXPECT_EQ(w.error().code, ErrorCode::kIoError);
+  EXPECT_MESSAGE_HAS(w.error(), dir.string() + ": cannot create session folder");
+}
+
+TEST(SessionWriterBadInput, InvalidManifest) {
+  TempDir tmp;
+  SessionManifest m = make_manifest();
+  m.streams[1].id = "cam";
+  auto dup = SessionWriter::create(tmp.path() / "a", m);
+  ASSERT_FALSE(dup);
+  EXPECT_MESSAGE_HAS(dup.error(), "duplicate stream id 'cam'");
+  m = make_manifest();
+  m.streams[0].encoding = "video";
+  auto video = SessionWriter::create(tmp.path() / "b", m);
+  ASSERT_FALSE(video);
+  EXPECT_EQ(video.error().code, ErrorCode::kUnsupported);
+  m = make_manifest();
+  m.streams[0].file = "../escape.mjpg";
+  auto escape = SessionWriter::create(tmp.path() / "c", m);
+  ASSERT_FALSE(escape);
+  EXPECT_MESSAGE_HAS(escape.error(), "not a relative path inside the session folder");
+}
+
+}  // namespace
+}  // namespace dreamsense::sources
