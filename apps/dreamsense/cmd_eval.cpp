@@ -29,6 +29,8 @@ void print_metrics(const nlohmann::json& j) {
 void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   CLI::App* eval = app.add_subcommand("eval", "Standard-protocol evaluations (JSON of cli.md)");
   eval->require_subcommand(1);
+  add_eval_calibration(*eval, g, exit_code);
+  add_eval_doa(*eval, g, exit_code);
 
   auto flags = std::make_shared<EvalSessionFlags>();
   CLI::App* cmd = eval->add_subcommand(

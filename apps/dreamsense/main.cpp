@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   app::add_analyze(app, g, exit_code);
   app::add_eval(app, g, exit_code);
   app::add_bench(app, g, exit_code);
+  app::add_calibrate(app, g, exit_code);
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug
                    : g.quiet ? log::Level::kWarn
