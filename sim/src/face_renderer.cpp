@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <fcntl.h>
+#include <unistd.h>
 
 namespace dreamsense::sim {
 
@@ -24,6 +27,24 @@ PlanarFaceRenderer::PlanarFaceRenderer(PlanarFaceOptions options) : options_(std
   origin_px_ = 0.5 * (options_.left_eye_px + options_.right_eye_px);
 }
 
+namespace {
+// Debian's astronaut.png carries an sRGB profile that libpng calls "known incorrect" on every
+// read, on stderr, bypassing our logger; the image itself is fine. Read it with stderr muted.
+cv::Mat read_image_without_libpng_warnings(const std::string& path) {
+  std::fflush(stderr);
+  const int saved = ::dup(STDERR_FILENO);
+  const int devnull = ::open("/dev/null", O_WRONLY);
+  if (saved >= 0 && devnull >= 0) ::dup2(devnull, STDERR_FILENO);
+  cv::Mat img = cv::imread(path, cv::IMREAD_COLOR);
+  if (saved >= 0) {
+    ::dup2(saved, STDERR_FILENO);
+    ::close(saved);
+  }
+  if (devnull >= 0) ::close(devnull);
+  return img;
+}
+}  // namespace
+
 Result<std::unique_ptr<PlanarFaceRenderer>> PlanarFaceRenderer::create(
     const PlanarFaceOptions& options) {
   if (auto st = options.check(); !st) return tl::unexpected(st.error());
@@ -31,7 +52,7 @@ Result<std::unique_ptr<PlanarFaceRenderer>> PlanarFaceRenderer::create(
     return make_error(ErrorCode::kNotFound,
                       "{}: portrait image not found (install the Debian package python3-skimage)",
                       options.portrait.string());
-  cv::Mat img = cv::imread(options.portrait.string(), cv::IMREAD_COLOR);
+  cv::Mat img = read_image_without_libpng_warnings(options.portrait.string());
   if (img.empty())
     return make_error(ErrorCode::kCorruptData, "{}: cannot decode the portrait image",
                       options.portrait.string());
