@@ -16,6 +16,11 @@ using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
+std::set<SensorId> ids_of(const std::vector<StreamSpec>& specs) {
+  std::set<SensorId> ids;
+  for (const auto& s : specs) ids.insert(s.id);
+  return ids;
+}
 }  // namespace
 
 Status PipelineOptions::check() const {
@@ -62,6 +67,12 @@ Result<std::unique_ptr<Pipeline>> Pipeline::build(
   }
   return std::unique_ptr<Pipeline>(
       new Pipeline(std::move(options), std::move(source_info), std::move(analyzers)));
+}
+
+void Pipeline::finish_stats(const Synchronizer& sync, Timestamp first, Timestamp last) {
+  stats_.sync = sync.stats();
+  if (first.is_set())
+    stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
 }
 
 std::vector<StreamSpec> Pipeline::stream_specs() const {
@@ -128,8 +139,7 @@ Status Pipeline::run(Source& source, const TickCallback& on_tick,
 Status Pipeline::run_settled(Source& source, const TickCallback& on_tick,
                              const ProgressCallback& on_progress) {
   const auto specs = stream_specs();
-  std::set<SensorId> used;
-  for (const auto& sp : specs) used.insert(sp.id);
+  const std::set<SensorId> used = ids_of(specs);
   Synchronizer sync(options_.sync, specs);
   Timestamp first = Timestamp::unset(), last = Timestamp::unset();
   auto drain = [&]() -> Status {
@@ -154,17 +164,14 @@ Status Pipeline::run_settled(Source& source, const TickCallback& on_tick,
   }
   sync.end_all();
   if (auto st = drain(); !st) return st;
-  stats_.sync = sync.stats();
-  if (first.is_set())
-    stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
+  finish_stats(sync, first, last);
   return ok_status();
 }
 
 Status Pipeline::run_live(Source& source, const TickCallback& on_tick,
                           const ProgressCallback& on_progress) {
   const auto specs = stream_specs();
-  std::set<SensorId> used;
-  for (const auto& sp : specs) used.insert(sp.id);
+  const std::set<SensorId> used = ids_of(specs);
   Synchronizer sync(options_.sync, specs);
 
   // The reader thread plays the sensors: it releases each frame at its stamp (if pacing).
@@ -250,9 +257,7 @@ Status Pipeline::run_live(Source& source, const TickCallback& on_tick,
   stop = true;  // on error the reader exits after its current frame
   reader.join();
   if (result && !reader_status) result = reader_status;
-  stats_.sync = sync.stats();
-  if (first.is_set())
-    stats_.media_seconds = (last - first).seconds() + options_.sync.tick_period.seconds();
+  finish_stats(sync, first, last);
   return result;
 }
 

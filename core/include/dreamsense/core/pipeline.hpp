@@ -64,6 +64,7 @@ class Pipeline {
   Status run_settled(Source& source, const TickCallback& on_tick, const ProgressCallback& p);
   Status run_live(Source& source, const TickCallback& on_tick, const ProgressCallback& p);
   std::vector<StreamSpec> stream_specs() const;
+  void finish_stats(const Synchronizer& sync, Timestamp first, Timestamp last);
 
   PipelineOptions options_;
   SourceInfo info_;
