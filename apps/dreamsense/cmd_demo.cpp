@@ -68,7 +68,7 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       return;
     }
     std::fprintf(stderr,
-                 "analysis: %llu ticks in %.2f s; primitives.jsonl, events.log, dream.json, "
+                 "analysis: %llu ticks in %.2f s; primitives.jsonl, events.log, dream.json, report.html, "
                  "summary.json in %s\n",
                  static_cast<unsigned long long>(r->pipeline.ticks), r->pipeline.wall_seconds,
                  out.string().c_str());

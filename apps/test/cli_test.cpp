@@ -89,7 +89,7 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, DemoLeavesSessionTruthAndAllOutputs) {
   for (const char* f : {"session.yaml", "truth.jsonl", "primitives.jsonl", "events.log",
-                        "dream.json", "summary.json"})
+                        "report.html", "dream.json", "summary.json"})
     EXPECT_TRUE(fs::exists(demo() / f)) << f;
   const auto records = read_jsonl(demo() / "primitives.jsonl");
   std::set<std::string> names;

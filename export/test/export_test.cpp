@@ -92,3 +92,33 @@ TEST(DreamExport, FrameAlignedArraysWithNullsAndDreamJointNames) {
 
 }  // namespace
 }  // namespace dreamsense::exporters
+
+#include "dreamsense/export/report.hpp"
+
+namespace dreamsense::exporters {
+namespace {
+
+TEST(HtmlReport, HasStatusTableAndTimelinesOfEnabledPrimitivesOnly) {
+  HtmlReport report;
+  for (int t = 0; t < 10; ++t) {
+    primitives::PrimitiveRecord ok, off;
+    ok.stamp = off.stamp = Timestamp::from_ns(t * 40'000'000LL);
+    ok.id = primitives::PrimitiveId::kGetBody;
+    ok.status = t == 5 ? primitives::PrimitiveStatus::kNoData : primitives::PrimitiveStatus::kOk;
+    ok.legacy = std::vector<double>{1.0 * t, 2, 3};
+    off.id = primitives::PrimitiveId::kGetFaces;
+    off.status = primitives::PrimitiveStatus::kDisabled;
+    report.add({ok, off});
+  }
+  sources::SessionManifest m;
+  m.name = "a<b";
+  const std::string html = report.build(m, {"10 ticks"});
+  EXPECT_NE(html.find("a&lt;b"), std::string::npos) << "escaped";
+  EXPECT_NE(html.find("<td>F3</td><td>getBody</td><td>9</td><td>1</td>"), std::string::npos);
+  EXPECT_NE(html.find("getBody[0]"), std::string::npos);
+  EXPECT_EQ(html.find("getFaces[0]"), std::string::npos) << "no timeline for a disabled one";
+  EXPECT_NE(html.find("<svg"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace dreamsense::exporters

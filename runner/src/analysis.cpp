@@ -4,6 +4,7 @@
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/core/perception.hpp"
+#include "dreamsense/export/report.hpp"
 #include "dreamsense/export/writers.hpp"
 #include "dreamsense/sources/session.hpp"
 
@@ -117,6 +118,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   exporters::PrimitivesJsonlWriter jsonl;
   exporters::EventLogWriter events;
   exporters::DreamExport dream;
+  exporters::HtmlReport report;
   if (write) {
     if (auto s = jsonl.open(options.out_dir / "primitives.jsonl"); !s)
       return tl::unexpected(s.error());
@@ -132,6 +134,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     if (!write) return ok_status();
     if (auto s = jsonl.write(records); !s) return s;
     if (auto s = events.write(records); !s) return s;
+    report.add(records);
     exporters::DreamExport::Frame f;
     if (auto body = view.get(keys::kChildBody);
         body && body->present() && tick.stamp - body->stamp <= options.evaluator.freshness)
@@ -153,8 +156,18 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     if (auto s = events.commit(); !s) return tl::unexpected(s.error());
     if (auto s = dream.write(options.out_dir / "dream.json", manifest); !s)
       return tl::unexpected(s.error());
+    std::string names;
+    for (const auto& a : summary.analyzers) names += (names.empty() ? "" : ", ") + a;
+    const auto& ps = (*pipeline)->stats();
+    if (auto s = report.write(
+            options.out_dir / "report.html", manifest,
+            {fmt::format("{} ticks, {:.1f} s of session time", ps.ticks, ps.media_seconds),
+             "analysers: " + (names.empty() ? std::string("none") : names)});
+        !s)
+      return tl::unexpected(s.error());
     summary.outputs = {options.out_dir / "primitives.jsonl", options.out_dir / "events.log",
-                       options.out_dir / "dream.json", options.out_dir / "summary.json"};
+                       options.out_dir / "dream.json", options.out_dir / "report.html",
+                       options.out_dir / "summary.json"};
     exporters::OutputFile f;
     if (auto s = f.open(options.out_dir / "summary.json"); !s) return tl::unexpected(s.error());
     nlohmann::json sj = summary.to_json();
