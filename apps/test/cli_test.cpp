@@ -250,6 +250,34 @@ TEST_F(Cli, EnabledPrimitivesMatchGoldenOutput) {
     expect_json_near(actual[i], expected[i], 1e-6, "record " + std::to_string(i));
 }
 
+TEST_F(Cli, EvalCalibrationRecoversTheDemoCamerasFromNoisyCorrespondences) {
+  const fs::path out = root() / "calib.json";
+  RunResult r =
+      run("eval calibration --dataset demo " + demo().string() + " --json " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j["task"], "calibration");
+  EXPECT_LE(j["metrics"]["rot_err_deg_max"].get<double>(), 0.5);
+  EXPECT_LE(j["metrics"]["trans_err_m_max"].get<double>(), 0.02);
+}
+
+TEST_F(Cli, CalibrateExtrinsicsRejectsDegeneratePointsAndWritesNothing) {
+  const fs::path csv = root() / "collinear.csv";
+  {
+    std::ofstream f(csv);
+    f << "u,v,x,y,z\n";
+    for (int i = 0; i < 8; ++i)
+      f << 100 + 10 * i << "," << 100 + 10 * i << "," << 0.1 * i << ",0,1\n";
+  }
+  const fs::path out = root() / "ext.yaml";
+  RunResult r =
+      run("calibrate extrinsics --intrinsics " + (demo() / "calib/camera_left.yaml").string() +
+          " --points " + csv.string() + " --out " + out.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("collinear"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(Cli, HelpAndUsageErrors) {
   EXPECT_EQ(run("analyze --help").exit_code, 0);
   EXPECT_NE(run("analyze").exit_code, 0) << "missing SESSION";
