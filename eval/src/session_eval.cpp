@@ -5,6 +5,7 @@
 #include "dreamsense/sources/session.hpp"
 #include "dreamsense/sources/truth.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <map>
 
@@ -31,6 +32,7 @@ const std::map<std::string, std::string> kMetricPrimitive = {
     {"mutual_gaze_f1", "checkMutualGaze"},
     {"eye_center_median_px", "getEyes"},
     {"doa_mae_deg", "getSoundDirection"},
+    {"doa_within_10deg", "getSoundDirection"},
     {"speech_accuracy", "recognizeSpeech"},
     {"speaker_accuracy", "identifyVoice"},
     {"action_accuracy", "identifyTrajectory"},
@@ -128,6 +130,45 @@ Result<json> evaluate_session(const SessionEvalOptions& options) {
     else
       not_evaluated["body_joint_median_error_m"] =
           "no getBodyPose record matches a truth skeleton frame";
+  }
+
+  // Sound direction: getSoundDirection azimuth of ok records during each truth utterance
+  // [start_ns, end_ns] against the utterance's truth azimuth (array frame).
+  if (enabled("getSoundDirection")) {
+    std::vector<std::pair<int64_t, int64_t>> spans;
+    std::vector<double> truth_az;
+    for (const auto& t : *truth)
+      if (t.value("type", "") == "speech" && t.contains("azimuth_deg")) {
+        spans.emplace_back(t.value("start_ns", int64_t{0}), t.value("end_ns", int64_t{0}));
+        truth_az.push_back(t["azimuth_deg"].get<double>());
+      }
+    std::vector<double> errors;
+    for (const auto& r : *records) {
+      if (r.value("primitive", "") != "getSoundDirection" || r.value("status", "") != "ok")
+        continue;
+      const int64_t stamp = r.value("stamp_ns", int64_t{-1});
+      for (size_t i = 0; i < spans.size(); ++i)
+        if (stamp >= spans[i].first && stamp <= spans[i].second) {
+          errors.push_back(std::abs(r["value"]["azimuth_deg"].get<double>() - truth_az[i]));
+          break;
+        }
+    }
+    if (!errors.empty()) {
+      double sum = 0;
+      int within = 0;
+      for (double e : errors) {
+        sum += e;
+        if (e <= 10) ++within;
+      }
+      metrics["doa_mae_deg"] = sum / static_cast<double>(errors.size());
+      metrics["doa_within_10deg"] =
+          static_cast<double>(within) / static_cast<double>(errors.size());
+    } else {
+      const char* why = spans.empty() ? "the truth has no speech records"
+                                      : "no ok getSoundDirection record during a truth utterance";
+      not_evaluated["doa_mae_deg"] = why;
+      not_evaluated["doa_within_10deg"] = why;
+    }
   }
 
   json out;

@@ -23,12 +23,16 @@ Status EvaluatorOptions::check() const {
   if (freshness.ns() <= 0) bad += " freshness must be > 0;";
   if (offline_after <= freshness) bad += " offline_after must exceed freshness;";
   if (!(track_hand_dt_s >= 0)) bad += " track_hand_dt_s must be >= 0;";
+  if (!(sound_direction_threshold >= 0 && sound_direction_threshold <= 1))
+    bad += " sound_direction_threshold must be in [0, 1];";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "EvaluatorOptions:" + bad);
   return ok_status();
 }
 
-Evaluator::Evaluator(EvaluatorOptions options, SensorId body_sensor)
-    : options_(std::move(options)), body_sensor_(std::move(body_sensor)) {}
+Evaluator::Evaluator(EvaluatorOptions options, SensorId body_sensor, SensorId audio_sensor)
+    : options_(std::move(options)),
+      body_sensor_(std::move(body_sensor)),
+      audio_sensor_(std::move(audio_sensor)) {}
 
 PrimitiveRecord Evaluator::base(PrimitiveId id, Timestamp stamp) const {
   PrimitiveRecord r;
@@ -50,7 +54,41 @@ std::vector<PrimitiveRecord> Evaluator::evaluate(const MultiFrame& tick,
   out.reserve(kPrimitiveCount);
   for (const auto& i : catalogue()) out.push_back(base(i.id, tick.stamp));
   if (!body_sensor_.empty()) evaluate_body(tick, view, out);
+  if (!audio_sensor_.empty()) evaluate_sound_direction(tick, view, out);
   return out;
+}
+
+// F16 getSoundDirection, default query threshold = options_.sound_direction_threshold.
+void Evaluator::evaluate_sound_direction(const MultiFrame& tick, const BlackboardView& view,
+                                         std::vector<PrimitiveRecord>& out) {
+  PrimitiveRecord& r = out[static_cast<int>(PrimitiveId::kGetSoundDirection) - 1];
+  r.source = audio_sensor_;
+  r.query = {{"threshold", options_.sound_direction_threshold}};
+  const auto entry = view.get(keys::kSoundDirection);
+  auto seen = last_seen_.find(audio_sensor_);
+  const Timestamp last = seen == last_seen_.end() ? first_tick_ : seen->second;
+  if (entry) r.data_stamp = entry->stamp;
+  if (tick.stamp - last > options_.offline_after)
+    r.status = PrimitiveStatus::kSensorOffline;
+  else if (!entry)
+    r.status = PrimitiveStatus::kNoData;
+  else if (tick.stamp - entry->stamp > options_.freshness)
+    r.status = PrimitiveStatus::kStale;
+  else if (!entry->present())
+    r.status = PrimitiveStatus::kNoData;  // silence
+  else if (entry->confidence < options_.sound_direction_threshold) {
+    r.status = PrimitiveStatus::kNoData;  // heard something, not confident enough
+    r.confidence = entry->confidence;
+  } else
+    r.status = PrimitiveStatus::kOk;
+  if (r.status != PrimitiveStatus::kOk) return;
+  const SoundDirection& d = *entry->value;
+  r.confidence = entry->confidence;
+  r.value = {{"azimuth_deg", d.azimuth_deg},
+             {"elevation_deg", d.elevation_deg ? json(*d.elevation_deg) : json(nullptr)},
+             {"confidence", entry->confidence},
+             {"direction", vec_json(d.direction_world)}};
+  r.legacy = std::vector<double>{d.azimuth_deg, static_cast<double>(entry->confidence)};
 }
 
 void Evaluator::evaluate_body(const MultiFrame& tick, const BlackboardView& view,

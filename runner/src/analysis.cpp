@@ -6,6 +6,7 @@
 #include "dreamsense/core/perception.hpp"
 #include "dreamsense/export/report.hpp"
 #include "dreamsense/export/writers.hpp"
+#include "dreamsense/sound_direction/sound_direction_analyzer.hpp"
 #include "dreamsense/sources/session.hpp"
 
 namespace dreamsense::runner {
@@ -95,6 +96,36 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     body_sensor = s.id;
     used.push_back(s.id);
   }
+  // Sound direction on the first audio stream: array geometry from its calibration file
+  // (calib/<id>.yaml: mic positions, rate, extrinsics), Kinect v1 when it has none.
+  SensorId audio_sensor;
+  for (const auto& s : manifest.streams) {
+    if (s.kind != SensorKind::kAudio || !audio_sensor.empty()) continue;
+    sound_direction::SoundDirectionAnalyzerOptions so;
+    so.audio_sensor = s.id;
+    if (!s.calibration.empty()) {
+      auto g = sound_direction::read_mic_array((*full)->dir() / s.calibration);
+      if (!g) return tl::unexpected(g.error());
+      so.geometry = *g;
+    } else {
+      log::info("audio stream '{}' has no calibration: assuming the Kinect v1 array", s.id);
+      so.geometry.sample_rate = s.sample_rate;
+    }
+    if (s.channels != static_cast<int>(so.geometry.mics_m.size()) ||
+        s.sample_rate != so.geometry.sample_rate)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "{}: audio stream '{}' has {} channel(s) at {} Hz but its microphone "
+                        "array{} has {} microphones at {} Hz",
+                        (options.session_dir / sources::kManifestName).string(), s.id, s.channels,
+                        s.sample_rate,
+                        s.calibration.empty() ? " (Kinect v1 default)" : " (" + s.calibration + ")",
+                        so.geometry.mics_m.size(), so.geometry.sample_rate);
+    auto a = sound_direction::make_sound_direction_analyzer(so);
+    if (!a) return tl::unexpected(a.error());
+    analyzers.push_back(std::move(*a));
+    audio_sensor = s.id;
+    used.push_back(s.id);
+  }
 
   sources::SessionReaderOptions ro;
   ro.only = used;
@@ -125,7 +156,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     if (auto s = events.open(options.out_dir / "events.log", manifest.clock_origin_unix_ns); !s)
       return tl::unexpected(s.error());
   }
-  primitives::Evaluator evaluator(options.evaluator, body_sensor);
+  primitives::Evaluator evaluator(options.evaluator, body_sensor, audio_sensor);
 
   auto on_tick = [&](const MultiFrame& tick, const BlackboardView& view) -> Status {
     const auto records = evaluator.evaluate(tick, view);

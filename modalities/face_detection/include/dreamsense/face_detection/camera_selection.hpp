@@ -1,0 +1,49 @@
+#pragma once
+// Camera selection (D4.2 Camera Selection Module): the camera with the best face, i.e. highest
+// detection score and most frontal, with hysteresis so that the choice does not flicker.
+
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/core/status.hpp"
+
+#include <optional>
+
+namespace dreamsense::face_detection {
+
+// Faces scoring at least this are "confident": they compete on frontalness alone. (The score of
+// a tracked face depends on the scale it was searched at, ROI or full frame, so it is not
+// compared finely between cameras.)
+inline constexpr float kConfidentFaceScore = 0.5f;
+// Selection criterion of one face, in [0, 1]: frontalness x min(1, score / kConfidentFaceScore).
+float selection_quality(const DetectedFace& face);
+
+struct CameraSelectorOptions {
+  // Another camera replaces the current one only when its best face's quality exceeds the
+  // current camera's by more than switch_margin for switch_ticks consecutive updates. If the
+  // current camera has no face (or no frame) in an update, the best other camera takes over at
+  // once.
+  double switch_margin = 0.05;
+  int switch_ticks = 2;
+  Status check() const;
+};
+
+class CameraSelector {
+ public:
+  explicit CameraSelector(CameraSelectorOptions options = {});
+  // Chooses among the cameras of `detections` that have a face; nullopt when none has one.
+  // Ties are broken by camera id order (deterministic).
+  std::optional<SelectedCamera> update(const FaceDetections& detections);
+  void reset();
+  const CameraSelectorOptions& options() const { return options_; }
+
+ private:
+  CameraSelectorOptions options_;
+  std::optional<SensorId> current_;
+  std::optional<SensorId> challenger_;
+  int challenger_ticks_ = 0;
+};
+
+// DREAM's legacy SelectCameraID: 0 camera_middle, 1 camera_left, 2 camera_right, -1 for none or
+// any other id.
+int dream_camera_id(const std::optional<SensorId>& camera);
+
+}  // namespace dreamsense::face_detection

@@ -1,0 +1,39 @@
+#pragma once
+// Face detection analyser: faces in every camera (keys::kFaceDetections) and the selected camera
+// (keys::kSelectedCamera). Method and numbers: modalities/face_detection/README.md.
+//
+// Per tick: every listed camera that has a frame in the MultiFrame is searched (in parallel over
+// cameras, one FaceTracker each; results do not depend on the thread count). A frame already
+// searched in an earlier tick (same sequence) is not searched again: its result is reused.
+// Writes, stamped with the tick:
+//  - no camera frame at all: nothing;
+//  - frames but no face in any: absent entries for both keys;
+//  - otherwise kFaceDetections (confidence = best score) listing every camera with a frame
+//    (empty list = searched, no face), and kSelectedCamera (confidence = the chosen face's score).
+
+#include "dreamsense/core/analyzer.hpp"
+#include "dreamsense/face_detection/camera_selection.hpp"
+#include "dreamsense/face_detection/face_detector.hpp"
+#include "dreamsense/face_detection/face_tracker.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace dreamsense::face_detection {
+
+struct FaceDetectionAnalyzerOptions {
+  // Colour streams searched (optional inputs: a camera the source lacks is skipped).
+  std::vector<SensorId> cameras{"camera_left", "camera_middle", "camera_right"};
+  FaceDetectorOptions detector;
+  // full_search_phase is set per camera by the analyser (cameras spread over the interval).
+  FaceTrackerOptions tracker;
+  CameraSelectorOptions selection;
+  bool parallel = true;  // search the cameras with cv::parallel_for_
+  Status check() const;
+};
+
+// Loads the cascades once per camera; errors name the missing file and the Debian package.
+Result<std::unique_ptr<Analyzer>> make_face_detection_analyzer(
+    const FaceDetectionAnalyzerOptions& options = {});
+
+}  // namespace dreamsense::face_detection

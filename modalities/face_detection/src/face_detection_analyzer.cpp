@@ -1,0 +1,139 @@
+#include "dreamsense/face_detection/face_detection_analyzer.hpp"
+
+#include <opencv2/core/utility.hpp>
+
+#include <set>
+
+namespace dreamsense::face_detection {
+namespace {
+
+class FaceDetectionAnalyzer : public Analyzer {
+ public:
+  struct Camera {
+    SensorId id;
+    FaceTracker tracker;
+    std::optional<CameraFaces> last;  // result of the last frame searched (reused for repeats)
+  };
+
+  FaceDetectionAnalyzer(FaceDetectionAnalyzerOptions o, std::vector<Camera> cameras)
+      : options_(std::move(o)), cameras_(std::move(cameras)), selector_(options_.selection) {}
+
+  std::string_view name() const override { return "face_detection"; }
+  AnalyzerContract contract() const override {
+    return {{}, options_.cameras, {}, {keys::kFaceDetections.name, keys::kSelectedCamera.name}};
+  }
+
+  Status process(const MultiFrame& in, const BlackboardView&, BlackboardWriter& out) override {
+    // Collect the frames of this tick; check them before any work.
+    std::vector<std::pair<size_t, FramePtr>> work;
+    for (size_t i = 0; i < cameras_.size(); ++i) {
+      FramePtr f = in.frame(cameras_[i].id);
+      if (!f) continue;
+      if (f->as<ColorImage>() == nullptr)
+        return make_error(ErrorCode::kInvalidArgument,
+                          "face_detection: stream '{}' is not a colour stream", cameras_[i].id);
+      work.emplace_back(i, std::move(f));
+    }
+    if (work.empty()) return ok_status();  // no camera frame near this tick: nothing observed
+
+    std::vector<CameraFaces> results(work.size());
+    auto run = [&](size_t w) {
+      Camera& cam = cameras_[work[w].first];
+      const SensorFrame& f = *work[w].second;
+      if (cam.last && cam.last->frame_sequence == f.sequence && cam.last->frame_stamp == f.stamp) {
+        results[w] = *cam.last;  // the same frame as in an earlier tick
+        return;
+      }
+      const cv::Mat& image = f.as<ColorImage>()->image;
+      CameraFaces r;
+      r.frame_stamp = f.stamp;
+      r.frame_sequence = f.sequence;
+      r.image_size = image.size();
+      r.faces = cam.tracker.process(image).faces;
+      cam.last = r;
+      results[w] = std::move(r);
+    };
+    if (options_.parallel && work.size() > 1) {
+      // One task per camera: each camera's tracker is used by exactly one task, and results land
+      // in fixed slots, so the output does not depend on scheduling.
+      cv::parallel_for_(
+          cv::Range(0, static_cast<int>(work.size())),
+          [&](const cv::Range& r) {
+            for (int w = r.start; w < r.end; ++w) run(static_cast<size_t>(w));
+          },
+          static_cast<double>(work.size()));
+    } else {
+      for (size_t w = 0; w < work.size(); ++w) run(w);
+    }
+
+    FaceDetections detections;
+    float best_score = 0.f;
+    for (size_t w = 0; w < work.size(); ++w) {
+      for (const DetectedFace& f : results[w].faces) best_score = std::max(best_score, f.score);
+      detections.cameras.emplace(cameras_[work[w].first].id, std::move(results[w]));
+    }
+    const std::optional<SelectedCamera> selected = selector_.update(detections);
+    if (detections.face_count() == 0) {
+      out.set_absent(keys::kFaceDetections, in.stamp);
+      out.set_absent(keys::kSelectedCamera, in.stamp);
+      return ok_status();
+    }
+    out.set(keys::kFaceDetections, std::move(detections), in.stamp, best_score);
+    if (selected)
+      out.set(keys::kSelectedCamera, *selected, in.stamp, selected->face.score);
+    else
+      out.set_absent(keys::kSelectedCamera, in.stamp);
+    return ok_status();
+  }
+
+  void reset() override {
+    for (Camera& c : cameras_) {
+      c.tracker.reset();
+      c.last.reset();
+    }
+    selector_.reset();
+  }
+
+ private:
+  FaceDetectionAnalyzerOptions options_;
+  std::vector<Camera> cameras_;
+  CameraSelector selector_;
+};
+
+}  // namespace
+
+Status FaceDetectionAnalyzerOptions::check() const {
+  if (cameras.empty())
+    return make_error(ErrorCode::kInvalidArgument, "FaceDetectionAnalyzerOptions: no cameras");
+  std::set<SensorId> seen;
+  for (const SensorId& c : cameras) {
+    if (c.empty())
+      return make_error(ErrorCode::kInvalidArgument,
+                        "FaceDetectionAnalyzerOptions: empty camera id");
+    if (!seen.insert(c).second)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "FaceDetectionAnalyzerOptions: camera '{}' listed twice", c);
+  }
+  if (auto s = detector.check(); !s) return s;
+  if (auto s = tracker.check(); !s) return s;
+  return selection.check();
+}
+
+Result<std::unique_ptr<Analyzer>> make_face_detection_analyzer(
+    const FaceDetectionAnalyzerOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  std::vector<FaceDetectionAnalyzer::Camera> cameras;
+  const int n = static_cast<int>(options.cameras.size());
+  for (int i = 0; i < n; ++i) {
+    auto detector = FaceDetector::create(options.detector);
+    if (!detector) return tl::unexpected(detector.error());
+    FaceTrackerOptions t = options.tracker;
+    // Spread the periodic full searches of the cameras over the interval.
+    t.full_search_phase = options.tracker.full_search_phase +
+                          i * options.tracker.full_search_interval / std::max(1, n);
+    cameras.push_back({options.cameras[i], FaceTracker(std::move(*detector), t), std::nullopt});
+  }
+  return std::unique_ptr<Analyzer>(new FaceDetectionAnalyzer(options, std::move(cameras)));
+}
+
+}  // namespace dreamsense::face_detection

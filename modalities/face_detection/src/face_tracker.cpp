@@ -1,0 +1,113 @@
+#include "dreamsense/face_detection/face_tracker.hpp"
+
+#include <algorithm>
+
+namespace dreamsense::face_detection {
+namespace {
+
+// Keeps the better of overlapping detections; result best score first.
+std::vector<DetectedFace> merge(std::vector<DetectedFace> faces, double merge_iou) {
+  std::stable_sort(faces.begin(), faces.end(),
+                   [](const DetectedFace& a, const DetectedFace& b) { return a.score > b.score; });
+  std::vector<DetectedFace> kept;
+  for (const DetectedFace& f : faces) {
+    bool dup = false;
+    for (const DetectedFace& k : kept) dup = dup || box_iou(f.box_px, k.box_px) > merge_iou;
+    if (!dup) kept.push_back(f);
+  }
+  return kept;
+}
+
+}  // namespace
+
+Status FaceTrackerOptions::check() const {
+  std::string bad;
+  auto add = [&](const std::string& s) { bad += (bad.empty() ? "" : "; ") + s; };
+  if (full_search_interval < 1)
+    add(fmt::format("full_search_interval {} < 1", full_search_interval));
+  if (full_search_phase < 0) add(fmt::format("full_search_phase {} < 0", full_search_phase));
+  if (frontalness_interval < 1)
+    add(fmt::format("frontalness_interval {} < 1", frontalness_interval));
+  if (lost_search_interval < 1)
+    add(fmt::format("lost_search_interval {} < 1", lost_search_interval));
+  if (!(roi_margin >= 0)) add(fmt::format("roi_margin {} < 0", roi_margin));
+  if (!(roi_min_scale > 0 && roi_min_scale <= 1 && roi_max_scale >= 1))
+    add(fmt::format("roi scales [{}, {}] must satisfy 0 < min <= 1 <= max", roi_min_scale,
+                    roi_max_scale));
+  if (!(merge_iou >= 0 && merge_iou < 1)) add(fmt::format("merge_iou {} not in [0, 1)", merge_iou));
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "FaceTrackerOptions: " + bad);
+  return ok_status();
+}
+
+FaceTracker::FaceTracker(FaceDetector detector, FaceTrackerOptions options)
+    : detector_(std::move(detector)), options_(std::move(options)) {
+  DS_CHECK(options_.check().has_value());
+}
+
+void FaceTracker::reset() {
+  tracked_.clear();
+  frames_since_full_ = 0;
+}
+
+TrackedFrameFaces FaceTracker::process(const cv::Mat& image) {
+  TrackedFrameFaces out;
+  const int64_t index = frame_index_++;
+  if (image.size() != last_size_) tracked_.clear();  // a new geometry: old boxes mean nothing
+  last_size_ = image.size();
+  ++frames_since_full_;
+  bool full = false;
+  if (tracked_.empty())
+    full = index == 0 || frames_since_full_ >= options_.lost_search_interval;
+  else
+    full = (index + options_.full_search_phase) % options_.full_search_interval == 0;
+
+  std::vector<DetectedFace> faces;
+  if (!full && !tracked_.empty()) {
+    for (const Track& track : tracked_) {
+      const cv::Rect2d& t = track.box;
+      const double size = std::max(t.width, t.height);
+      const double m = options_.roi_margin * size;
+      SearchRegion region{cv::Rect(cv::Rect2d(t.x - m, t.y - m, t.width + 2 * m, t.height + 2 * m)),
+                          options_.roi_min_scale * size, options_.roi_max_scale * size};
+      region.region_px &= cv::Rect(0, 0, image.cols, image.rows);
+      if (region.region_px.empty()) continue;
+      auto found = detector_.detect(image, region, false);
+      faces.insert(faces.end(), found.begin(), found.end());
+    }
+    if (faces.empty() && options_.full_search_on_miss) full = true;
+  }
+  if (full) {
+    faces = detector_.detect(image, std::nullopt, false);
+    frames_since_full_ = 0;
+  }
+  out.faces = merge(std::move(faces), options_.merge_iou);
+  out.full_search = full;
+  // Frontalness: carried over from the same face in the previous frame while young enough.
+  std::vector<Track> next;
+  const bool estimate = detector_.options().estimate_frontalness;
+  for (DetectedFace& f : out.faces) {
+    Track t{f.box_px, f.frontalness, 0};
+    if (estimate && f.view == FaceView::kFrontal) {
+      const Track* prev = nullptr;
+      for (const Track& p : tracked_)
+        if (box_iou(p.box, f.box_px) > options_.merge_iou &&
+            (prev == nullptr || box_iou(p.box, f.box_px) > box_iou(prev->box, f.box_px)))
+          prev = &p;
+      if (prev != nullptr && prev->frontalness_age + 1 < options_.frontalness_interval) {
+        t.frontalness = prev->frontalness;
+        t.frontalness_age = prev->frontalness_age + 1;
+      } else {
+        t.frontalness = detector_.frontalness(image, f.box_px);
+        // A new face starts at an age given by the phase, so cameras re-estimate in turn.
+        t.frontalness_age =
+            prev == nullptr ? options_.full_search_phase % options_.frontalness_interval : 0;
+      }
+      f.frontalness = t.frontalness;
+    }
+    next.push_back(t);
+  }
+  tracked_ = std::move(next);
+  return out;
+}
+
+}  // namespace dreamsense::face_detection

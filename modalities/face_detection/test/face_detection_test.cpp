@@ -1,0 +1,372 @@
+#include "dreamsense/face_detection/camera_selection.hpp"
+#include "dreamsense/face_detection/face_detection_analyzer.hpp"
+#include "dreamsense/face_detection/face_detector.hpp"
+#include "dreamsense/face_detection/face_tracker.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <chrono>
+#include <cstdio>
+
+#include "demo_frames.hpp"
+
+namespace dreamsense::face_detection {
+namespace {
+
+using testing::DemoFrames;
+using testing::FaceMetrics;
+using testing::kCameras;
+
+// A 3 s demo session (seed 3), generated once for the whole binary.
+const DemoFrames& demo() {
+  static const DemoFrames frames = [] {
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("ds_face_detection_test_" + std::to_string(::getpid()));
+    auto r = testing::load_demo(dir, 3.0, 3);
+    std::filesystem::remove_all(dir);
+    if (!r) throw std::runtime_error(r.error().to_string());
+    return std::move(*r);
+  }();
+  return frames;
+}
+
+const cv::Mat& image_of(const MultiFrame& mf, const SensorId& cam) {
+  return mf.frame(cam)->as<ColorImage>()->image;
+}
+
+FaceDetector make_detector(FaceDetectorOptions o = {}) {
+  auto d = FaceDetector::create(o);
+  if (!d) throw std::runtime_error(d.error().to_string());
+  return std::move(*d);
+}
+
+// Runs an analyser over ticks; returns the metrics against the demo truth.
+FaceMetrics run_analyzer(Analyzer& a, const DemoFrames& d, const std::vector<MultiFrame>& ticks) {
+  Blackboard bb;
+  FaceMetrics m;
+  for (const MultiFrame& mf : ticks) {
+    BlackboardWriter w("face_detection");
+    auto s = a.process(mf, bb.snapshot(), w);
+    EXPECT_TRUE(s) << s.error().to_string();
+    bb.commit(w, mf.stamp);
+    const BlackboardView v = bb.snapshot();
+    auto det = v.get(keys::kFaceDetections);
+    auto sel = v.get(keys::kSelectedCamera);
+    std::vector<SensorId> searched;
+    for (const auto& [id, f] : mf.frames) searched.push_back(id);
+    const bool fresh = det && det->stamp == mf.stamp;
+    testing::accumulate(m, d.truth.at(mf.stamp.ns()), searched, fresh ? det->value.get() : nullptr,
+                        sel && sel->stamp == mf.stamp ? sel->value.get() : nullptr);
+  }
+  return m;
+}
+
+TEST(FaceDetectorOptions, RejectsBadValuesAndMissingModels) {
+  FaceDetectorOptions o;
+  EXPECT_TRUE(o.check());
+  o.scale_factor = 1.0;
+  o.min_neighbors = 0;
+  auto s = o.check();
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("scale_factor"), std::string::npos);
+  EXPECT_NE(s.error().message.find("min_neighbors"), std::string::npos);
+  FaceDetectorOptions missing;
+  missing.frontal_cascade = "/nonexistent/cascade.xml";
+  auto d = FaceDetector::create(missing);
+  ASSERT_FALSE(d);
+  EXPECT_EQ(d.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(d.error().message.find("opencv-data"), std::string::npos);
+  FaceDetectionAnalyzerOptions ao;
+  ao.cameras = {"camera_left", "camera_left"};
+  EXPECT_FALSE(make_face_detection_analyzer(ao));
+  FaceTrackerOptions t;
+  t.full_search_interval = 0;
+  EXPECT_FALSE(t.check());
+  CameraSelectorOptions c;
+  c.switch_ticks = 0;
+  EXPECT_FALSE(c.check());
+}
+
+TEST(FaceDetector, NoFaceGivesAnEmptyList) {
+  FaceDetector d = make_detector();
+  EXPECT_TRUE(d.detect(cv::Mat()).empty());
+  EXPECT_TRUE(d.detect(cv::Mat(960, 1280, CV_8UC3, cv::Scalar(128, 128, 128))).empty());
+  cv::Mat noise(960, 1280, CV_8UC3);
+  cv::RNG rng(7);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 255);
+  EXPECT_TRUE(d.detect(noise).empty());
+  const cv::Mat fruits = cv::imread("/usr/share/doc/opencv-doc/examples/data/fruits.jpg");
+  ASSERT_FALSE(fruits.empty()) << "install opencv-doc";
+  EXPECT_TRUE(d.detect(fruits).empty());
+  cv::Mat big;
+  cv::resize(fruits, big, cv::Size(1280, 960));
+  EXPECT_TRUE(d.detect(big).empty());
+}
+
+TEST(FaceDetector, GreyOddSizedAndUnusableImagesDoNotCrash) {
+  FaceDetector d = make_detector();
+  const cv::Mat& colour = image_of(demo().ticks[0], "camera_middle");
+  cv::Mat grey;
+  cv::cvtColor(colour, grey, cv::COLOR_BGR2GRAY);
+  EXPECT_EQ(d.detect(grey).size(), 1u);
+  cv::Mat odd;
+  cv::resize(colour, odd, cv::Size(1001, 757));
+  EXPECT_EQ(d.detect(odd).size(), 1u);
+  cv::Mat bgra;
+  cv::cvtColor(colour, bgra, cv::COLOR_BGR2BGRA);
+  EXPECT_EQ(d.detect(bgra).size(), 1u);
+  EXPECT_TRUE(d.detect(cv::Mat(1, 1, CV_8UC1, cv::Scalar(0))).empty());
+  EXPECT_TRUE(d.detect(cv::Mat(7, 3001, CV_8UC3, cv::Scalar(0))).empty());
+  EXPECT_TRUE(d.detect(cv::Mat(100, 100, CV_16UC1, cv::Scalar(0))).empty());
+  EXPECT_TRUE(d.detect(cv::Mat(100, 100, CV_8UC2, cv::Scalar(0))).empty());
+  // A search region outside the image or smaller than the cascade window.
+  EXPECT_TRUE(d.detect(colour, SearchRegion{cv::Rect(5000, 5000, 100, 100)}).empty());
+  EXPECT_TRUE(d.detect(colour, SearchRegion{cv::Rect(600, 450, 10, 10)}).empty());
+  EXPECT_EQ(d.frontalness(cv::Mat(), cv::Rect2d(0, 0, 10, 10)), 0.f);
+}
+
+TEST(FaceDetector, FindsTheDemoFaceWhereTheTruthIs) {
+  FaceDetector d = make_detector();
+  const MultiFrame& mf = demo().ticks[0];
+  const auto& truth = demo().truth.at(mf.stamp.ns());
+  for (const SensorId& cam : kCameras) {
+    const auto& t = truth.cameras.at(cam);
+    if (!t.visible || std::abs(t.yaw_deg) > 45) continue;
+    auto faces = d.detect(image_of(mf, cam));
+    ASSERT_EQ(faces.size(), 1u) << cam;
+    EXPECT_TRUE(testing::matches(faces[0], t)) << cam;
+    EXPECT_GT(faces[0].score, 0.5f);
+    EXPECT_EQ(faces[0].view, FaceView::kFrontal);
+    EXPECT_GE(faces[0].frontalness, 0.f);
+    EXPECT_LE(faces[0].frontalness, 1.f);
+  }
+}
+
+TEST(FaceDetector, FrontalnessFallsWithYaw) {
+  // Over the demo frames: faces within 15 deg of a camera are more frontal than those beyond 30.
+  FaceDetector d = make_detector();
+  double near_sum = 0, far_sum = 0;
+  int near_n = 0, far_n = 0;
+  for (size_t i = 0; i < demo().ticks.size(); i += 3) {
+    const MultiFrame& mf = demo().ticks[i];
+    for (const SensorId& cam : kCameras) {
+      const auto& t = demo().truth.at(mf.stamp.ns()).cameras.at(cam);
+      if (!t.visible) continue;
+      auto faces = d.detect(image_of(mf, cam));
+      if (faces.empty() || !testing::matches(faces[0], t)) continue;
+      const double yaw = std::abs(t.yaw_deg);
+      if (yaw < 15) near_sum += faces[0].frontalness, ++near_n;
+      if (yaw > 30) far_sum += faces[0].frontalness, ++far_n;
+    }
+  }
+  ASSERT_GT(near_n, 0);
+  ASSERT_GT(far_n, 0);
+  std::printf("mean frontalness: |yaw| < 15: %.3f (%d), |yaw| > 30: %.3f (%d)\n", near_sum / near_n,
+              near_n, far_sum / far_n, far_n);
+  EXPECT_GT(near_sum / near_n, far_sum / far_n + 0.1);
+}
+
+TEST(FaceTracker, SearchesAroundTheFaceAndAgreesWithFullSearch) {
+  FaceTrackerOptions o;
+  FaceTracker tracker(make_detector(), o);
+  FaceDetector full = make_detector();
+  int roi_frames = 0;
+  for (size_t i = 0; i < 20; ++i) {
+    const cv::Mat& image = image_of(demo().ticks[i], "camera_middle");
+    const TrackedFrameFaces r = tracker.process(image);
+    if (i == 0) {
+      EXPECT_TRUE(r.full_search);
+    }
+    roi_frames += !r.full_search;
+    const auto reference = full.detect(image);
+    ASSERT_EQ(r.faces.size(), reference.size()) << "frame " << i;
+    for (size_t k = 0; k < r.faces.size(); ++k)
+      EXPECT_GT(box_iou(r.faces[k].box_px, reference[k].box_px), 0.7) << "frame " << i;
+  }
+  EXPECT_GE(roi_frames, 18);
+  // A frame without the face: nothing, then the tracker searches the full frame again.
+  const TrackedFrameFaces blank = tracker.process(cv::Mat(960, 1280, CV_8UC3, cv::Scalar(90)));
+  EXPECT_TRUE(blank.faces.empty());
+  EXPECT_TRUE(blank.full_search);
+  EXPECT_TRUE(tracker.process(image_of(demo().ticks[0], "camera_middle")).full_search);
+}
+
+DetectedFace face(float score, float frontalness) {
+  return DetectedFace{cv::Rect2d(100, 100, 150, 150), score, FaceView::kFrontal, frontalness};
+}
+FaceDetections dets(std::map<SensorId, std::vector<DetectedFace>> faces) {
+  FaceDetections d;
+  for (auto& [id, f] : faces) d.cameras[id].faces = f;
+  return d;
+}
+
+TEST(CameraSelector, HysteresisAndImmediateFallback) {
+  CameraSelectorOptions o;
+  o.switch_margin = 0.05;
+  o.switch_ticks = 3;
+  CameraSelector s(o);
+  EXPECT_FALSE(s.update(dets({})));
+  EXPECT_FALSE(s.update(dets({{"camera_left", {}}, {"camera_right", {}}})));
+  auto a = s.update(dets({{"camera_left", {face(0.9f, 0.8f)}}, {"camera_middle", {}}}));
+  ASSERT_TRUE(a);
+  EXPECT_EQ(a->camera, "camera_left");
+  EXPECT_NEAR(a->quality, 0.8, 1e-6);
+  // camera_middle is better by more than the margin: it takes over on the third tick only.
+  for (int k = 0; k < 3; ++k) {
+    auto r = s.update(dets({{"camera_left", {face(0.9f, 0.8f)}},
+                            {"camera_middle", {face(0.3f, 0.1f), face(0.95f, 0.95f)}}}));
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->camera, k < 2 ? "camera_left" : "camera_middle") << k;
+    if (k == 2) {
+      EXPECT_EQ(r->face_index, 1u);
+    }
+  }
+  // Better, but within the margin: no switch.
+  for (int k = 0; k < 5; ++k)
+    EXPECT_EQ(s.update(dets({{"camera_left", {face(0.95f, 0.92f)}},
+                             {"camera_middle", {face(0.95f, 0.9f)}}}))
+                  ->camera,
+              "camera_middle");
+  // The selected camera loses its face (or its frame): the best other camera at once.
+  EXPECT_EQ(s.update(dets({{"camera_left", {face(0.5f, 0.5f)}}, {"camera_middle", {}}}))->camera,
+            "camera_left");
+  EXPECT_EQ(s.update(dets({{"camera_right", {face(0.5f, 0.5f)}}}))->camera, "camera_right");
+  EXPECT_EQ(dream_camera_id(std::string("camera_middle")), 0);
+  EXPECT_EQ(dream_camera_id(std::string("camera_left")), 1);
+  EXPECT_EQ(dream_camera_id(std::string("camera_right")), 2);
+  EXPECT_EQ(dream_camera_id(std::nullopt), -1);
+}
+
+TEST(FaceDetectionAnalyzer, DemoRecallFalsePositivesAndCameraSelection) {
+  auto a = make_face_detection_analyzer();
+  ASSERT_TRUE(a) << a.error().to_string();
+  const auto t0 = std::chrono::steady_clock::now();
+  const FaceMetrics m = run_analyzer(**a, demo(), demo().ticks);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
+      demo().ticks.size();
+  std::printf(
+      "3 s demo (seed 3): recall(|yaw|<=45) %.4f (%d/%d), false-positive frames %.4f (%d/%d), "
+      "camera selection exact %.4f, within %d deg %.4f (%d ticks), %.1f ms/tick\n",
+      m.recall(), m.hits, m.positives, m.false_positive_rate(), m.fp_frames, m.camera_frames,
+      m.selection_exact_rate(), 10, m.selection_accuracy(), m.selection_ticks, ms);
+  EXPECT_GE(m.recall(), 0.98);
+  EXPECT_LE(m.false_positive_rate(), 0.01);
+  EXPECT_GE(m.selection_accuracy(), 0.95);
+}
+
+TEST(FaceDetectionAnalyzer, ParallelAndSerialGiveTheSameResult) {
+  FaceDetectionAnalyzerOptions o;
+  auto par = make_face_detection_analyzer(o);
+  o.parallel = false;
+  auto ser = make_face_detection_analyzer(o);
+  ASSERT_TRUE(par && ser);
+  Blackboard b1, b2;
+  for (size_t i = 0; i < 30; ++i) {
+    const MultiFrame& mf = demo().ticks[i];
+    BlackboardWriter w1("p"), w2("s");
+    ASSERT_TRUE((*par)->process(mf, b1.snapshot(), w1));
+    ASSERT_TRUE((*ser)->process(mf, b2.snapshot(), w2));
+    b1.commit(w1, mf.stamp);
+    b2.commit(w2, mf.stamp);
+    auto d1 = b1.snapshot().get(keys::kFaceDetections);
+    auto d2 = b2.snapshot().get(keys::kFaceDetections);
+    ASSERT_TRUE(d1 && d2 && d1->present() && d2->present());
+    ASSERT_EQ(d1->value->cameras.size(), d2->value->cameras.size());
+    for (const auto& [id, c] : d1->value->cameras) {
+      const auto& c2 = d2->value->cameras.at(id);
+      ASSERT_EQ(c.faces.size(), c2.faces.size());
+      for (size_t k = 0; k < c.faces.size(); ++k) {
+        EXPECT_EQ(c.faces[k].box_px, c2.faces[k].box_px);
+        EXPECT_EQ(c.faces[k].score, c2.faces[k].score);
+        EXPECT_EQ(c.faces[k].frontalness, c2.faces[k].frontalness);
+      }
+    }
+    EXPECT_EQ(b1.snapshot().get(keys::kSelectedCamera)->value->camera,
+              b2.snapshot().get(keys::kSelectedCamera)->value->camera);
+  }
+}
+
+TEST(FaceDetectionAnalyzer, MissingCameraNoFramesAndNoFaces) {
+  auto a = make_face_detection_analyzer();
+  ASSERT_TRUE(a);
+  EXPECT_EQ((*a)->contract().optional_inputs, kCameras);
+  Blackboard bb;
+  auto step = [&](const MultiFrame& mf) {
+    BlackboardWriter w("face_detection");
+    auto s = (*a)->process(mf, bb.snapshot(), w);
+    EXPECT_TRUE(s);
+    const bool wrote = !w.empty();
+    bb.commit(w, mf.stamp);
+    return wrote;
+  };
+  // No camera frame in the tick: nothing written.
+  MultiFrame empty;
+  empty.stamp = Timestamp::from_ns(0);
+  EXPECT_FALSE(step(empty));
+  // camera_middle missing for 20 ticks: never listed, no face made up for it; the others go on.
+  for (size_t i = 0; i < 40; ++i) {
+    MultiFrame mf = demo().ticks[i];
+    const bool drop = i >= 5 && i < 25;
+    if (drop) mf.frames.erase("camera_middle");
+    ASSERT_TRUE(step(mf));
+    auto det = bb.snapshot().get(keys::kFaceDetections);
+    ASSERT_TRUE(det && det->present());
+    EXPECT_EQ(det->value->cameras.count("camera_middle"), drop ? 0u : 1u) << i;
+    auto sel = bb.snapshot().get(keys::kSelectedCamera);
+    ASSERT_TRUE(sel && sel->present());
+    if (drop) {
+      EXPECT_NE(sel->value->camera, "camera_middle");
+    }
+    for (const auto& [id, c] : det->value->cameras) {
+      EXPECT_EQ(c.frame_stamp, mf.stamp);
+      EXPECT_EQ(c.image_size, cv::Size(1280, 960));
+    }
+  }
+  // Frames without any face: absent entries (not errors).
+  MultiFrame blank;
+  blank.stamp = Timestamp::from_ns(10'000'000'000);
+  for (size_t k = 0; k < kCameras.size(); ++k)
+    blank.frames[kCameras[k]] =
+        make_frame(kCameras[k], blank.stamp, 1000,
+                   ColorImage{cv::Mat(960, 1280, CV_8UC3, cv::Scalar(60, 90, 120))});
+  ASSERT_TRUE(step(blank));
+  auto det = bb.snapshot().get(keys::kFaceDetections);
+  ASSERT_TRUE(det);
+  EXPECT_FALSE(det->present());
+  EXPECT_FALSE(bb.snapshot().get(keys::kSelectedCamera)->present());
+  // A non-colour stream under a camera id is a wiring error.
+  MultiFrame wrong;
+  wrong.stamp = Timestamp::from_ns(11'000'000'000);
+  wrong.frames["camera_left"] = make_frame("camera_left", wrong.stamp, 0, Skeleton{});
+  BlackboardWriter w("face_detection");
+  auto s = (*a)->process(wrong, bb.snapshot(), w);
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().code, ErrorCode::kInvalidArgument);
+}
+
+TEST(FaceDetectionAnalyzer, RepeatedFrameIsNotSearchedAgain) {
+  auto a = make_face_detection_analyzer();
+  ASSERT_TRUE(a);
+  Blackboard bb;
+  MultiFrame mf = demo().ticks[0];
+  BlackboardWriter w1("f");
+  ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w1));
+  bb.commit(w1, mf.stamp);
+  auto first = *bb.snapshot().get(keys::kFaceDetections)->value;
+  mf.stamp = mf.stamp + Duration::from_ms(33);  // a faster pipeline clock, same camera frames
+  BlackboardWriter w2("f");
+  ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w2));
+  bb.commit(w2, mf.stamp);
+  auto second = *bb.snapshot().get(keys::kFaceDetections)->value;
+  for (const auto& [id, c] : first.cameras) {
+    ASSERT_EQ(c.faces.size(), second.cameras.at(id).faces.size());
+    for (size_t k = 0; k < c.faces.size(); ++k)
+      EXPECT_EQ(c.faces[k].box_px, second.cameras.at(id).faces[k].box_px);
+  }
+}
+
+}  // namespace
+}  // namespace dreamsense::face_detection

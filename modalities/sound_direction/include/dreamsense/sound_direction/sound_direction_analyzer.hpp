@@ -1,0 +1,30 @@
+#pragma once
+// Sound-direction analyser (DREAM V17 / primitive F16 getSoundDirection): reads the audio chunks
+// of one microphone-array stream, runs the DirectionFinder and writes keys::kSoundDirection once
+// per tick in which at least one analysis frame completed: the smoothed estimate when the last
+// frame was voiced, an absent entry (silence) otherwise. Method and numbers: README.md.
+//
+// Bad input: chunks whose sample rate or channel count differ from the configured array are an
+// error for that tick (clear message, the pipeline keeps running); clipped audio is processed
+// with a one-time warning; silence is absence, never an error.
+
+#include "dreamsense/core/analyzer.hpp"
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/sound_direction/direction_finder.hpp"
+#include "dreamsense/sound_direction/mic_array.hpp"
+
+#include <memory>
+
+namespace dreamsense::sound_direction {
+
+struct SoundDirectionAnalyzerOptions {
+  SensorId audio_sensor = "mic_array";
+  MicArrayGeometry geometry = MicArrayGeometry::kinect_v1();
+  DirectionFinderOptions finder;
+  Status check() const;
+};
+
+Result<std::unique_ptr<Analyzer>> make_sound_direction_analyzer(
+    const SoundDirectionAnalyzerOptions& options);
+
+}  // namespace dreamsense::sound_direction
