@@ -67,11 +67,12 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       exit_code = fail(r.error());
       return;
     }
-    std::fprintf(stderr,
-                 "analysis: %llu ticks in %.2f s; primitives.jsonl, events.log, dream.json, report.html, "
-                 "summary.json in %s\n",
-                 static_cast<unsigned long long>(r->pipeline.ticks), r->pipeline.wall_seconds,
-                 out.string().c_str());
+    std::fprintf(
+        stderr,
+        "analysis: %llu ticks in %.2f s; primitives.jsonl, events.log, dream.json, report.html, "
+        "summary.json in %s\n",
+        static_cast<unsigned long long>(r->pipeline.ticks), r->pipeline.wall_seconds,
+        out.string().c_str());
     std::fprintf(stderr, "compare with the truth: dreamsense eval session %s --analysis %s\n",
                  out.string().c_str(), out.string().c_str());
   });
