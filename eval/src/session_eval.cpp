@@ -39,6 +39,8 @@ const std::map<std::string, std::string> kMetricPrimitive = {
     {"object_track_mean_iou", "getObjects"},
     {"object_position_median_m", "getObjects"},
     {"body_joint_median_error_m", "getBodyPose"},
+    {"camera_selection_accuracy_within_10deg", "getFaces"},
+    {"face_position_median_m", "getFaces"},
 };
 
 Result<std::vector<json>> read_jsonl(const fs::path& path) {
@@ -59,6 +61,100 @@ Result<std::vector<json>> read_jsonl(const fs::path& path) {
     }
   }
   return out;
+}
+
+// Face detection and camera selection against the truth `face` records of the same tick.
+//  - A detection in camera c matches when that camera's truth face is visible and the
+//    detection's box centre lies inside the truth box.
+//  - face_recall: camera frames with a matched detection / camera frames whose truth face is
+//    visible with |yaw| <= 45 deg (issue 4's protocol).
+//  - face_false_positive_rate: camera frames with an unmatched detection / camera frames searched.
+//  - camera_selection_accuracy: ticks whose selected camera is the truth best_camera (the most
+//    frontal view) / ticks with a truth best_camera. Strict; the _within_10deg variant also
+//    accepts a camera whose face is at most 10 deg less frontal than the best one's.
+//  - face_position_median_m: the first face's 3-D position against the truth head position.
+// Ticks whose getFaces is stale or sensor_offline are skipped (nothing was observed); no_data
+// means every camera was searched and found nothing.
+void evaluate_faces(const std::vector<json>& truth, const std::vector<json>& records, json& metrics,
+                    json& not_evaluated) {
+  std::map<int64_t, const json*> truth_faces;
+  for (const auto& t : truth)
+    if (t.value("type", "") == "face") truth_faces[t.value("stamp_ns", int64_t{0})] = &t;
+  int visible = 0, found = 0, searched = 0, false_pos = 0, sel_total = 0, sel_exact = 0,
+      sel_near = 0;
+  std::vector<double> position_errors;
+  auto inside = [](const json& box, double x, double y) {
+    return x >= box[0].get<double>() && y >= box[1].get<double>() &&
+           x <= box[0].get<double>() + box[2].get<double>() &&
+           y <= box[1].get<double>() + box[3].get<double>();
+  };
+  for (const auto& r : records) {
+    if (r.value("primitive", "") != "getFaces") continue;
+    const std::string status = r.value("status", "");
+    if (status != "ok" && status != "no_data") continue;
+    auto it = truth_faces.find(r.value("stamp_ns", int64_t{-1}));
+    if (it == truth_faces.end()) continue;
+    const json& tf = *it->second;
+    const json empty = json::object();
+    const json& seen = status == "ok" ? r["value"]["cameras"] : empty;
+    std::map<std::string, bool> matched_in;
+    for (const auto& [cam, tc] : tf["cameras"].items()) {
+      const bool is_visible = tc.value("visible", false);
+      const json dets = seen.contains(cam) ? seen[cam] : json::array();
+      if (status == "ok" && !seen.contains(cam)) continue;  // no frame from it this tick
+      ++searched;
+      bool matched = false, unmatched = false;
+      for (const auto& d : dets) {
+        const auto& b = d["box_px"];
+        const double cx = b[0].get<double>() + b[2].get<double>() / 2;
+        const double cy = b[1].get<double>() + b[3].get<double>() / 2;
+        if (is_visible && inside(tc["box"], cx, cy))
+          matched = true;
+        else
+          unmatched = true;
+      }
+      matched_in[cam] = matched;
+      if (unmatched) ++false_pos;
+      if (is_visible && std::abs(tc.value("yaw_deg", 180.0)) <= 45) {
+        ++visible;
+        if (matched) ++found;
+      }
+    }
+    const json best = tf.value("best_camera", json(nullptr));
+    if (!best.is_null()) {
+      ++sel_total;
+      const json sel =
+          status == "ok" ? r["value"].value("selected_camera", json(nullptr)) : json(nullptr);
+      if (!sel.is_null()) {
+        const std::string s = sel.get<std::string>(), b = best.get<std::string>();
+        if (s == b) {
+          ++sel_exact;
+          ++sel_near;
+        } else if (matched_in[s] && tf["cameras"].contains(s) && tf["cameras"].contains(b) &&
+                   std::abs(tf["cameras"][s].value("yaw_deg", 180.0)) <=
+                       std::abs(tf["cameras"][b].value("yaw_deg", 180.0)) + 10.0) {
+          ++sel_near;
+        }
+      }
+    }
+    if (status == "ok" && !r["value"]["faces"].empty() && tf.contains("head_position_m")) {
+      const auto& p = r["value"]["faces"][0]["position_m"];
+      const auto& q = tf["head_position_m"];
+      double d2 = 0;
+      for (int k = 0; k < 3; ++k) d2 += std::pow(p[k].get<double>() - q[k].get<double>(), 2);
+      position_errors.push_back(std::sqrt(d2));
+    }
+  }
+  if (visible > 0)
+    metrics["face_recall"] = static_cast<double>(found) / visible;
+  else
+    not_evaluated["face_recall"] = "no truth face visible with |yaw| <= 45 deg";
+  if (searched > 0) metrics["face_false_positive_rate"] = static_cast<double>(false_pos) / searched;
+  if (sel_total > 0) {
+    metrics["camera_selection_accuracy"] = static_cast<double>(sel_exact) / sel_total;
+    metrics["camera_selection_accuracy_within_10deg"] = static_cast<double>(sel_near) / sel_total;
+  }
+  if (auto m = median(position_errors)) metrics["face_position_median_m"] = *m;
 }
 
 }  // namespace
@@ -170,6 +266,8 @@ Result<json> evaluate_session(const SessionEvalOptions& options) {
       not_evaluated["doa_within_10deg"] = why;
     }
   }
+
+  if (enabled("getFaces")) evaluate_faces(*truth, *records, metrics, not_evaluated);
 
   json out;
   out["task"] = "session";

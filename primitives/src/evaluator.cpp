@@ -26,7 +26,7 @@ Status EvaluatorOptions::check() const {
   if (!(sound_direction_threshold >= 0 && sound_direction_threshold <= 1))
     bad += " sound_direction_threshold must be in [0, 1];";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "EvaluatorOptions:" + bad);
-  return ok_status();
+  return face_geometry.check();
 }
 
 Evaluator::Evaluator(EvaluatorOptions options, SensorId body_sensor, SensorId audio_sensor)
@@ -43,6 +43,26 @@ PrimitiveRecord Evaluator::base(PrimitiveId id, Timestamp stamp) const {
   return r;
 }
 
+void Evaluator::enable_faces(std::map<SensorId, CameraModel> cameras) {
+  face_cameras_ = std::move(cameras);
+}
+
+template <typename T>
+PrimitiveStatus Evaluator::observation_status(const std::optional<Entry<T>>& entry,
+                                              const std::vector<SensorId>& sensors,
+                                              Timestamp tick) const {
+  Timestamp last = first_tick_;
+  for (const auto& s : sensors) {
+    auto seen = last_seen_.find(s);
+    if (seen != last_seen_.end()) last = std::max(last, seen->second);
+  }
+  if (tick - last > options_.offline_after) return PrimitiveStatus::kSensorOffline;
+  if (!entry) return PrimitiveStatus::kNoData;
+  if (tick - entry->stamp > options_.freshness) return PrimitiveStatus::kStale;
+  if (!entry->present()) return PrimitiveStatus::kNoData;
+  return PrimitiveStatus::kOk;
+}
+
 std::vector<PrimitiveRecord> Evaluator::evaluate(const MultiFrame& tick,
                                                  const BlackboardView& view) {
   if (!first_tick_.is_set()) first_tick_ = tick.stamp;
@@ -55,7 +75,58 @@ std::vector<PrimitiveRecord> Evaluator::evaluate(const MultiFrame& tick,
   for (const auto& i : catalogue()) out.push_back(base(i.id, tick.stamp));
   if (!body_sensor_.empty()) evaluate_body(tick, view, out);
   if (!audio_sensor_.empty()) evaluate_sound_direction(tick, view, out);
+  if (!face_cameras_.empty()) evaluate_faces(tick, view, out);
   return out;
+}
+
+// F7 getFaces: faces across cameras with their 3-D position, plus what each camera saw (so that
+// detection can be evaluated per camera) and the selected camera.
+void Evaluator::evaluate_faces(const MultiFrame& tick, const BlackboardView& view,
+                               std::vector<PrimitiveRecord>& out) {
+  PrimitiveRecord& r = out[static_cast<int>(PrimitiveId::kGetFaces) - 1];
+  std::vector<SensorId> sensors;
+  for (const auto& [id, m] : face_cameras_) sensors.push_back(id);
+  const auto entry = view.get(keys::kFaceDetections);
+  if (entry) r.data_stamp = entry->stamp;
+  r.status = observation_status(entry, sensors, tick.stamp);
+  if (r.status != PrimitiveStatus::kOk) return;
+  const auto selected = view.get(keys::kSelectedCamera);
+  const SelectedCamera* sel = selected && selected->present() && selected->stamp == entry->stamp
+                                  ? selected->value.get()
+                                  : nullptr;
+  const auto faces = associate_faces(*entry->value, sel, face_cameras_, options_.face_geometry);
+  json faces_json = json::array();
+  std::vector<double> legacy{static_cast<double>(std::min<size_t>(faces.size(), 5))};
+  for (size_t i = 0; i < faces.size(); ++i) {
+    const auto& f = faces[i];
+    json boxes = json::object();
+    for (const auto& [cam, b] : f.boxes) boxes[cam] = json::array({b.x, b.y, b.width, b.height});
+    faces_json.push_back({{"position_m", vec_json(f.position_m)},
+                          {"score", f.score},
+                          {"camera", f.camera},
+                          {"boxes", boxes}});
+    if (i < 5) append_mm(legacy, f.position_m);
+  }
+  legacy.resize(16, 0.0);  // DREAM: up to 5 faces, unused slots 0
+  json cameras = json::object();
+  for (const auto& [cam, cf] : entry->value->cameras) {
+    json list = json::array();
+    for (const auto& d : cf.faces)
+      list.push_back(
+          {{"box_px", json::array({d.box_px.x, d.box_px.y, d.box_px.width, d.box_px.height})},
+           {"score", d.score},
+           {"frontalness", d.frontalness}});
+    cameras[cam] = list;
+  }
+  r.confidence = entry->confidence;
+  r.value = {{"faces", faces_json},
+             {"cameras", cameras},
+             {"selected_camera", sel ? json(sel->camera) : json(nullptr)}};
+  r.legacy = legacy;
+  if (sel)
+    r.source = sel->camera;
+  else if (!faces.empty())
+    r.source = faces.front().camera;
 }
 
 // F16 getSoundDirection, default query threshold = options_.sound_direction_threshold.
@@ -65,23 +136,14 @@ void Evaluator::evaluate_sound_direction(const MultiFrame& tick, const Blackboar
   r.source = audio_sensor_;
   r.query = {{"threshold", options_.sound_direction_threshold}};
   const auto entry = view.get(keys::kSoundDirection);
-  auto seen = last_seen_.find(audio_sensor_);
-  const Timestamp last = seen == last_seen_.end() ? first_tick_ : seen->second;
   if (entry) r.data_stamp = entry->stamp;
-  if (tick.stamp - last > options_.offline_after)
-    r.status = PrimitiveStatus::kSensorOffline;
-  else if (!entry)
-    r.status = PrimitiveStatus::kNoData;
-  else if (tick.stamp - entry->stamp > options_.freshness)
-    r.status = PrimitiveStatus::kStale;
-  else if (!entry->present())
-    r.status = PrimitiveStatus::kNoData;  // silence
-  else if (entry->confidence < options_.sound_direction_threshold) {
+  r.status = observation_status(entry, {audio_sensor_}, tick.stamp);  // absent = silence
+  if (r.status != PrimitiveStatus::kOk) return;
+  if (entry->confidence < options_.sound_direction_threshold) {
     r.status = PrimitiveStatus::kNoData;  // heard something, not confident enough
     r.confidence = entry->confidence;
-  } else
-    r.status = PrimitiveStatus::kOk;
-  if (r.status != PrimitiveStatus::kOk) return;
+    return;
+  }
   const SoundDirection& d = *entry->value;
   r.confidence = entry->confidence;
   r.value = {{"azimuth_deg", d.azimuth_deg},
@@ -94,17 +156,7 @@ void Evaluator::evaluate_sound_direction(const MultiFrame& tick, const Blackboar
 void Evaluator::evaluate_body(const MultiFrame& tick, const BlackboardView& view,
                               std::vector<PrimitiveRecord>& out) {
   const auto entry = view.get(keys::kChildBody);
-  PrimitiveStatus status = PrimitiveStatus::kOk;
-  auto seen = last_seen_.find(body_sensor_);
-  const Timestamp last = seen == last_seen_.end() ? first_tick_ : seen->second;
-  if (tick.stamp - last > options_.offline_after)
-    status = PrimitiveStatus::kSensorOffline;
-  else if (!entry)
-    status = PrimitiveStatus::kNoData;
-  else if (tick.stamp - entry->stamp > options_.freshness)
-    status = PrimitiveStatus::kStale;
-  else if (!entry->present())
-    status = PrimitiveStatus::kNoData;
+  const PrimitiveStatus status = observation_status(entry, {body_sensor_}, tick.stamp);
 
   const PrimitiveId ids[] = {PrimitiveId::kGetArmAngle, PrimitiveId::kGetBody,
                              PrimitiveId::kGetBodyPose, PrimitiveId::kGetHands,

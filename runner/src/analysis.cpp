@@ -6,6 +6,7 @@
 #include "dreamsense/core/perception.hpp"
 #include "dreamsense/export/report.hpp"
 #include "dreamsense/export/writers.hpp"
+#include "dreamsense/face_detection/face_detection_analyzer.hpp"
 #include "dreamsense/sound_direction/sound_direction_analyzer.hpp"
 #include "dreamsense/sources/session.hpp"
 
@@ -127,6 +128,31 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     used.push_back(s.id);
   }
 
+  // Face detection on the colour cameras that watch the child (ids "camera*", DREAM's three
+  // 1280x960 cameras); their calibrations give the faces' 3-D positions.
+  std::map<SensorId, CameraModel> face_cameras;
+  for (const auto& s : manifest.streams) {
+    if (s.kind != SensorKind::kColor || s.id.rfind("camera", 0) != 0) continue;
+    if (s.calibration.empty()) {
+      log::warn("camera '{}' has no calibration: no face positions from it", s.id);
+      continue;
+    }
+    auto m = read_camera_model((*full)->dir() / s.calibration);
+    if (!m) return tl::unexpected(m.error());
+    face_cameras[s.id] = *m;
+  }
+  if (!face_cameras.empty()) {
+    face_detection::FaceDetectionAnalyzerOptions fo;
+    fo.cameras.clear();
+    for (const auto& [id, m] : face_cameras) {
+      fo.cameras.push_back(id);
+      used.push_back(id);
+    }
+    auto a = face_detection::make_face_detection_analyzer(fo);
+    if (!a) return tl::unexpected(a.error());
+    analyzers.push_back(std::move(*a));
+  }
+
   sources::SessionReaderOptions ro;
   ro.only = used;
   auto reader =
@@ -157,6 +183,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
       return tl::unexpected(s.error());
   }
   primitives::Evaluator evaluator(options.evaluator, body_sensor, audio_sensor);
+  if (!face_cameras.empty()) evaluator.enable_faces(face_cameras);
 
   auto on_tick = [&](const MultiFrame& tick, const BlackboardView& view) -> Status {
     const auto records = evaluator.evaluate(tick, view);

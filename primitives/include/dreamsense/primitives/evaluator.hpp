@@ -5,8 +5,10 @@
 // `offline_after`); disabled (no analyser for it is configured). Values are never invented.
 
 #include "dreamsense/core/blackboard.hpp"
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/multi_frame.hpp"
 #include "dreamsense/primitives/catalogue.hpp"
+#include "dreamsense/primitives/face_primitives.hpp"
 
 #include <map>
 #include <set>
@@ -25,6 +27,7 @@ struct EvaluatorOptions {
   // confidence is calibrated (modalities/sound_direction/README.md): >= 0.5 is within 10 deg
   // about 90 % of the time in eval doa's rooms, >= 0.7 (DREAM's consumer) about 98 %.
   double sound_direction_threshold = 0.5;
+  FaceGeometryOptions face_geometry;
   Status check() const;
 };
 
@@ -34,9 +37,20 @@ class Evaluator {
   // `audio_sensor`: the mic-array stream of the sound direction analyser (empty: disabled).
   Evaluator(EvaluatorOptions options, SensorId body_sensor, SensorId audio_sensor = {});
 
+  // Enables the face primitives (getFaces today) for these cameras (their calibrations give the
+  // 3-D positions).
+  void enable_faces(std::map<SensorId, CameraModel> cameras);
+
   std::vector<PrimitiveRecord> evaluate(const MultiFrame& tick, const BlackboardView& view);
 
  private:
+  // ok / no_data / stale / sensor_offline of an observation from `sensors` (offline when none of
+  // them delivered a frame for offline_after).
+  template <typename T>
+  PrimitiveStatus observation_status(const std::optional<Entry<T>>& entry,
+                                     const std::vector<SensorId>& sensors, Timestamp tick) const;
+  void evaluate_faces(const MultiFrame& tick, const BlackboardView& view,
+                      std::vector<PrimitiveRecord>& out);
   PrimitiveRecord base(PrimitiveId id, Timestamp stamp) const;
   void evaluate_body(const MultiFrame& tick, const BlackboardView& view,
                      std::vector<PrimitiveRecord>& out);
@@ -45,6 +59,7 @@ class Evaluator {
   EvaluatorOptions options_;
   SensorId body_sensor_;
   SensorId audio_sensor_;
+  std::map<SensorId, CameraModel> face_cameras_;
   std::map<SensorId, Timestamp> last_seen_;
   Timestamp first_tick_ = Timestamp::unset();
 };
