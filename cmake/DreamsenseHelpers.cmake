@@ -13,13 +13,13 @@ function(ds_add_library name)
   target_compile_options(dreamsense_${name} PRIVATE ${DREAMSENSE_WARNINGS})
 endfunction()
 
-# ds_add_test(<name> SOURCES ... DEPS ... [LABELS unit|analyzer|pipeline|dataset])
+# ds_add_test(<name> SOURCES ... DEPS ... [LABELS unit|analyzer|pipeline|dataset] [FIXTURES f])
 # One gtest executable per call; each TEST() becomes a ctest entry carrying the labels.
 function(ds_add_test name)
   if(NOT DREAMSENSE_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS;FIXTURES" ${ARGN})
   if(NOT ARG_LABELS)
     set(ARG_LABELS unit)
   endif()
@@ -32,7 +32,7 @@ function(ds_add_test name)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
   gtest_discover_tests(${name}
     WORKING_DIRECTORY ${PROJECT_BINARY_DIR}
-    PROPERTIES LABELS "${ARG_LABELS}"
+    PROPERTIES LABELS "${ARG_LABELS}" FIXTURES_REQUIRED "${ARG_FIXTURES}"
     DISCOVERY_TIMEOUT 60)
 endfunction()
 

@@ -31,6 +31,7 @@ void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   eval->require_subcommand(1);
   add_eval_calibration(*eval, g, exit_code);
   add_eval_doa(*eval, g, exit_code);
+  add_eval_speech(*eval, g, exit_code);
 
   auto flags = std::make_shared<EvalSessionFlags>();
   CLI::App* cmd = eval->add_subcommand(

@@ -13,19 +13,28 @@
 #include <bit>
 #include <cerrno>
 #include <charconv>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
+#include <exception>
 #include <fcntl.h>
 #include <fstream>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
 #include <sys/stat.h>
+#include <system_error>
+#include <thread>
 #include <unistd.h>
 #include <vector>
 
 namespace dreamsense::sources {
 namespace {
+
+// Upper bound of SessionReaderOptions::decode_threads.
+constexpr int kMaxDecodeThreads = 16;
 
 // Streams whose first stamps are further apart than this are on different clocks.
 constexpr int64_t kMaxFirstStampSpreadNs = 10'000'000'000LL;
@@ -132,6 +141,8 @@ class StreamReader {
  protected:
   StreamEntry entry_;
 };
+
+class ReadAhead;
 
 // The 8-byte signature every PNG starts with.
 constexpr unsigned char kPngSignature[8] = {0x89, 0x50, 0x4E, 0x47, 0x0D, 0x0A, 0x1A, 0x0A};
@@ -262,14 +273,22 @@ class IndexedReader : public StreamReader {
     return entries_.back().stamp_ns;
   }
 
-  Result<FramePtr> read() override {
-    const size_t k = next_++;
+  Result<FramePtr> read() override;
+
+  size_t frame_count() const { return entries_.size(); }
+  int64_t stamp_of(size_t k) const { return entries_[k].stamp_ns; }
+  // Decoding is handed to `read_ahead` (owned by the SessionReader, outlives this reader's reads).
+  void set_read_ahead(ReadAhead* read_ahead) { read_ahead_ = read_ahead; }
+
+  // Reads and decodes frame k into a new frame; `buffer` is scratch space. Thread-safe: it only
+  // reads state fixed at open() (pread does not move the file offset).
+  Result<FramePtr> decode(size_t k, std::vector<uchar>& buffer) const {
     const Entry& e = entries_.at(k);
-    buffer_.resize(e.size);
+    buffer.resize(e.size);
     size_t done = 0;
     while (done < e.size) {
       const ssize_t n =
-          ::pread(fd_, buffer_.data() + done, e.size - done, static_cast<off_t>(e.offset + done));
+          ::pread(fd_, buffer.data() + done, e.size - done, static_cast<off_t>(e.offset + done));
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0)
         return make_error(ErrorCode::kCorruptData, "{}: frame {}: read failed: {}", entry_.file, k,
@@ -279,7 +298,7 @@ class IndexedReader : public StreamReader {
     const Timestamp stamp = Timestamp::from_ns(e.stamp_ns);
     if (entry_.encoding == "raw16") {
       cv::Mat depth(entry_.height, entry_.width, CV_16UC1);
-      std::memcpy(depth.data, buffer_.data(), e.size);
+      std::memcpy(depth.data, buffer.data(), e.size);
       if constexpr (std::endian::native == std::endian::big) {
         auto* p = depth.ptr<uint16_t>();
         for (size_t i = 0; i < depth.total(); ++i)
@@ -289,10 +308,10 @@ class IndexedReader : public StreamReader {
       d.depth_mm = depth;
       return make_frame(entry_.id, stamp, e.sequence, std::move(d));
     }
-    if (entry_.encoding == "png16") return read_png16(k, e, stamp);
+    if (entry_.encoding == "png16") return decode_png16(k, e, stamp, buffer);
     cv::Mat image;
     try {
-      image = cv::imdecode(buffer_, cv::IMREAD_UNCHANGED);
+      image = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
     } catch (const cv::Exception&) {
       image.release();
     }
@@ -318,10 +337,11 @@ class IndexedReader : public StreamReader {
     int64_t stamp_ns = 0;
     uint64_t offset = 0, size = 0;
   };
-  Result<FramePtr> read_png16(size_t k, const Entry& e, Timestamp stamp) {
+  Result<FramePtr> decode_png16(size_t k, const Entry& e, Timestamp stamp,
+                                const std::vector<uchar>& buffer) const {
     cv::Mat depth;
     try {
-      depth = cv::imdecode(buffer_, cv::IMREAD_UNCHANGED);
+      depth = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
     } catch (const cv::Exception&) {
       depth.release();
     }
@@ -357,7 +377,160 @@ class IndexedReader : public StreamReader {
   std::vector<Entry> entries_;
   size_t next_ = 0;
   std::vector<uchar> buffer_;
+  ReadAhead* read_ahead_ = nullptr;
 };
+
+// Read-ahead decoding of the indexed streams on worker threads.
+//
+// The order in which next() returns the frames of the indexed streams depends only on their index
+// stamps (a stable merge by stamp, ties by manifest order; the other streams only interleave), so
+// it is known at open(). ReadAhead walks that order ("the plan") and keeps at most `window` frames
+// queued, being decoded or decoded ahead of the caller. Workers decode the earliest queued frames;
+// take() returns the front of the plan, decoding it on the caller's thread if no worker has
+// started it yet. Each frame is decoded exactly once by the same code as without read-ahead, and
+// its Result (frame or error) is returned at its own place, so only speed changes.
+class ReadAhead {
+ public:
+  // `streams`: the indexed streams in manifest order; threads >= 1, window >= 1. The workers start
+  // at the first take(), so a reader opened only for its manifest or info costs no decoding.
+  ReadAhead(std::vector<const IndexedReader*> streams, int threads, int window)
+      : streams_(std::move(streams)),
+        planned_(streams_.size(), 0),
+        threads_(threads),
+        window_(window) {}
+  ReadAhead(const ReadAhead&) = delete;
+  ReadAhead& operator=(const ReadAhead&) = delete;
+  // Stops the workers after the frame each is decoding; queued frames are dropped.
+  ~ReadAhead() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    work_cv_.notify_all();
+    for (auto& t : workers_) t.join();
+  }
+
+  // Frame k of `stream`, which must be the next frame of the plan (next() consumes the indexed
+  // streams in plan order).
+  Result<FramePtr> take(const IndexedReader* stream, size_t k) {
+    if (!started_) start();
+    std::unique_lock<std::mutex> lock(mutex_);
+    DS_CHECK(!slots_.empty());
+    Slot& slot = slots_.front();
+    DS_CHECK(slot.stream == stream);
+    DS_CHECK_EQ(slot.k, k);
+    if (slot.state == State::kQueued) {  // no worker on it yet: decode it here
+      slot.state = State::kDecoding;
+      lock.unlock();
+      run(slot, caller_buffer_);
+      lock.lock();
+    } else {
+      done_cv_.wait(lock, [&] { return slot.state == State::kDone; });
+    }
+    std::optional<Result<FramePtr>> result = std::move(slot.result);
+    const std::exception_ptr failure = slot.failure;
+    slots_.pop_front();
+    refill();
+    lock.unlock();
+    work_cv_.notify_all();
+    if (failure) std::rethrow_exception(failure);
+    return std::move(*result);
+  }
+
+ private:
+  enum class State { kQueued, kDecoding, kDone };
+  struct Slot {
+    const IndexedReader* stream = nullptr;
+    size_t k = 0;
+    State state = State::kQueued;
+    std::optional<Result<FramePtr>> result;
+    std::exception_ptr failure;  // an exception of decode(), rethrown by take()
+  };
+
+  void start() {
+    started_ = true;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      refill();
+    }
+    try {
+      for (int i = 0; i < threads_; ++i) workers_.emplace_back([this] { work(); });
+    } catch (const std::system_error& e) {  // no more threads: take() decodes what is left
+      log::warn("session reader: started {} of {} decode threads: {}", workers_.size(), threads_,
+                e.what());
+    }
+  }
+
+  // Appends the next frames of the plan up to the window. Caller holds mutex_.
+  void refill() {
+    while (slots_.size() < static_cast<size_t>(window_)) {
+      size_t best = streams_.size();
+      for (size_t s = 0; s < streams_.size(); ++s) {
+        if (planned_[s] >= streams_[s]->frame_count()) continue;
+        if (best == streams_.size() ||
+            streams_[s]->stamp_of(planned_[s]) < streams_[best]->stamp_of(planned_[best]))
+          best = s;  // ties: the earlier stream in the manifest, as in next()
+      }
+      if (best == streams_.size()) return;  // plan exhausted
+      Slot slot;
+      slot.stream = streams_[best];
+      slot.k = planned_[best]++;
+      slots_.push_back(std::move(slot));
+    }
+  }
+
+  // Decodes `slot` (state kDecoding, owned by this thread) without holding mutex_.
+  static void run(Slot& slot, std::vector<uchar>& buffer) {
+    try {
+      slot.result = slot.stream->decode(slot.k, buffer);
+    } catch (...) {
+      slot.failure = std::current_exception();
+    }
+  }
+
+  void work() {
+    std::vector<uchar> buffer;
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      Slot* slot = nullptr;
+      work_cv_.wait(lock, [&] {
+        if (stop_) return true;
+        for (Slot& s : slots_)
+          if (s.state == State::kQueued) {
+            slot = &s;
+            return true;
+          }
+        return false;
+      });
+      if (stop_) return;
+      slot->state = State::kDecoding;
+      lock.unlock();
+      run(*slot, buffer);  // deque elements keep their address; take() waits for kDone
+      lock.lock();
+      slot->state = State::kDone;
+      done_cv_.notify_all();
+    }
+  }
+
+  const std::vector<const IndexedReader*> streams_;  // manifest order
+  std::vector<size_t> planned_;                      // per stream: next frame not yet in slots_
+  const int threads_;
+  const int window_;
+  std::mutex mutex_;
+  std::condition_variable work_cv_;  // a frame was queued, or stop
+  std::condition_variable done_cv_;  // a frame was decoded
+  std::deque<Slot> slots_;           // the plan from the caller's next frame on
+  bool stop_ = false;
+  std::vector<uchar> caller_buffer_;  // used by take() only, i.e. by one thread at a time
+  bool started_ = false;              // likewise
+  std::vector<std::thread> workers_;
+};
+
+Result<FramePtr> IndexedReader::read() {
+  const size_t k = next_++;
+  if (read_ahead_ != nullptr) return read_ahead_->take(this, k);
+  return decode(k, buffer_);
+}
 
 // "video": any container OpenCV reads + one stamp_ns per line (read-only).
 class VideoReader : public StreamReader {
@@ -660,11 +833,18 @@ class WavReader : public StreamReader {
 // ----------------------------------------------------------------------------------------------
 
 Status SessionReaderOptions::check() const {
+  std::vector<std::string> bad;
   if (audio_chunk.ns() <= 0)
-    return make_error(ErrorCode::kInvalidArgument,
-                      "SessionReaderOptions: audio_chunk must be > 0, got {} s",
-                      audio_chunk.seconds());
-  return ok_status();
+    bad.push_back(fmt::format("audio_chunk must be > 0, got {} s", audio_chunk.seconds()));
+  if (decode_threads < 0 || decode_threads > kMaxDecodeThreads)
+    bad.push_back(fmt::format("decode_threads must be in [0, {}], got {}", kMaxDecodeThreads,
+                              decode_threads));
+  if (read_ahead_frames < 1)
+    bad.push_back(fmt::format("read_ahead_frames must be >= 1, got {}", read_ahead_frames));
+  if (bad.empty()) return ok_status();
+  std::string msg = "SessionReaderOptions: ";
+  for (size_t i = 0; i < bad.size(); ++i) msg += (i ? "; " : "") + bad[i];
+  return make_error(ErrorCode::kInvalidArgument, std::move(msg));
 }
 
 struct SessionReader::Impl {
@@ -673,6 +853,8 @@ struct SessionReader::Impl {
   SessionReaderOptions options;
   std::vector<std::unique_ptr<StreamReader>> streams;  // manifest order
   SourceInfo info;
+  // Declared last: destroyed (workers stopped) before the streams it decodes from.
+  std::unique_ptr<ReadAhead> read_ahead;
 };
 
 SessionReader::SessionReader() : impl_(std::make_unique<Impl>()) {}
@@ -786,6 +968,19 @@ Result<std::unique_ptr<SessionReader>> SessionReader::open(const std::filesystem
   }
   if (start) info.start = Timestamp::from_ns(*start);
   if (end) info.end = Timestamp::from_ns(*end);
+
+  if (options.decode_threads > 0) {
+    std::vector<IndexedReader*> indexed;
+    for (const auto& r : impl.streams)
+      if (auto* ir = dynamic_cast<IndexedReader*>(r.get()); ir != nullptr && ir->frame_count() > 0)
+        indexed.push_back(ir);
+    if (!indexed.empty()) {
+      impl.read_ahead = std::make_unique<ReadAhead>(
+          std::vector<const IndexedReader*>(indexed.begin(), indexed.end()), options.decode_threads,
+          options.read_ahead_frames);
+      for (auto* ir : indexed) ir->set_read_ahead(impl.read_ahead.get());
+    }
+  }
   return reader;
 }
 

@@ -89,4 +89,86 @@ inline constexpr Key<FaceDetections> kFaceDetections{"face.detections"};
 inline constexpr Key<SelectedCamera> kSelectedCamera{"face.selected_camera"};
 }  // namespace keys
 
+// ---- Facial landmarks (modalities/face_landmarks) and head pose (modalities/head_pose) ----
+
+// Number of landmarks in the iBUG 300-W / dlib-68 mark-up.
+inline constexpr int kFaceLandmarkCount = 68;
+
+// 68 facial landmarks of the selected face in the selected camera's image, iBUG 300-W order as
+// seen in the image: 0-16 jaw contour (image left to right), 17-21 and 22-26 brows, 27-30 nose
+// bridge (27 top, 30 tip), 31-35 nostrils, 36-41 the eye on the image left (the subject's RIGHT
+// eye for a face looking at the camera), 42-47 the other eye, 48-59 outer lips, 60-67 inner lips.
+struct FaceLandmarks {
+  SensorId camera;        // the camera whose image was fitted (keys::kSelectedCamera)
+  Timestamp frame_stamp;  // stamp of that camera frame
+  uint64_t frame_sequence = 0;
+  cv::Size image_size;                 // of that frame
+  cv::Rect2d box_px;                   // face box the landmarker started from
+  std::vector<cv::Point2d> points_px;  // kFaceLandmarkCount points, full-resolution pixels
+  // Centroid of the six contour points of the subject's right (36-41) / left (42-47) eye.
+  cv::Point2d right_eye_px() const { return centroid(36); }
+  cv::Point2d left_eye_px() const { return centroid(42); }
+
+ private:
+  cv::Point2d centroid(size_t first) const {
+    cv::Point2d c(0, 0);
+    if (points_px.size() < first + 6) return c;
+    for (size_t i = first; i < first + 6; ++i) c += points_px[i];
+    return c * (1.0 / 6);
+  }
+};
+
+// Head pose of the selected face. Head frame (the demo renderer's, docs/demo_session.md): origin
+// between the eyes, at head pose (0, 0, 0) its axes are the world axes: x towards the subject's
+// LEFT, y down, z towards the back of the head; the face looks along head -z.
+// world_from_head = rotation_from_ypr_deg(yaw, pitch, roll) = Ry(yaw) * Rx(pitch) * Rz(roll):
+// (0, 0, 0) looks at the front sensor (world -z); positive yaw turns the gaze towards world -x,
+// positive pitch looks down; roll about the face's forward axis.
+struct HeadPose {
+  SensorId camera;  // the camera whose landmarks were used
+  Timestamp frame_stamp;
+  cv::Matx33d camera_from_head = cv::Matx33d::eye();
+  cv::Vec3d position_camera_m{0, 0, 1};  // head-frame origin in that camera's frame
+  cv::Matx33d world_from_head = cv::Matx33d::eye();
+  cv::Vec3d position_world_m{0, 0, 1};  // head-frame origin (between the eyes) in world
+  double yaw_deg = 0, pitch_deg = 0, roll_deg = 0;  // of world_from_head (convention above)
+  // Head-gaze ray in world: origin between the eyes, direction = world_from_head * (0, 0, -1).
+  cv::Vec3d gaze_origin_world_m{0, 0, 1};
+  cv::Vec3d gaze_direction_world{0, 0, -1};
+  double reprojection_rms_px = 0;  // of the raw (unsmoothed) fit
+  int points_used = 0;             // landmarks used by the fit
+  bool smoothed = false;           // true when a temporal filter changed the raw fit
+};
+
+namespace keys {
+// Landmarks on the selected camera's face; absent entry when no face is selected or the
+// landmarker rejected it. Nothing is written in ticks without a selection entry.
+inline constexpr Key<FaceLandmarks> kFaceLandmarks{"face.landmarks"};
+// Head pose from the landmarks (F10 getHead, F11/F12 getHeadGaze); absent when no landmarks or
+// the fit was rejected.
+inline constexpr Key<HeadPose> kHeadPose{"face.head_pose"};
+}  // namespace keys
+
+}  // namespace dreamsense
+
+// ---- Speech recognised against a grammar (modalities/speech, F22 recognizeSpeech) ----
+
+namespace dreamsense {
+
+// One utterance recognised against the session's grammar. Out-of-grammar speech, silence and
+// noise produce no RecognizedSpeech at all (absence, not an error).
+struct RecognizedSpeech {
+  std::string text;         // recognised words, lower case, single spaces ("go forward ten meters")
+  std::string tag;          // the grammar's output string (SRGS <tag>, as DREAM emitted); = text
+                            // when the grammar has no tag for that alternative
+  double confidence = 0;    // [0, 1]: grammar path against a free phone loop; 0.5 = a tie
+  Timestamp start, end;     // first and last frame of the recognised words (session clock)
+  SensorId sensor;          // the audio stream it came from
+};
+
+namespace keys {
+// F22 recognizeSpeech: written once per recognised utterance (no entry while nothing is heard).
+inline constexpr Key<RecognizedSpeech> kRecognizedSpeech{"audio.speech"};
+}  // namespace keys
+
 }  // namespace dreamsense

@@ -88,7 +88,17 @@ struct SessionReaderOptions {
   // When false, an incomplete session is an error.
   bool allow_incomplete = true;
   std::vector<SensorId> only;  // if not empty, read only these streams
-  Status check() const;
+  // Read-ahead decoding of the indexed streams (mjpeg, raw16, png16): this many background threads
+  // read and decode upcoming frames, in the order next() will return them, while the caller
+  // works on the current one (0 to 16; 0 decodes on the caller's thread inside next()). Only speed
+  // changes: frames, order, content and errors are identical for every value. 1 is the best default
+  // on 2 cores (measurements in docs/session_format.md). "video" streams are always decoded in
+  // next().
+  int decode_threads = 1;
+  // Memory bound of read-ahead: at most this many frames (over all streams) queued, being decoded
+  // or decoded and not yet returned by next(). Must be >= 1; unused when decode_threads is 0.
+  int read_ahead_frames = 8;
+  Status check() const;  // every bad field in one message
 };
 
 // Replays a session as a Source: frames of all streams merged in stamp order (ties broken by
@@ -96,6 +106,9 @@ struct SessionReaderOptions {
 // open() validates everything it can before the first frame: files present and readable, index
 // consistent with data size (truncation), WAV rate/channels as declared, stamps increasing.
 // Errors name the file and the problem in one line.
+// A frame that fails to decode is returned as an error at its place in the order; the next call
+// goes on with the following frame. next() is called by one thread at a time. With read-ahead
+// (options.decode_threads > 0) the destructor stops the workers after their current frame.
 class SessionReader : public Source {
  public:
   static Result<std::unique_ptr<SessionReader>> open(const std::filesystem::path& session_dir,

@@ -1,0 +1,33 @@
+#pragma once
+// Face landmarks analyser: landmarks on the selected camera's face (keys::kFaceLandmarks).
+//
+// Per tick, reads keys::kSelectedCamera (written earlier in the same tick by face_detection):
+//  - no selection entry stamped with this tick: writes nothing (no camera frame this tick);
+//  - absent selection (no face anywhere): absent kFaceLandmarks;
+//  - the selected camera has no frame in this MultiFrame: absent;
+//  - otherwise the landmarker runs on that frame and the face box: kFaceLandmarks, confidence =
+//    the selected face's detection score, or absent when the landmarker rejects the face.
+
+#include "dreamsense/core/analyzer.hpp"
+#include "dreamsense/face_landmarks/landmarker.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace dreamsense::face_landmarks {
+
+struct FaceLandmarksAnalyzerOptions {
+  // Colour streams the selected camera may be (optional inputs of the contract).
+  std::vector<SensorId> cameras{"camera_left", "camera_middle", "camera_right"};
+  DlibLandmarkerOptions dlib;  // used by the factory that builds its own landmarker
+  Status check() const;
+};
+
+// Builds a dlib landmarker from options.dlib (loads the model).
+Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
+    const FaceLandmarksAnalyzerOptions& options = {});
+// Uses a landmarker created elsewhere (shared: load the model once, e.g. in tests).
+Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
+    const FaceLandmarksAnalyzerOptions& options, std::shared_ptr<const Landmarker> landmarker);
+
+}  // namespace dreamsense::face_landmarks

@@ -1,0 +1,167 @@
+// dlib 68-point landmarker. dlib headers stay in this file (they are slow to compile).
+//
+// dlib::shape_predictor::operator() rounds its output to integer pixels (dlib::point). To keep
+// sub-pixel landmarks (they matter for head pose on ~100 px faces) the model is deserialised
+// into the same members, in the same order, as dlib's own deserialize(shape_predictor&), and the
+// cascade is evaluated with dlib's public impl:: functions exactly as operator() does, without
+// the final rounding.
+
+#include "dreamsense/face_landmarks/landmarker.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <dlib/image_processing/shape_predictor.h>
+#include <dlib/opencv/cv_image.h>
+#include <fstream>
+
+namespace dreamsense::face_landmarks {
+namespace {
+
+struct ShapeModel {
+  dlib::matrix<float, 0, 1> initial_shape;  // mean shape in box-normalised coordinates
+  std::vector<std::vector<dlib::impl::regression_tree>> forests;
+  std::vector<std::vector<unsigned long>> anchor_idx;
+  std::vector<std::vector<dlib::vector<float, 2>>> deltas;
+  cv::Rect2d mean_extent;  // bounding box of the mean shape (box-normalised)
+
+  template <typename Image>
+  std::vector<cv::Point2d> predict(const Image& img, const dlib::rectangle& rect) const {
+    dlib::matrix<float, 0, 1> shape = initial_shape;
+    std::vector<float> feature_pixel_values;
+    for (unsigned long iter = 0; iter < forests.size(); ++iter) {
+      dlib::impl::extract_feature_pixel_values(img, rect, shape, initial_shape, anchor_idx[iter],
+                                               deltas[iter], feature_pixel_values);
+      unsigned long leaf_idx = 0;
+      for (const auto& tree : forests[iter]) shape += tree(feature_pixel_values, leaf_idx);
+    }
+    const dlib::point_transform_affine to_img = dlib::impl::unnormalizing_tform(rect);
+    std::vector<cv::Point2d> out(shape.size() / 2);
+    for (size_t i = 0; i < out.size(); ++i) {
+      const dlib::vector<double, 2> p = to_img(dlib::impl::location(shape, i));
+      out[i] = {p.x(), p.y()};
+    }
+    return out;
+  }
+};
+
+// dlib rectangles are inclusive integer boxes.
+dlib::rectangle to_dlib(const cv::Rect2d& b) {
+  return dlib::rectangle(std::lround(b.x), std::lround(b.y), std::lround(b.x + b.width - 1),
+                         std::lround(b.y + b.height - 1));
+}
+
+class DlibLandmarker final : public Landmarker {
+ public:
+  DlibLandmarker(DlibLandmarkerOptions o, ShapeModel m)
+      : options_(std::move(o)), model_(std::move(m)) {}
+  std::string_view name() const override { return "dlib_68"; }
+  int point_count() const override { return static_cast<int>(model_.initial_shape.size() / 2); }
+
+  Result<std::optional<std::vector<cv::Point2d>>> fit(const cv::Mat& image,
+                                                      const cv::Rect2d& box) const override {
+    if (image.type() != CV_8UC3 && image.type() != CV_8UC1)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "DlibLandmarker: image type {} (need CV_8UC3 BGR or CV_8UC1)",
+                        image.type());
+    using Out = std::optional<std::vector<cv::Point2d>>;
+    if (image.empty() || !(box.width >= options_.min_box_px) || !(box.height > 0)) return Out{};
+    const cv::Rect2d inside = box & cv::Rect2d(0, 0, image.cols, image.rows);
+    if (inside.area() < options_.min_box_inside * box.area()) return Out{};
+    {  // contrast: a uniform patch carries no landmark information
+      cv::Mat patch = image(cv::Rect(inside) & cv::Rect(0, 0, image.cols, image.rows));
+      if (patch.empty()) return Out{};
+      cv::Mat grey;
+      if (patch.channels() == 3)
+        cv::cvtColor(patch, grey, cv::COLOR_BGR2GRAY);
+      else
+        grey = patch;
+      cv::Scalar mean, sd;
+      cv::meanStdDev(grey, mean, sd);
+      if (sd[0] < options_.min_contrast) return Out{};
+    }
+    // No copy: dlib views the cv::Mat buffer (const use only).
+    if (image.type() == CV_8UC3) return Out{run(dlib::cv_image<dlib::bgr_pixel>(image), box)};
+    return Out{run(dlib::cv_image<unsigned char>(image), box)};
+  }
+
+ private:
+  template <typename Image>
+  std::vector<cv::Point2d> run(const Image& img, cv::Rect2d box) const {
+    std::vector<cv::Point2d> pts = model_.predict(img, to_dlib(box));
+    for (int pass = 0; pass < options_.refit_passes; ++pass) {
+      // The box that maps the mean shape's extent onto the fitted points' extent.
+      double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+      for (const cv::Point2d& p : pts) {
+        x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
+        x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+      }
+      const cv::Rect2d& m = model_.mean_extent;
+      const double w = (x1 - x0) / m.width, h = (y1 - y0) / m.height;
+      if (!(w >= options_.min_box_px) || !(h > 0)) break;
+      box = cv::Rect2d(x0 - m.x * w, y0 - m.y * h, w, h);
+      pts = model_.predict(img, to_dlib(box));
+    }
+    return pts;
+  }
+
+  DlibLandmarkerOptions options_;
+  ShapeModel model_;
+};
+
+}  // namespace
+
+Status DlibLandmarkerOptions::check() const {
+  std::string bad;
+  if (model.empty()) bad += " model path empty;";
+  if (refit_passes < 0 || refit_passes > 5) bad += " refit_passes must be in [0, 5];";
+  if (!(min_box_px >= 8)) bad += " min_box_px must be >= 8;";
+  if (!(min_contrast >= 0)) bad += " min_contrast must be >= 0;";
+  if (!(min_box_inside > 0 && min_box_inside <= 1)) bad += " min_box_inside must be in (0, 1];";
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "DlibLandmarkerOptions:{}", bad);
+  return ok_status();
+}
+
+Result<std::unique_ptr<Landmarker>> make_dlib_landmarker(const DlibLandmarkerOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  if (!std::filesystem::exists(options.model))
+    return make_error(ErrorCode::kNotFound,
+                      "{}: dlib landmark model not found (install the Debian package "
+                      "libdlib-data, or set DlibLandmarkerOptions::model)",
+                      options.model.string());
+  std::ifstream in(options.model, std::ios::binary);
+  if (!in)
+    return make_error(ErrorCode::kIoError, "{}: cannot open the dlib landmark model",
+                      options.model.string());
+  ShapeModel m;
+  try {
+    int version = 0;
+    dlib::deserialize(version, in);
+    if (version != 1)
+      return make_error(ErrorCode::kUnsupported, "{}: shape_predictor version {} (expected 1)",
+                        options.model.string(), version);
+    dlib::deserialize(m.initial_shape, in);
+    dlib::deserialize(m.forests, in);
+    dlib::deserialize(m.anchor_idx, in);
+    dlib::deserialize(m.deltas, in);
+  } catch (const dlib::serialization_error& e) {
+    return make_error(ErrorCode::kCorruptData, "{}: not a dlib shape_predictor ({})",
+                      options.model.string(), e.what());
+  }
+  if (m.initial_shape.size() < 2 || m.initial_shape.size() % 2 != 0 ||
+      m.forests.size() != m.anchor_idx.size() || m.forests.size() != m.deltas.size())
+    return make_error(ErrorCode::kCorruptData, "{}: inconsistent shape_predictor",
+                      options.model.string());
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (long i = 0; i < m.initial_shape.size() / 2; ++i) {
+    x0 = std::min<double>(x0, m.initial_shape(2 * i)),
+    x1 = std::max<double>(x1, m.initial_shape(2 * i));
+    y0 = std::min<double>(y0, m.initial_shape(2 * i + 1));
+    y1 = std::max<double>(y1, m.initial_shape(2 * i + 1));
+  }
+  m.mean_extent = cv::Rect2d(x0, y0, x1 - x0, y1 - y0);
+  return std::unique_ptr<Landmarker>(new DlibLandmarker(options, std::move(m)));
+}
+
+}  // namespace dreamsense::face_landmarks

@@ -1,0 +1,89 @@
+#include "dreamsense/face_landmarks/face_landmarks_analyzer.hpp"
+
+#include <set>
+
+namespace dreamsense::face_landmarks {
+namespace {
+
+class FaceLandmarksAnalyzer : public Analyzer {
+ public:
+  FaceLandmarksAnalyzer(FaceLandmarksAnalyzerOptions o, std::shared_ptr<const Landmarker> l)
+      : options_(std::move(o)), landmarker_(std::move(l)) {}
+
+  std::string_view name() const override { return "face_landmarks"; }
+  AnalyzerContract contract() const override {
+    return {{}, options_.cameras, {keys::kSelectedCamera.name}, {keys::kFaceLandmarks.name}};
+  }
+
+  Status process(const MultiFrame& in, const BlackboardView& prior,
+                 BlackboardWriter& out) override {
+    const auto sel = prior.get(keys::kSelectedCamera);
+    if (!sel || sel->stamp != in.stamp) return ok_status();  // no camera frame this tick
+    if (!sel->present()) {
+      out.set_absent(keys::kFaceLandmarks, in.stamp);
+      return ok_status();
+    }
+    const SelectedCamera& s = *sel->value;
+    const FramePtr f = in.frame(s.camera);
+    const ColorImage* img = f ? f->as<ColorImage>() : nullptr;
+    if (img == nullptr) {
+      if (f)
+        return make_error(ErrorCode::kInvalidArgument,
+                          "face_landmarks: stream '{}' is not a colour stream", s.camera);
+      out.set_absent(keys::kFaceLandmarks, in.stamp);
+      return ok_status();
+    }
+    auto pts = landmarker_->fit(img->image, s.face.box_px);
+    if (!pts) return tl::unexpected(pts.error());
+    if (!*pts) {
+      out.set_absent(keys::kFaceLandmarks, in.stamp);
+      return ok_status();
+    }
+    FaceLandmarks lm;
+    lm.camera = s.camera;
+    lm.frame_stamp = f->stamp;
+    lm.frame_sequence = f->sequence;
+    lm.image_size = img->image.size();
+    lm.box_px = s.face.box_px;
+    lm.points_px = std::move(**pts);
+    out.set(keys::kFaceLandmarks, std::move(lm), in.stamp, sel->confidence);
+    return ok_status();
+  }
+
+ private:
+  FaceLandmarksAnalyzerOptions options_;
+  std::shared_ptr<const Landmarker> landmarker_;
+};
+
+}  // namespace
+
+Status FaceLandmarksAnalyzerOptions::check() const {
+  std::set<SensorId> seen;
+  for (const SensorId& c : cameras)
+    if (c.empty() || !seen.insert(c).second)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "FaceLandmarksAnalyzerOptions: empty or repeated camera id '{}'", c);
+  return dlib.check();
+}
+
+Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
+    const FaceLandmarksAnalyzerOptions& options, std::shared_ptr<const Landmarker> landmarker) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  if (!landmarker)
+    return make_error(ErrorCode::kInvalidArgument, "make_face_landmarks_analyzer: no landmarker");
+  if (landmarker->point_count() != kFaceLandmarkCount)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "make_face_landmarks_analyzer: landmarker '{}' gives {} points, need {}",
+                      landmarker->name(), landmarker->point_count(), kFaceLandmarkCount);
+  return std::unique_ptr<Analyzer>(new FaceLandmarksAnalyzer(options, std::move(landmarker)));
+}
+
+Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
+    const FaceLandmarksAnalyzerOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  auto l = make_dlib_landmarker(options.dlib);
+  if (!l) return tl::unexpected(l.error());
+  return make_face_landmarks_analyzer(options, std::shared_ptr<const Landmarker>(std::move(*l)));
+}
+
+}  // namespace dreamsense::face_landmarks

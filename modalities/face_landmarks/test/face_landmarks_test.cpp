@@ -1,0 +1,202 @@
+// face_landmarks: DlibLandmarker unit tests, the analyser's blackboard behaviour, and landmark
+// sanity on a 3 s demo session (eye landmarks vs truth eyes_px).
+
+#include "dreamsense/face_landmarks/face_landmarks_analyzer.hpp"
+#include "dreamsense/face_landmarks/landmarker.hpp"
+#include "dreamsense/sim/face_renderer.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <iostream>
+
+#include "demo_face.hpp"
+
+namespace dreamsense::face_landmarks {
+namespace {
+
+// The 100 MB model is loaded once per test binary.
+std::shared_ptr<const Landmarker> shared_landmarker() {
+  static std::shared_ptr<const Landmarker> l = [] {
+    auto r = make_dlib_landmarker();
+    if (!r) throw std::runtime_error(r.error().to_string());
+    return std::shared_ptr<const Landmarker>(std::move(*r));
+  }();
+  return l;
+}
+
+const sim::PlanarFaceOptions kPortrait;
+
+cv::Mat portrait() { return cv::imread(kPortrait.portrait.string(), cv::IMREAD_COLOR); }
+
+TEST(DlibLandmarkerOptions, CheckListsBadFields) {
+  DlibLandmarkerOptions o;
+  o.refit_passes = -1;
+  o.min_box_px = 1;
+  auto s = o.check();
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("refit_passes"), std::string::npos);
+  EXPECT_NE(s.error().message.find("min_box_px"), std::string::npos);
+  EXPECT_TRUE(DlibLandmarkerOptions{}.check());
+}
+
+TEST(DlibLandmarker, MissingModelNamesFileAndPackage) {
+  DlibLandmarkerOptions o;
+  o.model = "/nonexistent/shape_predictor_68_face_landmarks.dat";
+  auto r = make_dlib_landmarker(o);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(r.error().message.find("/nonexistent/shape_predictor_68"), std::string::npos);
+  EXPECT_NE(r.error().message.find("libdlib-data"), std::string::npos);
+}
+
+TEST(DlibLandmarker, PortraitEyesAtHandMeasuredIrises) {
+  const cv::Mat img = portrait();
+  ASSERT_FALSE(img.empty());
+  auto l = shared_landmarker();
+  EXPECT_EQ(l->point_count(), kFaceLandmarkCount);
+  for (bool grey : {false, true}) {
+    cv::Mat in = img;
+    if (grey) cv::cvtColor(img, in, cv::COLOR_BGR2GRAY);
+    auto r = l->fit(in, kPortrait.face_region_px);
+    ASSERT_TRUE(r);
+    ASSERT_TRUE(r->has_value());
+    FaceLandmarks lm;
+    lm.points_px = **r;
+    ASSERT_EQ(lm.points_px.size(), 68u);
+    // Eye-contour centroids vs the irises measured by hand (sim/face_renderer.hpp).
+    EXPECT_LT(cv::norm(lm.right_eye_px() - kPortrait.right_eye_px), 3.0) << "grey " << grey;
+    EXPECT_LT(cv::norm(lm.left_eye_px() - kPortrait.left_eye_px), 3.0) << "grey " << grey;
+    // Nose tip below the eyes, mouth below the nose.
+    EXPECT_GT(lm.points_px[30].y, lm.right_eye_px().y + 10);
+    EXPECT_GT(lm.points_px[57].y, lm.points_px[30].y + 5);
+  }
+}
+
+TEST(DlibLandmarker, BoxConventionDoesNotMatterMuch) {
+  // A box 20% larger and shifted (another detector's convention) gives nearly the same eyes.
+  auto l = shared_landmarker();
+  const cv::Mat img = portrait();
+  const cv::Rect2d b = kPortrait.face_region_px;
+  const cv::Rect2d big(b.x - 0.1 * b.width, b.y - 0.2 * b.height, 1.2 * b.width, 1.2 * b.height);
+  auto a = l->fit(img, b), c = l->fit(img, big);
+  ASSERT_TRUE(a && *a && c && *c);
+  for (int i : {36, 39, 42, 45, 30}) EXPECT_LT(cv::norm((**a)[i] - (**c)[i]), 2.5) << i;
+}
+
+TEST(DlibLandmarker, NegativeCases) {
+  auto l = shared_landmarker();
+  const cv::Mat grey_image(480, 640, CV_8UC3, cv::Scalar(128, 128, 128));
+  auto r = l->fit(grey_image, cv::Rect2d(200, 150, 120, 120));
+  ASSERT_TRUE(r);
+  EXPECT_FALSE(r->has_value()) << "uniform grey box";
+  r = l->fit(portrait(), cv::Rect2d(200, 100, 10, 10));
+  ASSERT_TRUE(r);
+  EXPECT_FALSE(r->has_value()) << "tiny box";
+  r = l->fit(portrait(), cv::Rect2d(600, 600, 100, 100));
+  ASSERT_TRUE(r);
+  EXPECT_FALSE(r->has_value()) << "box outside the image";
+  r = l->fit(cv::Mat(100, 100, CV_32F, cv::Scalar(0)), cv::Rect2d(10, 10, 50, 50));
+  EXPECT_FALSE(r) << "unsupported image type is an error";
+}
+
+// ---- Analyser ----
+
+MultiFrame one_frame(const SensorId& cam, const cv::Mat& img, Timestamp t) {
+  MultiFrame mf;
+  mf.stamp = t;
+  mf.frames[cam] = make_frame(cam, t, 7, ColorImage{img});
+  return mf;
+}
+
+TEST(FaceLandmarksAnalyzer, BlackboardBehaviour) {
+  auto a = make_face_landmarks_analyzer({}, shared_landmarker());
+  ASSERT_TRUE(a);
+  EXPECT_EQ((*a)->contract().writes, std::vector<std::string>{keys::kFaceLandmarks.name});
+  const Timestamp t = Timestamp::from_seconds(1);
+  const MultiFrame mf = one_frame("camera_middle", portrait(), t);
+  {  // no selection entry this tick: nothing written
+    Blackboard bb;
+    BlackboardWriter w("face_landmarks");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    EXPECT_TRUE(w.empty());
+  }
+  {  // absent selection (no face): absent landmarks
+    Blackboard bb;
+    BlackboardWriter d("face_detection");
+    d.set_absent(keys::kSelectedCamera, t);
+    bb.commit(d, t);
+    BlackboardWriter w("face_landmarks");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    auto e = bb.snapshot().get(keys::kFaceLandmarks);
+    ASSERT_TRUE(e);
+    EXPECT_FALSE(e->present());
+  }
+  {  // a selected face: 68 landmarks with the frame's stamp and the detection score
+    Blackboard bb;
+    BlackboardWriter d("face_detection");
+    SelectedCamera s;
+    s.camera = "camera_middle";
+    s.face.box_px = kPortrait.face_region_px;
+    s.face.score = 0.9f;
+    d.set(keys::kSelectedCamera, s, t, 0.9f);
+    bb.commit(d, t);
+    BlackboardWriter w("face_landmarks");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    auto e = bb.snapshot().get(keys::kFaceLandmarks);
+    ASSERT_TRUE(e && e->present());
+    EXPECT_EQ(e->value->camera, "camera_middle");
+    EXPECT_EQ(e->value->frame_sequence, 7u);
+    EXPECT_EQ(e->value->points_px.size(), 68u);
+    EXPECT_FLOAT_EQ(e->confidence, 0.9f);
+    // The selected camera has no frame in this tick: absent.
+    s.camera = "camera_left";
+    BlackboardWriter d2("face_detection");
+    d2.set(keys::kSelectedCamera, s, t + Duration::from_ms(40), 0.9f);
+    bb.commit(d2, t + Duration::from_ms(40));
+    MultiFrame mf2 = one_frame("camera_middle", portrait(), t + Duration::from_ms(40));
+    BlackboardWriter w2("face_landmarks");
+    ASSERT_TRUE((*a)->process(mf2, bb.snapshot(), w2));
+    bb.commit(w2, t + Duration::from_ms(40));
+    e = bb.snapshot().get(keys::kFaceLandmarks);
+    ASSERT_TRUE(e);
+    EXPECT_FALSE(e->present());
+  }
+}
+
+// ---- Demo session ----
+
+TEST(FaceLandmarksDemo, EyeLandmarksNearTruthEyes) {
+  const auto& run = face_testing::demo_run(shared_landmarker());
+  std::vector<double> err, ms;
+  int selected = 0, fitted = 0;
+  for (const auto& t : run.ticks) {
+    if (!t.selected) continue;
+    ++selected;
+    if (!t.landmarks) continue;
+    ++fitted;
+    ms.push_back(t.landmark_ms);
+    ASSERT_NE(t.truth, nullptr);
+    const auto& ct = t.truth->cameras.at(t.landmarks->camera);
+    if (!ct.visible) continue;
+    err.push_back(cv::norm(t.landmarks->left_eye_px() - ct.left_eye_px));
+    err.push_back(cv::norm(t.landmarks->right_eye_px() - ct.right_eye_px));
+  }
+  const double med = face_testing::median(err);
+  std::vector<double> sorted = err;
+  std::sort(sorted.begin(), sorted.end());
+  const double p90 = sorted.empty() ? NAN : sorted[sorted.size() * 9 / 10];
+  std::cout << "[demo s3 3s] ticks " << run.ticks.size() << ", selected " << selected
+            << ", landmarks " << fitted << ", eye error median " << med << " px, p90 " << p90
+            << " px, landmarks ms/face median " << face_testing::median(ms) << "\n";
+  RecordProperty("eye_error_median_px", std::to_string(med));
+  EXPECT_GT(selected, 40);
+  EXPECT_EQ(fitted, selected);
+  EXPECT_LT(med, 3.0);
+}
+
+}  // namespace
+}  // namespace dreamsense::face_landmarks

@@ -1,0 +1,30 @@
+#pragma once
+// Head pose analyser: keys::kFaceLandmarks -> keys::kHeadPose.
+//
+// Per tick, reads kFaceLandmarks (written earlier in the same tick by face_landmarks):
+//  - no landmarks entry stamped with this tick: writes nothing;
+//  - absent landmarks, or the fit rejected: absent kHeadPose;
+//  - otherwise kHeadPose (smoothed unless options.filter.enabled is false), confidence = the
+//    landmarks' confidence * (1 - rms / (max_rms_per_interocular * inter-ocular px)).
+// A landmarks camera without a CameraModel in options.cameras is an error (configuration).
+
+#include "dreamsense/core/analyzer.hpp"
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/head_pose/head_pose_estimator.hpp"
+#include "dreamsense/head_pose/pose_filter.hpp"
+
+#include <map>
+#include <memory>
+
+namespace dreamsense::head_pose {
+
+struct HeadPoseAnalyzerOptions {
+  std::map<SensorId, CameraModel> cameras;  // intrinsics + camera_from_world per colour stream
+  HeadPoseEstimatorOptions estimator;
+  PoseFilterOptions filter;
+  Status check() const;
+};
+
+Result<std::unique_ptr<Analyzer>> make_head_pose_analyzer(const HeadPoseAnalyzerOptions& options);
+
+}  // namespace dreamsense::head_pose

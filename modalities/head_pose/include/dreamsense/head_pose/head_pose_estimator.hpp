@@ -1,0 +1,54 @@
+#pragma once
+// Head pose from 2-D landmarks and a 3-D face model by PnP: SQPnP (Terzakis & Lourakis, ECCV
+// 2020; global, no initial guess) followed by Levenberg-Marquardt refinement of the reprojection
+// error (cv::solvePnPRefineLM), with the camera's intrinsics and distortion; then camera -> world
+// through the camera's extrinsics. Method and numbers: modalities/head_pose/README.md.
+
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/head_pose/face_model.hpp"
+
+#include <optional>
+#include <vector>
+
+namespace dreamsense::head_pose {
+
+struct HeadPoseEstimatorOptions {
+  FaceModel3d model = generic_face_model();
+  // Reject fits whose RMS reprojection error exceeds this fraction of the inter-ocular distance
+  // in pixels (a wrong landmark fit or a model that does not explain the points).
+  double max_rms_per_interocular = 0.15;
+  // Reject poses whose face normal points away from the camera by more than this (deg): the
+  // camera would not see the face (PnP's mirror solution, a false landmark fit).
+  double max_angle_to_camera_deg = 85;
+  Status check() const;
+};
+
+// The raw PnP fit in one camera's frame.
+struct PnpFit {
+  cv::Matx33d camera_from_head = cv::Matx33d::eye();
+  cv::Vec3d position_camera_m{0, 0, 1};
+  double rms_px = 0;
+  int points_used = 0;
+};
+
+// Fits `options.model` to `landmarks_px` (68 points, pixels of `camera`'s image). nullopt when
+// the fit is rejected (see options) or fails; `landmarks_px` of the wrong size is an error.
+Result<std::optional<PnpFit>> fit_head_pose(const std::vector<cv::Point2d>& landmarks_px,
+                                            const CameraModel& camera,
+                                            const HeadPoseEstimatorOptions& options);
+
+// Fills the world-frame fields (rotation, position, yaw/pitch/roll, head-gaze ray) of a HeadPose
+// from a camera-frame fit and the camera's extrinsics.
+HeadPose make_head_pose(const PnpFit& fit, const CameraModel& camera, const SensorId& camera_id,
+                        Timestamp frame_stamp);
+// Recomputes yaw/pitch/roll and the gaze ray from world_from_head and position_world_m.
+void update_derived(HeadPose& pose);
+
+// Inverse of rotation_from_ypr_deg (R = Ry(yaw) Rx(pitch) Rz(roll)): (yaw, pitch, roll) in
+// degrees, pitch in [-90, 90].
+cv::Vec3d ypr_deg_from_rotation(const cv::Matx33d& R);
+// Angle of the rotation A^T B (deg): the angular distance between two orientations.
+double rotation_angle_deg(const cv::Matx33d& A, const cv::Matx33d& B);
+
+}  // namespace dreamsense::head_pose

@@ -1,0 +1,287 @@
+// head_pose: synthetic PnP recovery, noise robustness, negative cases, the pose filter and the
+// analyser's blackboard behaviour.
+
+#include "dreamsense/head_pose/face_model.hpp"
+#include "dreamsense/head_pose/head_pose_analyzer.hpp"
+#include "dreamsense/head_pose/head_pose_estimator.hpp"
+#include "dreamsense/head_pose/pose_filter.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace dreamsense::head_pose {
+namespace {
+
+// A 1280x960 camera 1.1 m in front of the child, looking at it from `x` metres to the side.
+CameraModel camera_at(double x, bool distorted = false) {
+  CameraModel c;
+  c.frame = "camera_middle";
+  c.image_size = {1280, 960};
+  c.K = cv::Matx33d(1100, 0, 640, 0, 1100, 480, 0, 0, 1);
+  if (distorted) c.distortion = (cv::Mat_<double>(1, 5) << -0.12, 0.05, 0.001, -0.0005, 0);
+  look_at({x, -0.05, 0.0}, {0, -0.05, 1.1}, {0, 1, 0}, c.R, c.t);
+  return c;
+}
+
+// 68 landmarks of `model_points` (all 68, head frame) at a world pose, projected by `cam`.
+std::vector<cv::Point2d> project(const std::vector<cv::Point3d>& head_points,
+                                 const cv::Matx33d& world_from_head, const cv::Vec3d& pos,
+                                 const CameraModel& cam) {
+  std::vector<cv::Point2d> out;
+  for (const cv::Point3d& p : head_points) {
+    auto px = cam.project(world_from_head * cv::Vec3d(p.x, p.y, p.z) + pos);
+    out.push_back(px ? *px : cv::Point2d(NAN, NAN));
+  }
+  return out;
+}
+
+TEST(HeadPoseMath, YawPitchRollRoundTrip) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> yaw(-170, 170), pitch(-80, 80), roll(-170, 170);
+  for (int i = 0; i < 200; ++i) {
+    const double y = yaw(rng), p = pitch(rng), r = roll(rng);
+    const cv::Vec3d ypr = ypr_deg_from_rotation(rotation_from_ypr_deg(y, p, r));
+    EXPECT_NEAR(ypr[0], y, 1e-9);
+    EXPECT_NEAR(ypr[1], p, 1e-9);
+    EXPECT_NEAR(ypr[2], r, 1e-9);
+  }
+  // Truth conventions: positive yaw turns the gaze towards world -x, positive pitch looks down.
+  EXPECT_LT((rotation_from_ypr_deg(20, 0, 0) * cv::Vec3d(0, 0, -1))[0], 0);
+  EXPECT_GT((rotation_from_ypr_deg(0, 20, 0) * cv::Vec3d(0, 0, -1))[1], 0);
+}
+
+TEST(FaceModels, AreValidAndInTheHeadFrame) {
+  for (const FaceModel3d& m :
+       {generic_face_model(), generic_face_model(true), dream13_face_model()})
+    EXPECT_TRUE(m.check()) << m.name;
+  EXPECT_EQ(generic_face_model().points_m.size(), 51u);
+  EXPECT_EQ(generic_face_model(true).points_m.size(), 68u);
+  const auto& g = generic_68_points_m();
+  // Subject's right eye (36-41) on head -x, nose tip in front (-z) and below the eyes (+y).
+  EXPECT_LT(g[36].x, 0);
+  EXPECT_GT(g[45].x, 0);
+  EXPECT_LT(g[30].z, -0.02);
+  EXPECT_GT(g[30].y, 0.02);
+  EXPECT_NEAR(cv::norm(g[36] - g[45]), 0.094, 1e-3);
+  FaceModel3d bad = generic_face_model();
+  bad.landmark_index[0] = 70;
+  EXPECT_FALSE(bad.check());
+}
+
+struct Case {
+  double yaw, pitch, roll, cam_x;
+  bool distorted;
+};
+
+TEST(HeadPoseEstimator, RecoversKnownPoseExactly) {
+  const Case cases[] = {{0, 0, 0, 0, false},       {30, -10, 5, 0, false},
+                        {-45, 12, -8, 0.3, true},  {55, 15, 10, -0.4, true},
+                        {-20, -15, 0, 0.5, false}, {10, 5, -10, 0, true}};
+  for (bool dream : {false, true}) {
+    HeadPoseEstimatorOptions o;
+    if (dream) o.model = dream13_face_model();
+    ASSERT_TRUE(o.check());
+    std::vector<cv::Point3d> all(68, cv::Point3d(0, 0, 0));
+    for (size_t i = 0; i < o.model.landmark_index.size(); ++i)
+      all[static_cast<size_t>(o.model.landmark_index[i])] = o.model.points_m[i];
+    // Points outside the model (dream13) still need finite eye contours for the inter-ocular
+    // distance: use the generic ones there.
+    for (int i = 36; i < 48; ++i)
+      if (std::find(o.model.landmark_index.begin(), o.model.landmark_index.end(), i) ==
+          o.model.landmark_index.end())
+        all[static_cast<size_t>(i)] = generic_68_points_m()[static_cast<size_t>(i)];
+    for (const Case& c : cases) {
+      const CameraModel cam = camera_at(c.cam_x, c.distorted);
+      const cv::Matx33d R = rotation_from_ypr_deg(c.yaw, c.pitch, c.roll);
+      const cv::Vec3d pos(0.02, -0.04, 1.08);
+      auto fit = fit_head_pose(project(all, R, pos, cam), cam, o);
+      ASSERT_TRUE(fit);
+      ASSERT_TRUE(fit->has_value()) << o.model.name << " yaw " << c.yaw;
+      const HeadPose p = make_head_pose(**fit, cam, "camera_middle", Timestamp::from_seconds(1));
+      EXPECT_LT(rotation_angle_deg(p.world_from_head, R), 0.5) << o.model.name << " " << c.yaw;
+      EXPECT_NEAR(p.yaw_deg, c.yaw, 0.5);
+      EXPECT_NEAR(p.pitch_deg, c.pitch, 0.5);
+      EXPECT_NEAR(p.roll_deg, c.roll, 0.5);
+      EXPECT_LT(cv::norm(p.position_world_m - pos), 1e-3);
+      EXPECT_LT(cv::norm(p.gaze_direction_world - R * cv::Vec3d(0, 0, -1)), 1e-2);
+      EXPECT_LT(p.reprojection_rms_px, 0.01);
+      EXPECT_EQ(p.points_used, static_cast<int>(o.model.points_m.size()));
+    }
+  }
+}
+
+TEST(HeadPoseEstimator, NoiseRobustness) {
+  // 1 px landmark noise on a ~60 px inter-ocular face (1.1 m, f = 1100 px).
+  HeadPoseEstimatorOptions o;
+  const CameraModel cam = camera_at(0);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0, 1.0);
+  std::uniform_real_distribution<double> yaw(-50, 50), pitch(-15, 15), roll(-10, 10);
+  std::vector<double> err;
+  int rejected = 0;
+  for (int i = 0; i < 200; ++i) {
+    const cv::Matx33d R = rotation_from_ypr_deg(yaw(rng), pitch(rng), roll(rng));
+    const cv::Vec3d pos(0, -0.05, 1.1);
+    auto pts = project(generic_68_points_m(), R, pos, cam);
+    for (auto& p : pts) p += cv::Point2d(noise(rng), noise(rng));
+    auto fit = fit_head_pose(pts, cam, o);
+    ASSERT_TRUE(fit);
+    if (!*fit) {
+      ++rejected;
+      continue;
+    }
+    err.push_back(rotation_angle_deg(make_head_pose(**fit, cam, "c", {}).world_from_head, R));
+  }
+  std::sort(err.begin(), err.end());
+  const double med = err[err.size() / 2], p90 = err[err.size() * 9 / 10];
+  std::cout << "[synthetic, 1 px noise] rotation error median " << med << " deg, p90 " << p90
+            << " deg, rejected " << rejected << "/200\n";
+  EXPECT_EQ(rejected, 0);
+  EXPECT_LT(med, 2.5);
+  EXPECT_LT(p90, 5.0);
+}
+
+TEST(HeadPoseEstimator, NegativeCases) {
+  HeadPoseEstimatorOptions o;
+  const CameraModel cam = camera_at(0);
+  EXPECT_FALSE(fit_head_pose(std::vector<cv::Point2d>(10), cam, o)) << "wrong size is an error";
+  // All landmarks on one pixel: no inter-ocular distance, no pose.
+  auto r = fit_head_pose(std::vector<cv::Point2d>(68, cv::Point2d(640, 480)), cam, o);
+  ASSERT_TRUE(r);
+  EXPECT_FALSE(r->has_value());
+  // Scrambled landmarks: the face model cannot explain them (rms too large).
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(500, 700);
+  std::vector<cv::Point2d> junk(68);
+  for (auto& p : junk) p = {u(rng), u(rng) - 100};
+  r = fit_head_pose(junk, cam, o);
+  ASSERT_TRUE(r);
+  EXPECT_FALSE(r->has_value());
+  // Non-finite landmarks are skipped, the rest still fits.
+  auto pts = project(generic_68_points_m(), cv::Matx33d::eye(), {0, -0.05, 1.1}, cam);
+  pts[50] = cv::Point2d(NAN, NAN);
+  r = fit_head_pose(pts, cam, o);
+  ASSERT_TRUE(r && r->has_value());
+  EXPECT_EQ((*r)->points_used, 50);
+}
+
+HeadPose pose_at(double t, double yaw, cv::Vec3d pos = {0, -0.05, 1.1}) {
+  HeadPose p;
+  p.frame_stamp = Timestamp::from_seconds(t);
+  p.world_from_head = rotation_from_ypr_deg(yaw, 0, 0);
+  p.position_world_m = pos;
+  update_derived(p);
+  return p;
+}
+
+TEST(PoseFilter, SmoothsJitterAndFollowsTurns) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> jitter(0, 2.0);
+  PoseFilter f;
+  std::vector<double> raw_err, filt_err;
+  for (int i = 0; i < 100; ++i) {
+    HeadPose p = pose_at(i * 0.04, 10 + jitter(rng));
+    raw_err.push_back(std::abs(p.yaw_deg - 10));
+    f.apply(p);
+    if (i > 10) filt_err.push_back(std::abs(p.yaw_deg - 10));
+    if (i > 0) {
+      EXPECT_TRUE(p.smoothed);
+    }
+    EXPECT_NEAR(cv::norm(p.gaze_direction_world), 1.0, 1e-9);
+  }
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return s / v.size();
+  };
+  EXPECT_LT(mean(filt_err), 0.7 * mean(raw_err));
+  // A 100 deg/s turn: the filtered yaw lags by only a few degrees.
+  PoseFilter g;
+  double lag = 0;
+  for (int i = 0; i < 50; ++i) {
+    HeadPose p = pose_at(i * 0.04, -50 + 4.0 * i);
+    g.apply(p);
+    lag = (-50 + 4.0 * i) - p.yaw_deg;
+  }
+  EXPECT_GT(lag, 0);
+  EXPECT_LT(lag, 6.0);
+  // A gap restarts the filter: the next pose passes unchanged.
+  HeadPose p = pose_at(10.0, 40);
+  g.apply(p);
+  EXPECT_FALSE(p.smoothed);
+  EXPECT_NEAR(p.yaw_deg, 40, 1e-9);
+  // Disabled: pass-through.
+  PoseFilterOptions off;
+  off.enabled = false;
+  PoseFilter h(off);
+  for (int i = 0; i < 5; ++i) {
+    HeadPose q = pose_at(i * 0.04, 3.0 * i);
+    h.apply(q);
+    EXPECT_FALSE(q.smoothed);
+    EXPECT_NEAR(q.yaw_deg, 3.0 * i, 1e-9);
+  }
+}
+
+TEST(HeadPoseAnalyzer, BlackboardBehaviour) {
+  HeadPoseAnalyzerOptions o;
+  EXPECT_FALSE(o.check()) << "no camera models";
+  const CameraModel cam = camera_at(0);
+  o.cameras["camera_middle"] = cam;
+  o.filter.enabled = false;
+  auto a = make_head_pose_analyzer(o);
+  ASSERT_TRUE(a);
+  const Timestamp t = Timestamp::from_seconds(2);
+  MultiFrame mf;
+  mf.stamp = t;
+  {  // no landmarks entry: nothing
+    Blackboard bb;
+    BlackboardWriter w("head_pose");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    EXPECT_TRUE(w.empty());
+  }
+  Blackboard bb;
+  {  // absent landmarks: absent pose
+    BlackboardWriter l("face_landmarks");
+    l.set_absent(keys::kFaceLandmarks, t);
+    bb.commit(l, t);
+    BlackboardWriter w("head_pose");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    auto e = bb.snapshot().get(keys::kHeadPose);
+    ASSERT_TRUE(e);
+    EXPECT_FALSE(e->present());
+  }
+  const cv::Matx33d R = rotation_from_ypr_deg(25, 5, -3);
+  FaceLandmarks lm;
+  lm.camera = "camera_middle";
+  lm.frame_stamp = t;
+  lm.points_px = project(generic_68_points_m(), R, {0, -0.05, 1.1}, cam);
+  {  // landmarks: a pose
+    BlackboardWriter l("face_landmarks");
+    l.set(keys::kFaceLandmarks, lm, t, 0.8f);
+    bb.commit(l, t);
+    BlackboardWriter w("head_pose");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    auto e = bb.snapshot().get(keys::kHeadPose);
+    ASSERT_TRUE(e && e->present());
+    EXPECT_NEAR(e->value->yaw_deg, 25, 0.5);
+    EXPECT_EQ(e->value->camera, "camera_middle");
+    EXPECT_NEAR(e->confidence, 0.8f, 0.01f);
+  }
+  {  // landmarks from a camera without a model: configuration error
+    lm.camera = "camera_left";
+    BlackboardWriter l("face_landmarks");
+    l.set(keys::kFaceLandmarks, lm, t + Duration::from_ms(40), 0.8f);
+    bb.commit(l, t + Duration::from_ms(40));
+    mf.stamp = t + Duration::from_ms(40);
+    BlackboardWriter w("head_pose");
+    auto s = (*a)->process(mf, bb.snapshot(), w);
+    ASSERT_FALSE(s);
+    EXPECT_NE(s.error().message.find("camera_left"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace dreamsense::head_pose

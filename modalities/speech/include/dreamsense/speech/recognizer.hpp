@@ -1,0 +1,105 @@
+#pragma once
+// Speech recognition against a grammar (F22 recognizeSpeech) with Debian's PocketSphinx
+// (0.8+5prealpha API) and the en-us continuous model. See README.md for the method.
+//
+// Out-of-grammar rejection: the grammar's finite-state graph gets a parallel garbage branch, a
+// free loop over the 39 CMU phones (each phone a one-phone "word"), from the start state to the
+// final state. The decoder's best path is then either a grammar sentence or a phone string;
+// a phone string means "not in the grammar" and yields no result. Confidence (0..1) is a
+// logistic of the per-frame path-score margin between the best grammar path and the best
+// garbage path (a second pass over the garbage branch alone, run only when the grammar won);
+// 0.5 = tie. ps_get_prob() is no use here: with FSG searches it returns 0 (posterior 1).
+
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/core/timestamp.hpp"
+#include "dreamsense/speech/srgs.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+
+namespace dreamsense::speech {
+
+struct RecognizerOptions {
+  // Debian package pocketsphinx-en-us.
+  std::filesystem::path model_dir = "/usr/share/pocketsphinx/model/en-us/en-us";
+  std::filesystem::path dictionary = "/usr/share/pocketsphinx/model/en-us/cmudict-en-us.dict";
+  int model_rate_hz = 16000;  // the acoustic model's rate; other input rates are resampled
+  bool reject_out_of_grammar = true;
+  // Weight of each phone in the garbage loop (FSG transition probability, (0, 1]). Higher =
+  // more rejections (fewer false accepts, more false rejects). 1 was measured best (README).
+  double garbage_phone_weight = 1.0;
+  // Optional extra threshold on the confidence, on top of the garbage-branch decision (which
+  // alone decides with the default 0). The confidence pass searches the garbage branch alone,
+  // so it can find a slightly better phone string than survived the joint beam: accepted
+  // utterances can have confidences a little under 0.5 (cards/004: 0.47).
+  double min_confidence = 0.0;
+  // Score units per 10 ms frame that map to one logistic unit in the confidence.
+  double confidence_scale = 10.0;
+  Status check() const;
+};
+
+// A grammar in the form the recogniser consumes: JSGF text plus, when it came from SRGS, the
+// SRGS tree that maps words back to tags.
+struct Grammar {
+  std::string jsgf;
+  std::optional<SrgsGrammar> srgs;
+  std::string source;  // file name or "<string>", for messages
+
+  static Result<Grammar> from_jsgf(std::string jsgf, std::string source = "<string>");
+  static Result<Grammar> from_jsgf_file(const std::filesystem::path& path);
+  static Result<Grammar> from_srgs(const std::string& xml, std::string source = "<string>");
+  static Result<Grammar> from_srgs_file(const std::filesystem::path& path);
+  // .grxml / .xml -> SRGS, anything else -> JSGF.
+  static Result<Grammar> from_file(const std::filesystem::path& path);
+};
+
+// What one decode produced, including rejected hypotheses (for evaluation and logs).
+struct Decoding {
+  std::string grammar_hypothesis;  // best grammar sentence (empty if the garbage path won or
+                                   // nothing was heard)
+  bool heard_speech = false;       // the decoder produced any word (grammar or garbage)
+  bool accepted = false;           // grammar path won and confidence >= min_confidence
+  double confidence = 0;
+  int first_frame = -1, last_frame = -1;  // 10 ms frames of the grammar words
+  double decode_seconds = 0;
+};
+
+class Recognizer {
+ public:
+  // Loads the model and compiles the grammar. Missing model: kNotFound naming the path and the
+  // Debian package; words missing from the dictionary: kInvalidArgument listing them.
+  static Result<std::unique_ptr<Recognizer>> create(const RecognizerOptions& options,
+                                                    const Grammar& grammar);
+  ~Recognizer();
+  Recognizer(const Recognizer&) = delete;
+  Recognizer& operator=(const Recognizer&) = delete;
+
+  // Decodes one whole utterance (mono). `start` is the stamp of the first sample.
+  // Returns nullopt when nothing in the grammar was said (silence, noise, other speech).
+  // Errors only for bad input (rate <= 0) or a decoder failure.
+  Result<std::optional<RecognizedSpeech>> recognize(std::span<const int16_t> samples,
+                                                    int sample_rate_hz,
+                                                    Timestamp start = Timestamp::from_ns(0));
+  // Float samples in [-1, 1].
+  Result<std::optional<RecognizedSpeech>> recognize(std::span<const float> samples,
+                                                    int sample_rate_hz,
+                                                    Timestamp start = Timestamp::from_ns(0));
+  // Same decode, with the details.
+  Result<Decoding> decode(std::span<const int16_t> samples, int sample_rate_hz);
+
+ private:
+  struct Impl;
+  explicit Recognizer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// Band-limited resampling (windowed-sinc, Kaiser beta 8, 32 zero crossings per side, low-pass at
+// the lower Nyquist), e.g. 8 kHz telephone/FSDD audio to the model's 16 kHz.
+std::vector<int16_t> resample(std::span<const int16_t> in, int from_hz, int to_hz);
+
+}  // namespace dreamsense::speech

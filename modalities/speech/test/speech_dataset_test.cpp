@@ -1,0 +1,36 @@
+// Dataset check (label dataset): 0 % sentence error on cards and goforward. Skips without data.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "speech_eval.hpp"
+
+namespace dreamsense::speech {
+namespace {
+
+std::filesystem::path data_dir() {
+  if (const char* d = std::getenv("DREAMSENSE_SPEECH_DATA")) return d;
+  const std::filesystem::path shared =
+      std::filesystem::path(DREAMSENSE_SOURCE_DIR) / "../shared/data/speech_pocketsphinx";
+  if (std::filesystem::exists(shared / "goforward.raw")) return shared;
+  return "/usr/share/pocketsphinx/test/data";
+}
+
+TEST(SpeechDataset, PocketsphinxGrammarsHaveNoSentenceErrors) {
+  SpeechEvalOptions o;
+  o.dir = data_dir();
+  if (!std::filesystem::exists(o.dir / "cards/cards.gram") ||
+      !std::filesystem::exists(RecognizerOptions{}.model_dir / "mdef"))
+    GTEST_SKIP() << "pocketsphinx test data or model absent (" << o.dir << ")";
+  auto r = run_speech_eval(o);
+  ASSERT_TRUE(r) << r.error().to_string();
+  const auto& m = (*r)["metrics"];
+  EXPECT_EQ(m["grammar_sentence_accuracy"].get<double>(), 1.0) << (*r)["items"].dump(1);
+  EXPECT_EQ((*r)["per_class"]["cards"]["grammar_sentence_accuracy"].get<double>(), 1.0);
+  EXPECT_EQ((*r)["per_class"]["goforward"]["grammar_sentence_accuracy"].get<double>(), 1.0);
+  EXPECT_LE(m["false_accept_rate"].get<double>(), 0.1);
+  EXPECT_LT((*r)["timing"]["rtf"].get<double>(), 1.0);
+}
+
+}  // namespace
+}  // namespace dreamsense::speech
