@@ -35,8 +35,8 @@ void add_bench(CLI::App& app, const GlobalFlags& g, int& exit_code);
 // Verbs of other modules, each in its own file (cmd_<module>.cpp).
 void add_calibrate(CLI::App& app, const GlobalFlags& g, int& exit_code);  // cmd_calibrate.cpp
 void add_eval_calibration(CLI::App& eval, const GlobalFlags& g,
-                          int& exit_code);                                // cmd_calibrate.cpp
-void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code);  // cmd_audio.cpp
+                          int& exit_code);                                   // cmd_calibrate.cpp
+void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code);     // cmd_audio.cpp
 void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code);  // cmd_speech.cpp
 
 }  // namespace dreamsense::app

@@ -58,7 +58,8 @@ Result<std::string> jsgf_to_fsg_text(const std::string& jsgf, const std::string&
         }
         static const std::regex bogus_line(R"( at line -?[0-9]+)");
         messages = std::regex_replace(l, bogus_line, "");
-        messages.insert(messages.begin(), ' ');  // (not " " + ...: GCC 12 -Wrestrict false positive)
+        messages.insert(messages.begin(),
+                        ' ');  // (not " " + ...: GCC 12 -Wrestrict false positive)
       }
     }
     std::fclose(log);

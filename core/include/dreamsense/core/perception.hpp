@@ -130,7 +130,7 @@ struct HeadPose {
   cv::Matx33d camera_from_head = cv::Matx33d::eye();
   cv::Vec3d position_camera_m{0, 0, 1};  // head-frame origin in that camera's frame
   cv::Matx33d world_from_head = cv::Matx33d::eye();
-  cv::Vec3d position_world_m{0, 0, 1};  // head-frame origin (between the eyes) in world
+  cv::Vec3d position_world_m{0, 0, 1};              // head-frame origin (between the eyes) in world
   double yaw_deg = 0, pitch_deg = 0, roll_deg = 0;  // of world_from_head (convention above)
   // Head-gaze ray in world: origin between the eyes, direction = world_from_head * (0, 0, -1).
   cv::Vec3d gaze_origin_world_m{0, 0, 1};
@@ -158,12 +158,12 @@ namespace dreamsense {
 // One utterance recognised against the session's grammar. Out-of-grammar speech, silence and
 // noise produce no RecognizedSpeech at all (absence, not an error).
 struct RecognizedSpeech {
-  std::string text;         // recognised words, lower case, single spaces ("go forward ten meters")
-  std::string tag;          // the grammar's output string (SRGS <tag>, as DREAM emitted); = text
-                            // when the grammar has no tag for that alternative
-  double confidence = 0;    // [0, 1]: grammar path against a free phone loop; 0.5 = a tie
-  Timestamp start, end;     // first and last frame of the recognised words (session clock)
-  SensorId sensor;          // the audio stream it came from
+  std::string text;       // recognised words, lower case, single spaces ("go forward ten meters")
+  std::string tag;        // the grammar's output string (SRGS <tag>, as DREAM emitted); = text
+                          // when the grammar has no tag for that alternative
+  double confidence = 0;  // [0, 1]: grammar path against a free phone loop; 0.5 = a tie
+  Timestamp start, end;   // first and last frame of the recognised words (session clock)
+  SensorId sensor;        // the audio stream it came from
 };
 
 namespace keys {
