@@ -14,6 +14,7 @@ namespace {
 struct AnalyzeFlags {
   std::string session, out;
   std::string policy = "settled";
+  std::string grammar;
 };
 
 void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path& out) {
@@ -56,11 +57,15 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--policy", flags->policy,
                   "Synchronisation: settled (deterministic replay) or live (real-time, drops)")
       ->check(CLI::IsMember({"settled", "live"}));
+  cmd->add_option("--grammar", flags->grammar,
+                  "Speech grammar (JSGF or SRGS .grxml); default: the session's own, if any")
+      ->check(CLI::ExistingFile);
   cmd->callback([flags, &g, &exit_code] {
     runner::AnalysisOptions o;
     o.session_dir = flags->session;
     o.out_dir = flags->out;
     o.policy = flags->policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
+    o.speech_grammar = flags->grammar;
     auto r = run_analysis_with_progress(o, g.quiet);
     if (!r) {
       exit_code = fail(r.error());

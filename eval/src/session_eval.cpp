@@ -41,6 +41,7 @@ const std::map<std::string, std::string> kMetricPrimitive = {
     {"body_joint_median_error_m", "getBodyPose"},
     {"camera_selection_accuracy_within_10deg", "getFaces"},
     {"face_position_median_m", "getFaces"},
+    {"speech_false_accept_rate", "recognizeSpeech"},
 };
 
 Result<std::vector<json>> read_jsonl(const fs::path& path) {
@@ -157,6 +158,46 @@ void evaluate_faces(const std::vector<json>& truth, const std::vector<json>& rec
   if (auto m = median(position_errors)) metrics["face_position_median_m"] = *m;
 }
 
+// Speech against the truth utterances: an in-grammar utterance is right when exactly its text
+// is recognised (an ok recognizeSpeech whose words overlap it); an out-of-grammar one is right
+// when nothing is recognised during it. speech_false_accept_rate: out-of-grammar utterances
+// with a recognition / out-of-grammar utterances.
+void evaluate_speech(const std::vector<json>& truth, const std::vector<json>& records,
+                     json& metrics, json& not_evaluated) {
+  std::vector<std::pair<int64_t, int64_t>> heard_spans;
+  std::vector<std::string> heard_text;
+  for (const auto& r : records)
+    if (r.value("primitive", "") == "recognizeSpeech" && r.value("status", "") == "ok") {
+      heard_spans.emplace_back(r["value"].value("start_ns", int64_t{0}),
+                               r["value"].value("end_ns", int64_t{0}));
+      heard_text.push_back(r["value"].value("text", ""));
+    }
+  int total = 0, right = 0, oog = 0, oog_accepted = 0;
+  for (const auto& t : truth) {
+    if (t.value("type", "") != "speech" || !t.contains("in_grammar")) continue;
+    const int64_t s = t.value("start_ns", int64_t{0}), e = t.value("end_ns", int64_t{0});
+    std::vector<std::string> said;
+    for (size_t i = 0; i < heard_spans.size(); ++i)
+      if (heard_spans[i].first < e && heard_spans[i].second > s) said.push_back(heard_text[i]);
+    ++total;
+    if (t.value("in_grammar", false)) {
+      if (said.size() == 1 && said[0] == t.value("text", "")) ++right;
+    } else {
+      ++oog;
+      if (said.empty())
+        ++right;
+      else
+        ++oog_accepted;
+    }
+  }
+  if (total == 0) {
+    not_evaluated["speech_accuracy"] = "the truth has no speech records with in_grammar";
+    return;
+  }
+  metrics["speech_accuracy"] = static_cast<double>(right) / total;
+  if (oog > 0) metrics["speech_false_accept_rate"] = static_cast<double>(oog_accepted) / oog;
+}
+
 }  // namespace
 
 Result<json> evaluate_session(const SessionEvalOptions& options) {
@@ -268,6 +309,7 @@ Result<json> evaluate_session(const SessionEvalOptions& options) {
   }
 
   if (enabled("getFaces")) evaluate_faces(*truth, *records, metrics, not_evaluated);
+  if (enabled("recognizeSpeech")) evaluate_speech(*truth, *records, metrics, not_evaluated);
 
   json out;
   out["task"] = "session";

@@ -27,7 +27,9 @@ Status EventLogWriter::write(const std::vector<primitives::PrimitiveRecord>& rec
     const auto& info = primitives::info(r.id);
     const int key = static_cast<int>(r.id);
     const std::string time = format_local_time(origin_ns_ + r.stamp.ns());
-    if (r.status == primitives::PrimitiveStatus::kOk && r.legacy) {
+    if (r.status == primitives::PrimitiveStatus::kOk && r.legacy_text) {
+      text += fmt::format("{};{};{}\n", info.port, time, *r.legacy_text);
+    } else if (r.status == primitives::PrimitiveStatus::kOk && r.legacy) {
       text += fmt::format("{};{}", info.port, time);
       for (double v : *r.legacy) text += fmt::format(";{:.6f}", v);
       text += '\n';

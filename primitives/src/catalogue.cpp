@@ -63,7 +63,9 @@ nlohmann::json to_json(const PrimitiveRecord& r) {
   j["status"] = to_string(r.status);
   j["confidence"] = r.confidence ? nlohmann::json(*r.confidence) : nlohmann::json(nullptr);
   j["value"] = r.value;
-  j["legacy"] = r.legacy ? nlohmann::json(*r.legacy) : nlohmann::json(nullptr);
+  j["legacy"] = r.legacy_text ? nlohmann::json::array({*r.legacy_text})
+                : r.legacy    ? nlohmann::json(*r.legacy)
+                              : nlohmann::json(nullptr);
   j["source"] = r.source.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.source);
   if (r.data_stamp.is_set()) j["data_stamp_ns"] = r.data_stamp.ns();
   if (!r.query.is_null()) j["query"] = r.query;

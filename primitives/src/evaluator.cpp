@@ -76,7 +76,31 @@ std::vector<PrimitiveRecord> Evaluator::evaluate(const MultiFrame& tick,
   if (!body_sensor_.empty()) evaluate_body(tick, view, out);
   if (!audio_sensor_.empty()) evaluate_sound_direction(tick, view, out);
   if (!face_cameras_.empty()) evaluate_faces(tick, view, out);
+  if (!speech_sensor_.empty()) evaluate_speech(tick, view, out);
   return out;
+}
+
+// F22 recognizeSpeech: ok at the tick an utterance in the grammar was recognised; no_data
+// otherwise (nothing new said: the last utterance is not repeated).
+void Evaluator::evaluate_speech(const MultiFrame& tick, const BlackboardView& view,
+                                std::vector<PrimitiveRecord>& out) {
+  PrimitiveRecord& r = out[static_cast<int>(PrimitiveId::kRecognizeSpeech) - 1];
+  r.source = speech_sensor_;
+  const auto entry = view.get(keys::kRecognizedSpeech);
+  if (entry) r.data_stamp = entry->stamp;
+  r.status = observation_status(entry, {speech_sensor_}, tick.stamp);
+  if (r.status == PrimitiveStatus::kStale ||
+      (r.status == PrimitiveStatus::kOk && entry->stamp != tick.stamp))
+    r.status = PrimitiveStatus::kNoData;  // reported once, at the tick it was recognised
+  if (r.status != PrimitiveStatus::kOk) return;
+  const RecognizedSpeech& s = *entry->value;
+  r.confidence = entry->confidence;
+  r.value = {{"text", s.text},
+             {"tag", s.tag},
+             {"confidence", s.confidence},
+             {"start_ns", s.start.ns()},
+             {"end_ns", s.end.ns()}};
+  r.legacy_text = s.tag;
 }
 
 // F7 getFaces: faces across cameras with their 3-D position, plus what each camera saw (so that

@@ -9,6 +9,7 @@
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
 #include "dreamsense/sound_direction/sound_direction_analyzer.hpp"
 #include "dreamsense/sources/session.hpp"
+#include "dreamsense/speech/speech_analyzer.hpp"
 
 namespace dreamsense::runner {
 namespace fs = std::filesystem;
@@ -128,6 +129,25 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     used.push_back(s.id);
   }
 
+  // Speech recognition on the same audio stream, when a grammar is known.
+  SensorId speech_sensor;
+  if (!audio_sensor.empty()) {
+    fs::path grammar = options.speech_grammar;
+    if (grammar.empty()) {
+      auto g = manifest.metadata.find("speech_grammar");
+      if (g != manifest.metadata.end()) grammar = (*full)->dir() / g->second;
+    }
+    if (!grammar.empty()) {
+      speech::SpeechAnalyzerOptions so;
+      so.audio_sensor = audio_sensor;
+      so.grammar = grammar;
+      auto a = speech::make_speech_analyzer(so);
+      if (!a) return tl::unexpected(a.error());
+      analyzers.push_back(std::move(*a));
+      speech_sensor = audio_sensor;
+    }
+  }
+
   // Face detection on the colour cameras that watch the child (ids "camera*", DREAM's three
   // 1280x960 cameras); their calibrations give the faces' 3-D positions.
   std::map<SensorId, CameraModel> face_cameras;
@@ -184,6 +204,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   }
   primitives::Evaluator evaluator(options.evaluator, body_sensor, audio_sensor);
   if (!face_cameras.empty()) evaluator.enable_faces(face_cameras);
+  if (!speech_sensor.empty()) evaluator.enable_speech(speech_sensor);
 
   auto on_tick = [&](const MultiFrame& tick, const BlackboardView& view) -> Status {
     const auto records = evaluator.evaluate(tick, view);

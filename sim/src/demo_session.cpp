@@ -714,6 +714,19 @@ std::vector<PlannedUtterance> plan_utterances(const DemoScript& script,
   return out;
 }
 
+// JSGF of the demo's speech commands: cards.gram and goforward.gram of pocketsphinx-testdata.
+constexpr const char* kDemoGrammar = R"(#JSGF V1.0;
+grammar demo;
+public <command> = <cards> | <move>;
+<cards> = <card> <card> <card> | <card> <card> | <card> | <rank> <card> | <rank> <rank>;
+<card> = <rank> [ of ] <suits>;
+<suits> = clubs | hearts | diamonds | spades;
+<rank> = ace | two | three | four | five | six | seven | eight | nine | ten | jack | queen | king | lady;
+<move> = go <direction> <distance> [ meter | meters ];
+<direction> = forward | backward;
+<distance> = one | two | three | four | five | six | seven | eight | nine | ten;
+)";
+
 Result<DemoSummary> generate_demo_session(const DemoOptions& options,
                                           const std::function<void(double)>& progress) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -759,7 +772,9 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
   manifest.task = "TT";
   manifest.frame_rate = options.camera_rate_hz;
   manifest.truth = "truth.jsonl";
-  manifest.metadata = {{"generator", kGenerator}, {"seed", std::to_string(options.seed)}};
+  manifest.metadata = {{"generator", kGenerator},
+                       {"seed", std::to_string(options.seed)},
+                       {"speech_grammar", "speech.gram"}};
   const int channels = static_cast<int>(g.mic_x_m.size());
   for (const auto& p : plans) {
     sources::StreamEntry e;
@@ -804,6 +819,15 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
           write_mic_calibration(dir / "calib" / "mic_array.yaml", g, options.audio_sample_rate);
       !st)
     return tl::unexpected(st.error());
+  // The command grammar of the session (what the robot listens for): the union of the two
+  // pocketsphinx-testdata grammars whose clips the child says. The LibriVox sentences the
+  // therapist reads are outside it and must be rejected.
+  {
+    std::ofstream g_out(dir / "speech.gram", std::ios::binary | std::ios::trunc);
+    g_out << kDemoGrammar;
+    if (!g_out)
+      return make_error(ErrorCode::kIoError, "{}: cannot write", (dir / "speech.gram").string());
+  }
 
   // ---- audio: image-source room + pink noise
   const auto& clips = gen.media().clips;
@@ -842,6 +866,8 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
     r["end_ns"] = static_cast<int64_t>(std::llround(s1 * 1e9));
     r["text"] = clip.text;
     r["source_file"] = clip.file;
+    // Said from the session's command grammar (speech.gram): the cards and goforward clips.
+    r["in_grammar"] = clip.file.rfind("librivox/", 0) != 0;
     r["speaker"] = clip.speaker;
     r["azimuth_deg"] = q(az, 1e4);
     r["elevation_deg"] = q(el, 1e4);

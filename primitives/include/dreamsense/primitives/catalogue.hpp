@@ -64,6 +64,7 @@ struct PrimitiveRecord {
   std::optional<double> confidence;
   nlohmann::json value;                       // null unless status is ok
   std::optional<std::vector<double>> legacy;  // DREAM layout, only when ok (or DREAM's "no face")
+  std::optional<std::string> legacy_text;     // DREAM strings (recognizeSpeech's tag) instead
   std::string source;                         // sensor that produced the data, empty if none
   Timestamp data_stamp;                       // stamp of the observation used (unset if none)
   nlohmann::json query;  // parameters of parametrised primitives (null otherwise)

@@ -40,6 +40,8 @@ class Evaluator {
   // Enables the face primitives (getFaces today) for these cameras (their calibrations give the
   // 3-D positions).
   void enable_faces(std::map<SensorId, CameraModel> cameras);
+  // Enables recognizeSpeech (F22) for the speech analyser's audio stream.
+  void enable_speech(SensorId audio_sensor) { speech_sensor_ = std::move(audio_sensor); }
 
   std::vector<PrimitiveRecord> evaluate(const MultiFrame& tick, const BlackboardView& view);
 
@@ -51,6 +53,8 @@ class Evaluator {
                                      const std::vector<SensorId>& sensors, Timestamp tick) const;
   void evaluate_faces(const MultiFrame& tick, const BlackboardView& view,
                       std::vector<PrimitiveRecord>& out);
+  void evaluate_speech(const MultiFrame& tick, const BlackboardView& view,
+                       std::vector<PrimitiveRecord>& out);
   PrimitiveRecord base(PrimitiveId id, Timestamp stamp) const;
   void evaluate_body(const MultiFrame& tick, const BlackboardView& view,
                      std::vector<PrimitiveRecord>& out);
@@ -60,6 +64,7 @@ class Evaluator {
   SensorId body_sensor_;
   SensorId audio_sensor_;
   std::map<SensorId, CameraModel> face_cameras_;
+  SensorId speech_sensor_;
   std::map<SensorId, Timestamp> last_seen_;
   Timestamp first_tick_ = Timestamp::unset();
 };

@@ -22,6 +22,9 @@ struct AnalysisOptions {
   SyncPolicy policy = SyncPolicy::kSettled;  // replay: settled (deterministic)
   bool pace_source = true;                   // live policy only
   primitives::EvaluatorOptions evaluator;
+  // Grammar for recognizeSpeech (JSGF or SRGS .grxml). Empty: the session's own
+  // (metadata speech_grammar, relative to the session folder), else speech recognition is off.
+  std::filesystem::path speech_grammar;
   Status check() const;
 };
 
