@@ -66,18 +66,22 @@ Result<CameraModel> read_camera_model(const std::filesystem::path& path) {
   }
 }
 
+void write_camera_model_keys(cv::FileStorage& fs, const CameraModel& m) {
+  fs << "frame" << m.frame;
+  fs << "image_width" << m.image_size.width << "image_height" << m.image_size.height;
+  fs << "camera_matrix" << cv::Mat(m.K);
+  fs << "distortion_coefficients" << m.distortion;
+  fs.writeComment("Extrinsics: camera_from_world, X_cam = R * X_world + t (metres)");
+  fs << "camera_from_world_R" << cv::Mat(m.R);
+  fs << "camera_from_world_t" << cv::Mat(m.t);
+}
+
 Status write_camera_model(const std::filesystem::path& path, const CameraModel& m) {
   try {
     cv::FileStorage fs(path.string(), cv::FileStorage::WRITE);
     if (!fs.isOpened())
       return make_error(ErrorCode::kIoError, "{}: cannot write calibration file", path.string());
-    fs << "frame" << m.frame;
-    fs << "image_width" << m.image_size.width << "image_height" << m.image_size.height;
-    fs << "camera_matrix" << cv::Mat(m.K);
-    fs << "distortion_coefficients" << m.distortion;
-    fs.writeComment("Extrinsics: camera_from_world, X_cam = R * X_world + t (metres)");
-    fs << "camera_from_world_R" << cv::Mat(m.R);
-    fs << "camera_from_world_t" << cv::Mat(m.t);
+    write_camera_model_keys(fs, m);
     return ok_status();
   } catch (const cv::Exception& e) {
     return make_error(ErrorCode::kIoError, "{}: {}", path.string(), e.msg);

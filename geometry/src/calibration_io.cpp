@@ -38,14 +38,8 @@ Status write_camera_yaml(const std::filesystem::path& path, const CameraModel& m
       cv::FileStorage fs(tmp.string(), cv::FileStorage::WRITE);
       if (!fs.isOpened())
         return make_error(ErrorCode::kIoError, "{}: cannot write calibration file", path.string());
-      // Same keys as dreamsense::write_camera_model, so read_camera_model reads this file.
-      fs << "frame" << m.frame;
-      fs << "image_width" << m.image_size.width << "image_height" << m.image_size.height;
-      fs << "camera_matrix" << cv::Mat(m.K);
-      fs << "distortion_coefficients" << m.distortion;
-      fs.writeComment("Extrinsics: camera_from_world, X_cam = R * X_world + t (metres)");
-      fs << "camera_from_world_R" << cv::Mat(m.R);
-      fs << "camera_from_world_t" << cv::Mat(m.t);
+      // The keys of dreamsense::write_camera_model, so read_camera_model reads this file.
+      write_camera_model_keys(fs, m);
       if (extra) extra(fs);
       return ok_status();
     } catch (const cv::Exception& e) {

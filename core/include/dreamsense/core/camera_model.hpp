@@ -41,6 +41,8 @@ struct CameraModel {
 
 Result<CameraModel> read_camera_model(const std::filesystem::path& path);
 Status write_camera_model(const std::filesystem::path& path, const CameraModel& model);
+// Writes the keys above into an open FileStorage (for files that add keys of their own).
+void write_camera_model_keys(cv::FileStorage& fs, const CameraModel& model);
 
 // Rotation matrix from yaw (about y), pitch (about x), roll (about z), degrees, applied as
 // R = Ry(yaw) * Rx(pitch) * Rz(roll).
