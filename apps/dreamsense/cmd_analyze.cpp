@@ -41,10 +41,8 @@ void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path
 
 Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o,
                                                            bool quiet) {
-  ProgressBar bar("analyse", quiet);
-  auto r = runner::analyze_session(o, [&](double f) { bar.update(f); });
-  bar.finish();
-  return r;
+  return with_progress("analyse", quiet,
+                       [&](const auto& progress) { return runner::analyze_session(o, progress); });
 }
 
 void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {

@@ -44,9 +44,9 @@ void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
       exit_code = fail(s.error());
       return;
     }
-    ProgressBar bar("eval doa", g.quiet);
-    auto r = sound_direction::run_doa_eval(flags->options, [&](double f) { bar.update(f); });
-    bar.finish();
+    auto r = with_progress("eval doa", g.quiet, [&](const auto& progress) {
+      return sound_direction::run_doa_eval(flags->options, progress);
+    });
     if (!r) {
       exit_code = fail(r.error());
       return;

@@ -10,9 +10,6 @@
 
 namespace dreamsense::app {
 
-Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o,
-                                                           bool quiet);
-
 namespace {
 struct DemoFlags {
   std::string out;
@@ -45,11 +42,9 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     o.seed = flags->seed;
     o.duration_s = flags->duration_s;
     o.overwrite = true;
-    Result<sim::DemoSummary> demo;
-    {
-      ProgressBar bar("generate", g.quiet);
-      demo = sim::generate_demo_session(o, [&](double f) { bar.update(f); });
-    }
+    Result<sim::DemoSummary> demo = with_progress("generate", g.quiet, [&](const auto& progress) {
+      return sim::generate_demo_session(o, progress);
+    });
     if (!demo) {
       exit_code = fail(demo.error());
       return;

@@ -10,9 +10,6 @@
 
 namespace dreamsense::app {
 
-Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o,
-                                                           bool quiet);
-
 namespace {
 struct EvalSessionFlags {
   std::string session, analysis, json;

@@ -45,9 +45,9 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
     }
     flags->options.dataset = flags->dataset[0];
     flags->options.dir = flags->dataset[1];
-    ProgressBar bar("eval speech", g.quiet);
-    auto r = speech::run_speech_eval(flags->options, [&](double f) { bar.update(f); });
-    bar.finish();
+    auto r = with_progress("eval speech", g.quiet, [&](const auto& progress) {
+      return speech::run_speech_eval(flags->options, progress);
+    });
     if (!r) {
       exit_code = fail(r.error());
       return;

@@ -2,6 +2,7 @@
 // Each verb is a thin layer: flags -> library options -> run -> exit code.
 
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/runner/analysis.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -23,6 +24,10 @@ inline constexpr int kExitFailure = 1;  // bad input or a failed run (one-line r
 // Prints "error: <message>" on one line and returns kExitFailure.
 int fail(const Error& e);
 int fail(const std::string& message);
+
+// Runs a session analysis with a progress bar (cmd_analyze.cpp); used by analyze, demo, eval.
+Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o,
+                                                           bool quiet);
 
 // Writes JSON to a file, or to stdout for "-". Empty target: does nothing.
 Status write_json(const std::string& target, const nlohmann::json& j);

@@ -20,4 +20,13 @@ class ProgressBar {
   std::chrono::steady_clock::time_point start_;
 };
 
+// Runs `work(progress)` with a bar labelled `label`; progress takes fractions in [0, 1].
+template <typename Work>
+auto with_progress(const std::string& label, bool quiet, Work&& work) {
+  ProgressBar bar(label, quiet);
+  auto result = work([&bar](double fraction) { bar.update(fraction); });
+  bar.finish();
+  return result;
+}
+
 }  // namespace dreamsense::app

@@ -64,6 +64,15 @@ class Builder {
     return ok_status();
   }
 
+  // An <item> (in a sequence or a <one-of>): a sequence with an optional repeat.
+  Status parse_item(const xml::Node& element, SrgsNode& item) {
+    item.kind = Kind::kSequence;
+    item.line = element.line;
+    if (auto it = element.attributes.find("repeat"); it != element.attributes.end())
+      if (auto st = parse_repeat(it->second, element.line, item); !st) return st;
+    return content(element, item);
+  }
+
   // Appends the nodes for an element's content to `seq` (a kSequence).
   Status content(const xml::Node& parent, SrgsNode& seq) {
     for (const auto& c : parent.children) {
@@ -76,11 +85,7 @@ class Builder {
       const std::string n = local_name(c.name);
       if (n == "item") {
         SrgsNode item;
-        item.kind = Kind::kSequence;
-        item.line = c.line;
-        if (auto it = c.attributes.find("repeat"); it != c.attributes.end())
-          if (auto st = parse_repeat(it->second, c.line, item); !st) return st;
-        if (auto st = content(c, item); !st) return st;
+        if (auto st = parse_item(c, item); !st) return st;
         seq.children.push_back(std::move(item));
       } else if (n == "one-of") {
         SrgsNode alt;
@@ -95,11 +100,7 @@ class Builder {
           if (local_name(i.name) != "item")
             return err(i.line, "<one-of> may contain only <item>, found <" + i.name + ">");
           SrgsNode item;
-          item.kind = Kind::kSequence;
-          item.line = i.line;
-          if (auto it = i.attributes.find("repeat"); it != i.attributes.end())
-            if (auto st = parse_repeat(it->second, i.line, item); !st) return st;
-          if (auto st = content(i, item); !st) return st;
+          if (auto st = parse_item(i, item); !st) return st;
           alt.children.push_back(std::move(item));
         }
         if (alt.children.empty()) return err(c.line, "empty <one-of>");
