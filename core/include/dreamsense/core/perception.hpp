@@ -149,6 +149,30 @@ inline constexpr Key<FaceLandmarks> kFaceLandmarks{"face.landmarks"};
 inline constexpr Key<HeadPose> kHeadPose{"face.head_pose"};
 }  // namespace keys
 
+// ---- Eye centres (modalities/eye_centers) ----
+
+// Centre of one eye's pupil/iris in the image, or found = false (eye closed, too small, ...).
+struct EyeCenter {
+  bool found = false;
+  cv::Point2d center_px;  // full-resolution pixels of the camera image
+  double confidence = 0;  // [0, 1]
+};
+
+// Pupil centres of the selected face, from the landmarks' eye regions in the same frame.
+struct EyeCenters {
+  SensorId camera;  // = FaceLandmarks::camera
+  Timestamp frame_stamp;
+  uint64_t frame_sequence = 0;
+  EyeCenter right;     // the subject's right eye (landmarks 36-41)
+  EyeCenter left;      // the subject's left eye (landmarks 42-47)
+  std::string method;  // which locator produced them (e.g. "improved_integro_differential")
+};
+
+namespace keys {
+// Absent entry when there are no landmarks in this tick.
+inline constexpr Key<EyeCenters> kEyeCenters{"face.eye_centers"};
+}  // namespace keys
+
 }  // namespace dreamsense
 
 // ---- Speech recognised against a grammar (modalities/speech, F22 recognizeSpeech) ----
@@ -169,6 +193,25 @@ struct RecognizedSpeech {
 namespace keys {
 // F22 recognizeSpeech: written once per recognised utterance (no entry while nothing is heard).
 inline constexpr Key<RecognizedSpeech> kRecognizedSpeech{"audio.speech"};
+}  // namespace keys
+
+// ---- Who spoke (modalities/voice_id, F21 identifyVoice) ----
+
+// The speaker of one utterance. speaker_id is "child", "therapist" or "unknown" in a therapy
+// session (any enrolled name in general); method says how it was decided: "gmm_ubm" (speaker
+// models) or "direction_rule" (DREAM's fallback from the sound direction, chosen explicitly).
+struct SpeakerIdentity {
+  std::string speaker_id;
+  std::string name;       // display name from the enrolment (= speaker_id when none)
+  double score = 0;       // [0, 1]: confidence in speaker_id
+  Timestamp start, end;   // the utterance (session clock)
+  SensorId sensor;        // the audio stream it came from
+  std::string method;
+};
+
+namespace keys {
+// Written once per utterance heard (no entry while nobody speaks).
+inline constexpr Key<SpeakerIdentity> kSpeakerIdentity{"audio.speaker"};
 }  // namespace keys
 
 }  // namespace dreamsense
