@@ -30,9 +30,12 @@ function(ds_add_test name)
     DREAMSENSE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     DREAMSENSE_BINARY_DIR="${PROJECT_BINARY_DIR}")
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
+  # A list property must reach set_tests_properties as one argument: escape its semicolons.
+  string(REPLACE ";" "\\;" labels "${ARG_LABELS}")
+  string(REPLACE ";" "\\;" fixtures "${ARG_FIXTURES}")
   gtest_discover_tests(${name}
     WORKING_DIRECTORY ${PROJECT_BINARY_DIR}
-    PROPERTIES LABELS "${ARG_LABELS}" FIXTURES_REQUIRED "${ARG_FIXTURES}"
+    PROPERTIES LABELS "${labels}" FIXTURES_REQUIRED "${fixtures}"
     DISCOVERY_TIMEOUT 60)
 endfunction()
 

@@ -12,10 +12,12 @@ packages=(
   libopencv-dev libopencv-contrib-dev libdlib-dev libpocketsphinx-dev libsphinxbase-dev
   libsndfile1-dev libfftw3-dev libeigen3-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libcli11-dev libyaml-cpp-dev libexpected-dev libgtest-dev libgmock-dev libbenchmark-dev
+  # audio front end: resampling (audio/), live ALSA capture (sources/)
+  libsoxr-dev libasound2-dev
   # models and media (the demo session is built from these; nothing is downloaded)
   opencv-data opencv-doc libdlib-data pocketsphinx-en-us pocketsphinx-testdata python3-skimage
-  # tests: JSON-schema validation of the DREAM export
-  python3 python3-jsonschema
+  # tests: JSON-schema validation of the DREAM export; synthetic spoken words (speech tests)
+  python3 python3-jsonschema espeak-ng
 )
 
 missing=()

@@ -15,6 +15,11 @@ struct AnalyzeFlags {
   std::string session, out;
   std::string policy = "settled";
   std::string grammar;
+  bool overlay = false;
+  std::string gaze_model;
+  std::string mutual_mode = "3d";
+  std::vector<double> robot_head;
+  std::string voice_method = "gmm_ubm", voice_model;
 };
 
 void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path& out) {
@@ -58,12 +63,45 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--grammar", flags->grammar,
                   "Speech grammar (JSGF or SRGS .grxml); default: the session's own, if any")
       ->check(CLI::ExistingFile);
+  cmd->add_flag("--overlay", flags->overlay,
+                "Also write overlay.mp4: the selected camera with face boxes, landmarks, head "
+                "axes, eye centres, gaze rays and mutual gaze");
+  cmd->add_option("--gaze-model", flags->gaze_model,
+                  "Gaze constants from `dreamsense train gaze` (default: built in)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--mutual-gaze", flags->mutual_mode,
+                  "Mutual-gaze test: 3d (ray within 0.2 m of the robot head) or camera-plane "
+                  "(DREAM's rectangle on the selected camera's plane)")
+      ->check(CLI::IsMember({"3d", "camera-plane"}));
+  cmd->add_option("--robot-head", flags->robot_head,
+                  "Robot head position in world metres, X Y Z (default: the session's "
+                  "robot_head_m metadata)")
+      ->expected(3);
+  cmd->add_option("--voice-method", flags->voice_method,
+                  "identifyVoice: gmm_ubm (speaker models: --voice-model, or trained from the "
+                  "session's enrolment audio), direction_rule (DREAM's sound-direction rule) "
+                  "or off")
+      ->check(CLI::IsMember({"gmm_ubm", "direction_rule", "off"}));
+  cmd->add_option("--voice-model", flags->voice_model,
+                  "Voice model from `dreamsense train voices` (gmm_ubm)")
+      ->check(CLI::ExistingFile);
   cmd->callback([flags, &g, &exit_code] {
     runner::AnalysisOptions o;
     o.session_dir = flags->session;
     o.out_dir = flags->out;
+    o.overlay = flags->overlay;
+    o.gaze_model = flags->gaze_model;
+    if (flags->mutual_mode == "camera-plane")
+      o.mutual_gaze.mode = gaze::MutualGazeMode::kCameraPlane;
+    if (flags->robot_head.size() == 3) {
+      o.mutual_gaze.robot_head_m = {flags->robot_head[0], flags->robot_head[1],
+                                    flags->robot_head[2]};
+      o.robot_head_from_session = false;
+    }
     o.policy = flags->policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
     o.speech_grammar = flags->grammar;
+    o.voice_method = flags->voice_method;
+    o.voice_model = flags->voice_model;
     auto r = run_analysis_with_progress(o, g.quiet);
     if (!r) {
       exit_code = fail(r.error());

@@ -29,6 +29,8 @@ void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   add_eval_calibration(*eval, g, exit_code);
   add_eval_doa(*eval, g, exit_code);
   add_eval_speech(*eval, g, exit_code);
+  add_eval_eyes(*eval, g, exit_code);
+  add_eval_voices(*eval, g, exit_code);
 
   auto flags = std::make_shared<EvalSessionFlags>();
   CLI::App* cmd = eval->add_subcommand(

@@ -1,6 +1,8 @@
-// `dreamsense eval speech --dataset pocketsphinx DIR [--garbage-weight W] [--json FILE|-]`
+// `dreamsense eval speech --dataset pocketsphinx|fsdd|speech-commands DIR [--json FILE|-]`
+// (flags -> speech::SpeechEvalOptions; protocols in modalities/speech/README.md).
 
 #include <cstdio>
+#include <sstream>
 
 #include "commands.hpp"
 #include "progress.hpp"
@@ -11,59 +13,139 @@ namespace {
 struct EvalSpeechFlags {
   std::vector<std::string> dataset;  // NAME DIR
   speech::SpeechEvalOptions options;
-  std::string json;
+  std::string json, resampler = "soxr", speakers, indices;
+  double garbage_weight = 0, min_confidence = -1, pad = -1, warp = 0;
 };
+
+Status parse_indices(const std::string& s, speech::FsddSelection& sel) {
+  const size_t dash = s.find('-');
+  try {
+    if (dash == std::string::npos) {
+      sel.first_index = sel.last_index = std::stoi(s);
+    } else {
+      sel.first_index = std::stoi(s.substr(0, dash));
+      sel.last_index = std::stoi(s.substr(dash + 1));
+    }
+  } catch (const std::exception&) {
+    return make_error(ErrorCode::kInvalidArgument, "--indices must be N or A-B (got '{}')", s);
+  }
+  if (sel.first_index < 0 || sel.last_index < sel.first_index)
+    return make_error(ErrorCode::kInvalidArgument, "--indices must be N or A-B, A <= B (got '{}')",
+                      s);
+  return ok_status();
+}
+
+void print_summary(const nlohmann::json& r) {
+  const auto& m = r["metrics"];
+  const std::string name = r["dataset"]["name"];
+  std::fprintf(stderr, "speech %s: %zu items, accuracy %.3f", name.c_str(),
+               r["dataset"]["items"].get<size_t>(), m["accuracy"].get<double>());
+  if (m.contains("false_accept_rate"))
+    std::fprintf(stderr, ", false_accept_rate %.3f", m["false_accept_rate"].get<double>());
+  if (m.contains("grammar_sentence_accuracy"))
+    std::fprintf(stderr, ", grammar_sentence_accuracy %.3f",
+                 m["grammar_sentence_accuracy"].get<double>());
+  if (m.contains("per_speaker"))
+    for (const auto& [spk, v] : m["per_speaker"].items())
+      std::fprintf(stderr, ", %s %.3f", spk.c_str(), v["accuracy"].get<double>());
+  std::fprintf(stderr, ", rtf %.3f\n", r["timing"]["rtf"].get<double>());
+}
 }  // namespace
 
 void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<EvalSpeechFlags>();
   CLI::App* cmd = eval.add_subcommand(
       "speech",
-      "Speech recognition against a grammar (PocketSphinx, phone-loop rejection): "
-      "grammar_sentence_accuracy, false_accept_rate, accuracy, rtf");
+      "Speech recognition against a grammar (PocketSphinx, phone-loop rejection): accuracy, "
+      "false_accept_rate, per_class recall, rtf");
   cmd->add_option("--dataset", flags->dataset,
                   "NAME DIR; NAME: pocketsphinx (pocketsphinx-testdata layout, e.g. "
-                  "/usr/share/pocketsphinx/test/data)")
+                  "/usr/share/pocketsphinx/test/data), fsdd (DIGIT_SPEAKER_INDEX.wav, 8 kHz, in "
+                  "DIR or DIR/recordings), speech-commands (class folders yes..go, _unknown_, "
+                  "_silence_ of 16 kHz WAVs)")
       ->expected(2)
       ->required();
   auto& r = flags->options.recognizer;
-  cmd->add_option("--model", r.model_dir, "PocketSphinx acoustic model folder")
+  cmd->add_option("--model", r.model_dir,
+                  "PocketSphinx acoustic model folder (pocketsphinx, speech-commands, and fsdd "
+                  "with --fsdd-model en-us)")
       ->default_val(r.model_dir.string());
   cmd->add_option("--dict", r.dictionary, "Pronunciation dictionary")
       ->default_val(r.dictionary.string());
-  cmd->add_option("--garbage-weight", r.garbage_phone_weight,
-                  "Phone-loop weight of the rejection branch, (0, 1]; higher rejects more")
-      ->default_val(r.garbage_phone_weight);
+  cmd->add_option("--garbage-weight", flags->garbage_weight,
+                  "Phone-loop weight of the rejection branch, (0, 1]; higher rejects more "
+                  "(default per layout: 1)");
+  cmd->add_option("--min-confidence", flags->min_confidence,
+                  "Confidence threshold on accepted words, [0, 1] (default per layout: "
+                  "pocketsphinx 0, speech-commands " +
+                      fmt::format("{}", speech::kCommandsMinConfidence) + ")");
   cmd->add_flag("!--no-reject", r.reject_out_of_grammar,
                 "Grammar only: no out-of-grammar rejection");
+  cmd->add_option("--fsdd-model", flags->options.fsdd_model,
+                  "fsdd: tidigits (PocketSphinx's TIDIGITS digit model from "
+                  "pocketsphinx-testdata, 8 kHz front end) or en-us (--model, resampled)")
+      ->default_val(flags->options.fsdd_model);
+  cmd->add_option("--speakers", flags->speakers, "fsdd: comma-separated speakers (default all)");
+  cmd->add_option("--indices", flags->indices,
+                  "fsdd: take indices N or A-B (official split: 0-4 test, 5-49 train)");
+  cmd->add_option("--pad", flags->pad,
+                  "fsdd: seconds of quiet noise added at both ends of each clip (default " +
+                      fmt::format("{}", speech::kFsddPadSeconds) + ")");
+  cmd->add_option("--warp", flags->warp,
+                  "fsdd: frequency warp of the filter bank (default tidigits " +
+                      fmt::format("{}", speech::kFsddTidigitsWarp) + ", en-us 1)");
+  cmd->add_option("--resampler", flags->resampler,
+                  "Rate conversion to the model's rate: soxr (libsoxr VHQ) or sinc (ours)")
+      ->default_val(flags->resampler);
+  cmd->add_option("--front-end-rate", r.front_end_rate_hz,
+                  "MFCC front-end rate in Hz (0 = the model's; 8000 decodes 8 kHz audio without "
+                  "upsampling, needs --front-end-upper)");
+  cmd->add_option("--front-end-upper", r.front_end_upper_hz,
+                  "Upper edge of the mel filters in Hz (0 = the model's)");
+  cmd->add_flag("!--no-remove-noise", r.remove_noise,
+                "Switch off PocketSphinx's spectral noise subtraction");
+  cmd->add_flag("!--no-items", flags->options.list_items,
+                "Leave the per-item list out of the JSON");
   cmd->add_option("--json", flags->json, "Write the evaluation JSON to FILE (- for stdout)");
   cmd->callback([flags, &g, &exit_code] {
-    if (flags->dataset[0] != "pocketsphinx") {
-      exit_code = fail("eval speech: dataset " + flags->dataset[0] +
-                       " is not supported yet (supported: pocketsphinx)");
+    auto& o = flags->options;
+    o.dataset = flags->dataset[0];
+    o.dir = flags->dataset[1];
+    if (o.dataset != "pocketsphinx" && o.dataset != "fsdd" && o.dataset != "speech-commands") {
+      exit_code = fail("eval speech: dataset " + o.dataset +
+                       " is not supported (pocketsphinx, fsdd, speech-commands)");
       return;
     }
-    flags->options.dataset = flags->dataset[0];
-    flags->options.dir = flags->dataset[1];
-    auto r = with_progress("eval speech", g.quiet, [&](const auto& progress) {
-      return speech::run_speech_eval(flags->options, progress);
+    auto resampler = speech::parse_resampler(flags->resampler);
+    if (!resampler) {
+      exit_code = fail(resampler.error());
+      return;
+    }
+    o.recognizer.resampler = *resampler;
+    if (flags->garbage_weight != 0) o.garbage_phone_weight = flags->garbage_weight;
+    if (flags->min_confidence >= 0) o.min_confidence = flags->min_confidence;
+    if (flags->pad >= 0) o.pad_seconds = flags->pad;
+    if (flags->warp != 0) o.frequency_warp = flags->warp;
+    if (!flags->speakers.empty()) {
+      std::stringstream ss(flags->speakers);
+      std::string s;
+      while (std::getline(ss, s, ','))
+        if (!s.empty()) o.fsdd.speakers.push_back(s);
+    }
+    if (!flags->indices.empty())
+      if (auto st = parse_indices(flags->indices, o.fsdd); !st) {
+        exit_code = fail(st.error());
+        return;
+      }
+    auto res = with_progress("eval speech", g.quiet, [&](const auto& progress) {
+      return speech::run_speech_eval(o, progress);
     });
-    if (!r) {
-      exit_code = fail(r.error());
+    if (!res) {
+      exit_code = fail(res.error());
       return;
     }
-    const auto& m = (*r)["metrics"];
-    if (!g.quiet)
-      std::fprintf(stderr,
-                   "speech: %zu items, grammar_sentence_accuracy %.3f (cards %.3f, goforward "
-                   "%.3f), false_accept_rate %.3f, accuracy %.3f, rtf %.3f\n",
-                   (*r)["dataset"]["items"].get<size_t>(),
-                   m["grammar_sentence_accuracy"].get<double>(),
-                   (*r)["per_class"]["cards"]["grammar_sentence_accuracy"].get<double>(),
-                   (*r)["per_class"]["goforward"]["grammar_sentence_accuracy"].get<double>(),
-                   m["false_accept_rate"].get<double>(), m["accuracy"].get<double>(),
-                   (*r)["timing"]["rtf"].get<double>());
-    if (auto s = write_json(flags->json, *r); !s) exit_code = fail(s.error());
+    if (!g.quiet) print_summary(*res);
+    if (auto s = write_json(flags->json, *res); !s) exit_code = fail(s.error());
   });
 }
 

@@ -43,5 +43,13 @@ void add_eval_calibration(CLI::App& eval, const GlobalFlags& g,
                           int& exit_code);                                   // cmd_calibrate.cpp
 void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code);     // cmd_audio.cpp
 void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code);  // cmd_speech.cpp
+void add_eval_eyes(CLI::App& eval, const GlobalFlags& g, int& exit_code);    // cmd_eyes.cpp
+
+// cmd_voices.cpp: `train voices` (under the `train` verb of main.cpp) and `eval voices`.
+void add_train_voices(CLI::App& train, const GlobalFlags& g, int& exit_code);
+void add_eval_voices(CLI::App& eval, const GlobalFlags& g, int& exit_code);
+
+// cmd_gaze.cpp: `train gaze` (subject calibration: head-model offset and D4.2 eq. 4 constants).
+void add_train_gaze(CLI::App& train, const GlobalFlags& g, int& exit_code);
 
 }  // namespace dreamsense::app

@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   CLI::App app{"dreamsense: open multi-sensory perception for robot-enhanced therapy (DREAM D4.2)"};
   app.set_version_flag("--version", std::string(DREAMSENSE_VERSION));
   app.require_subcommand(1);
+  app.fallthrough();  // global flags (-q, -v) also after the verb
   app::GlobalFlags g;
   app.add_flag("-q,--quiet", g.quiet, "No progress bar and only warnings/errors in the log");
   app.add_flag("-v,--verbose", g.verbose, "Debug logging");
@@ -50,6 +51,11 @@ int main(int argc, char** argv) {
   app::add_eval(app, g, exit_code);
   app::add_bench(app, g, exit_code);
   app::add_calibrate(app, g, exit_code);
+  CLI::App* train =
+      app.add_subcommand("train", "Train a model from a dataset (writes a versioned model file)");
+  train->require_subcommand(1);
+  app::add_train_voices(*train, g, exit_code);
+  app::add_train_gaze(*train, g, exit_code);
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug
                    : g.quiet ? log::Level::kWarn

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -143,12 +144,18 @@ TEST_F(Cli, EvalSessionMeasuresTheBodyAgainstTruth) {
   ASSERT_TRUE(j["metrics"]["body_joint_median_error_m"].is_number());
   EXPECT_LT(j["metrics"]["body_joint_median_error_m"].get<double>(), 0.02);
   EXPECT_GT(j["metrics"]["body_joint_median_error_m"].get<double>(), 0.0);
-  // Faces are detected in the three cameras; head pose does not exist yet: null, not zero.
+  // Faces are detected in the three cameras; head pose, gaze and eye centres are measured.
   ASSERT_TRUE(j["metrics"]["face_recall"].is_number());
   EXPECT_GE(j["metrics"]["face_recall"].get<double>(), 0.95);
   EXPECT_LE(j["metrics"]["face_false_positive_rate"].get<double>(), 0.02);
-  EXPECT_TRUE(j["metrics"]["head_pose_median_deg"].is_null());
-  EXPECT_TRUE(j["not_evaluated"].contains("head_pose_median_deg"));
+  ASSERT_TRUE(j["metrics"]["head_pose_median_deg"].is_number());
+  EXPECT_LT(j["metrics"]["head_pose_median_deg"].get<double>(), 45.0);  // uncalibrated
+  ASSERT_TRUE(j["metrics"]["eye_center_median_px"].is_number());
+  EXPECT_LT(j["metrics"]["eye_center_median_px"].get<double>(), 5.0);
+  ASSERT_TRUE(j["metrics"]["mutual_gaze_f1"].is_number());
+  // Metrics of analysers that do not exist yet stay null with a reason, not zero.
+  EXPECT_TRUE(j["metrics"]["action_accuracy"].is_null());
+  EXPECT_TRUE(j["not_evaluated"].contains("action_accuracy"));
 }
 
 TEST_F(Cli, SameSeedGivesIdenticalTruthAndAnalysis) {
@@ -286,6 +293,39 @@ TEST_F(Cli, CalibrateExtrinsicsRejectsDegeneratePointsAndWritesNothing) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("collinear"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// Speaker models from the demo's enrolment audio (enroll/<speaker>/*.wav): train, eval, and the
+// one-line errors for a missing or corrupt model.
+TEST_F(Cli, TrainAndEvalVoicesOnTheDemoEnrolment) {
+  const fs::path enroll = demo() / "enroll", model = root() / "voices.yaml";
+  ASSERT_TRUE(fs::exists(enroll / "child")) << "the demo writes enrolment audio";
+  RunResult t =
+      run("train voices --dataset folders " + enroll.string() + " --out " + model.string());
+  ASSERT_EQ(t.exit_code, 0) << t.err;
+  EXPECT_NE(slurp(model).find("dreamsense.voice_model"), std::string::npos);
+  const fs::path out = root() / "voices.json";
+  RunResult e = run("eval voices --dataset folders " + enroll.string() + " --enroll 1 --json " +
+                    out.string());
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j["task"], "voices");
+  EXPECT_EQ(j["dataset"]["name"], "folders");
+  EXPECT_GE(j["metrics"]["accuracy"].get<double>(), 0.0);
+  EXPECT_TRUE(j["per_class"].contains("therapist"));
+
+  RunResult missing = run("eval voices --dataset folders " + enroll.string() + " --model " +
+                          (root() / "no_such_model.yaml").string());
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.err.find("no_such_model.yaml"), std::string::npos) << missing.err;
+  EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << missing.err;
+  const fs::path corrupt = root() / "corrupt_voices.yaml";
+  std::ofstream(corrupt) << "%YAML:1.0\n---\nformat: [dreamsense.voice_model\n";
+  RunResult bad = run("analyze " + demo().string() + " --out " + (root() / "voice_out").string() +
+                      " --voice-model " + corrupt.string());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("corrupt_voices.yaml"), std::string::npos) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
 }
 
 TEST_F(Cli, HelpAndUsageErrors) {

@@ -1,10 +1,12 @@
 #include "dreamsense/eval/session_eval.hpp"
 
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
 #include "dreamsense/eval/metrics.hpp"
 #include "dreamsense/sources/session.hpp"
 #include "dreamsense/sources/truth.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -42,6 +44,11 @@ const std::map<std::string, std::string> kMetricPrimitive = {
     {"camera_selection_accuracy_within_10deg", "getFaces"},
     {"face_position_median_m", "getFaces"},
     {"speech_false_accept_rate", "recognizeSpeech"},
+    {"head_position_median_m", "getHead"},
+    {"head_gaze_median_deg", "getHeadGaze"},
+    {"gaze_coverage", "getEyeGaze"},
+    {"mutual_gaze_precision", "checkMutualGaze"},
+    {"mutual_gaze_recall", "checkMutualGaze"},
 };
 
 Result<std::vector<json>> read_jsonl(const fs::path& path) {
@@ -158,6 +165,107 @@ void evaluate_faces(const std::vector<json>& truth, const std::vector<json>& rec
   if (auto m = median(position_errors)) metrics["face_position_median_m"] = *m;
 }
 
+cv::Vec3d vec3(const json& a) {
+  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+}
+double angle_deg(const cv::Vec3d& a, const cv::Vec3d& b) {
+  const double c = a.dot(b) / (cv::norm(a) * cv::norm(b));
+  return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+// Head pose, gaze, mutual gaze and eye centres against the truth `face` record of the same tick.
+//  - head_pose_median_deg: geodesic angle between the estimated and true head rotations (all
+//    three axes at once); head_gaze_median_deg: angle between the head-gaze directions;
+//    head_position_median_m: getHead against the truth head position.
+//  - gaze_median_deg: getEyeGaze (both eyes) against the truth eye-gaze direction, over ticks
+//    with a gaze; gaze_coverage: those ticks / ticks whose truth face is visible in some camera.
+//  - mutual_gaze_f1: per tick with a truth face, checkMutualGaze's `mutual` (false when there is
+//    no face or no gaze) against the truth mutual_gaze.
+//  - eye_center_median_px: getEyes pixel centres against the truth pupil pixels in the same
+//    camera (eyes_px), over found eyes.
+void evaluate_head_and_gaze(const std::vector<json>& truth, const std::vector<json>& records,
+                            json& metrics, json& not_evaluated) {
+  std::map<int64_t, const json*> truth_faces;
+  for (const auto& t : truth)
+    if (t.value("type", "") == "face") truth_faces[t.value("stamp_ns", int64_t{0})] = &t;
+  std::vector<double> pose_err, head_gaze_err, head_pos_err, gaze_err, eye_err;
+  int face_ticks = 0, gaze_ticks = 0, tp = 0, fp = 0, fn = 0, mutual_ticks = 0;
+  std::map<int64_t, int> visible_ticks;
+  for (const auto& [stamp, tf] : truth_faces) {
+    bool visible = false;
+    for (const auto& [cam, tc] : (*tf)["cameras"].items()) visible |= tc.value("visible", false);
+    visible_ticks[stamp] = visible;
+  }
+  for (const auto& r : records) {
+    const std::string p = r.value("primitive", "");
+    if (p != "getHeadGaze" && p != "getHead" && p != "getEyeGaze" && p != "checkMutualGaze" &&
+        p != "getEyes")
+      continue;
+    const auto it = truth_faces.find(r.value("stamp_ns", int64_t{-1}));
+    if (it == truth_faces.end()) continue;
+    const json& tf = *it->second;
+    const std::string status = r.value("status", "");
+    if (p == "checkMutualGaze") {
+      if (status == "stale" || status == "sensor_offline" || status == "disabled") continue;
+      ++mutual_ticks;
+      const bool predicted = status == "ok" && r["value"].value("mutual", false);
+      const bool actual = tf.value("mutual_gaze", false);
+      tp += predicted && actual;
+      fp += predicted && !actual;
+      fn += !predicted && actual;
+      continue;
+    }
+    if (status == "disabled") continue;
+    if (p == "getEyeGaze" && visible_ticks[it->first]) ++face_ticks;
+    if (status != "ok") continue;
+    const json& v = r["value"];
+    if (p == "getHeadGaze") {
+      const cv::Matx33d est = rotation_from_ypr_deg(
+          v["yaw_deg"].get<double>(), v["pitch_deg"].get<double>(), v["roll_deg"].get<double>());
+      const cv::Matx33d tru = rotation_from_ypr_deg(
+          tf["yaw_deg"].get<double>(), tf["pitch_deg"].get<double>(), tf["roll_deg"].get<double>());
+      const cv::Matx33d d = est.t() * tru;
+      const double c = (d(0, 0) + d(1, 1) + d(2, 2) - 1) / 2;
+      pose_err.push_back(std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI);
+      if (tf.contains("head_gaze_dir"))
+        head_gaze_err.push_back(angle_deg(vec3(v["direction"]), vec3(tf["head_gaze_dir"])));
+    } else if (p == "getHead") {
+      head_pos_err.push_back(cv::norm(vec3(v["position_m"]) - vec3(tf["head_position_m"])));
+    } else if (p == "getEyeGaze") {
+      ++gaze_ticks;
+      gaze_err.push_back(angle_deg(vec3(v["direction"]), vec3(tf["eye_gaze_dir"])));
+    } else if (p == "getEyes") {
+      const std::string cam = v.value("camera", "");
+      if (!tf["cameras"].contains(cam) || !tf["cameras"][cam].contains("eyes_px")) continue;
+      const json& te = tf["cameras"][cam]["eyes_px"];
+      for (const char* eye : {"right", "left"}) {
+        const json& e = v[std::string(eye) + "_px"];
+        if (e.is_null() || !te.contains(eye) || te[eye].is_null()) continue;
+        eye_err.push_back(std::hypot(e[0].get<double>() - te[eye][0].get<double>(),
+                                     e[1].get<double>() - te[eye][1].get<double>()));
+      }
+    }
+  }
+  auto put = [&](const char* name, const std::vector<double>& v, const char* why) {
+    if (auto m = median(v))
+      metrics[name] = *m;
+    else if (!not_evaluated.contains(name))
+      not_evaluated[name] = why;
+  };
+  put("head_pose_median_deg", pose_err, "no ok getHeadGaze record at a truth face tick");
+  put("head_gaze_median_deg", head_gaze_err, "no ok getHeadGaze record at a truth face tick");
+  put("head_position_median_m", head_pos_err, "no ok getHead record at a truth face tick");
+  put("gaze_median_deg", gaze_err, "no ok getEyeGaze record at a truth face tick");
+  put("eye_center_median_px", eye_err, "no found eye centre in a camera with truth pupils");
+  if (face_ticks > 0) metrics["gaze_coverage"] = static_cast<double>(gaze_ticks) / face_ticks;
+  if (mutual_ticks > 0) {
+    metrics["mutual_gaze_f1"] =
+        tp + fp + fn > 0 ? 2.0 * tp / (2.0 * tp + fp + fn) : 1.0;  // nothing to find, none found
+    metrics["mutual_gaze_precision"] = tp + fp > 0 ? json(1.0 * tp / (tp + fp)) : json(nullptr);
+    metrics["mutual_gaze_recall"] = tp + fn > 0 ? json(1.0 * tp / (tp + fn)) : json(nullptr);
+  }
+}
+
 // Speech against the truth utterances: an in-grammar utterance is right when exactly its text
 // is recognised (an ok recognizeSpeech whose words overlap it); an out-of-grammar one is right
 // when nothing is recognised during it. speech_false_accept_rate: out-of-grammar utterances
@@ -196,6 +304,39 @@ void evaluate_speech(const std::vector<json>& truth, const std::vector<json>& re
   }
   metrics["speech_accuracy"] = static_cast<double>(right) / total;
   if (oog > 0) metrics["speech_false_accept_rate"] = static_cast<double>(oog_accepted) / oog;
+}
+
+// Who spoke: each truth utterance with a `speaker` against the ok identifyVoice record whose
+// utterance [start_ns, end_ns] overlaps it most; right when its speaker_id is the truth speaker
+// (child / therapist). A truth utterance no identity overlaps counts as wrong (missed).
+void evaluate_speaker(const std::vector<json>& truth, const std::vector<json>& records,
+                      json& metrics, json& not_evaluated) {
+  std::vector<std::pair<int64_t, int64_t>> spans;
+  std::vector<std::string> who;
+  for (const auto& r : records)
+    if (r.value("primitive", "") == "identifyVoice" && r.value("status", "") == "ok") {
+      spans.emplace_back(r["value"].value("start_ns", int64_t{0}),
+                         r["value"].value("end_ns", int64_t{0}));
+      who.push_back(r["value"].value("speaker_id", ""));
+    }
+  int total = 0, right = 0;
+  for (const auto& t : truth) {
+    if (t.value("type", "") != "speech" || !t.contains("speaker")) continue;
+    const int64_t s = t.value("start_ns", int64_t{0}), e = t.value("end_ns", int64_t{0});
+    int64_t best = 0;
+    std::string said;
+    for (size_t i = 0; i < spans.size(); ++i) {
+      const int64_t overlap = std::min(e, spans[i].second) - std::max(s, spans[i].first);
+      if (overlap > best) best = overlap, said = who[i];
+    }
+    ++total;
+    right += !said.empty() && said == t.value("speaker", "");
+  }
+  if (total == 0) {
+    not_evaluated["speaker_accuracy"] = "the truth has no speech records with a speaker";
+    return;
+  }
+  metrics["speaker_accuracy"] = static_cast<double>(right) / total;
 }
 
 }  // namespace
@@ -309,7 +450,10 @@ Result<json> evaluate_session(const SessionEvalOptions& options) {
   }
 
   if (enabled("getFaces")) evaluate_faces(*truth, *records, metrics, not_evaluated);
+  if (enabled("getHeadGaze") || enabled("getEyeGaze"))
+    evaluate_head_and_gaze(*truth, *records, metrics, not_evaluated);
   if (enabled("recognizeSpeech")) evaluate_speech(*truth, *records, metrics, not_evaluated);
+  if (enabled("identifyVoice")) evaluate_speaker(*truth, *records, metrics, not_evaluated);
 
   json out;
   out["task"] = "session";

@@ -12,6 +12,21 @@ json vec_json(const cv::Vec3d& v) { return json::array({v[0], v[1], v[2]}); }
 void append_mm(std::vector<double>& out, const cv::Vec3d& v) {
   for (int i = 0; i < 3; ++i) out.push_back(v[i] * 1000.0);
 }
+// DREAM's camera ids (SelectCameraID): 0 camera_middle, 1 camera_left, 2 camera_right; -1 other.
+double dream_camera_id(const SensorId& camera) {
+  if (camera == "camera_middle") return 0;
+  if (camera == "camera_left") return 1;
+  if (camera == "camera_right") return 2;
+  return -1;
+}
+json ray_json(const GazeRay& r) {
+  if (!r.valid) return nullptr;
+  return {{"origin", vec_json(r.origin_world_m)},
+          {"direction", vec_json(r.direction_world)},
+          {"theta_deg", r.theta_deg},
+          {"phi_deg", r.phi_deg},
+          {"offset", json::array({r.features[0], r.features[1]})}};
+}
 json arm_json(const std::optional<body::ArmAngle>& a) {
   if (!a) return nullptr;
   return {{"azimuth_deg", a->azimuth_deg}, {"elevation_deg", a->elevation_deg}};
@@ -25,6 +40,10 @@ Status EvaluatorOptions::check() const {
   if (!(track_hand_dt_s >= 0)) bad += " track_hand_dt_s must be >= 0;";
   if (!(sound_direction_threshold >= 0 && sound_direction_threshold <= 1))
     bad += " sound_direction_threshold must be in [0, 1];";
+  if (!(track_face_dt_s >= 0)) bad += " track_face_dt_s must be >= 0;";
+  const cv::Vec3d n =
+      (head_gaze_plane[1] - head_gaze_plane[0]).cross(head_gaze_plane[2] - head_gaze_plane[0]);
+  if (!(cv::norm(n) > 1e-9)) bad += " the three head_gaze_plane points are collinear;";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "EvaluatorOptions:" + bad);
   return face_geometry.check();
 }
@@ -75,8 +94,14 @@ std::vector<PrimitiveRecord> Evaluator::evaluate(const MultiFrame& tick,
   for (const auto& i : catalogue()) out.push_back(base(i.id, tick.stamp));
   if (!body_sensor_.empty()) evaluate_body(tick, view, out);
   if (!audio_sensor_.empty()) evaluate_sound_direction(tick, view, out);
-  if (!face_cameras_.empty()) evaluate_faces(tick, view, out);
+  if (!face_cameras_.empty()) {
+    evaluate_faces(tick, view, out);
+    evaluate_head(tick, view, out);
+    evaluate_track_face(tick, view, out);
+    if (gaze_enabled_) evaluate_gaze(tick, view, out);
+  }
   if (!speech_sensor_.empty()) evaluate_speech(tick, view, out);
+  if (!voice_sensor_.empty()) evaluate_voice(tick, view, out);
   return out;
 }
 
@@ -101,6 +126,29 @@ void Evaluator::evaluate_speech(const MultiFrame& tick, const BlackboardView& vi
              {"start_ns", s.start.ns()},
              {"end_ns", s.end.ns()}};
   r.legacy_text = s.tag;
+}
+
+// F21 identifyVoice: ok at the tick an utterance's speaker was decided (child, therapist or
+// unknown); no_data otherwise. Legacy: DREAM's [1] child / [0] therapist; [-1] for anyone else
+// (DREAM published nothing then; its consumer only tests element 0 > 0).
+void Evaluator::evaluate_voice(const MultiFrame& tick, const BlackboardView& view,
+                               std::vector<PrimitiveRecord>& out) {
+  PrimitiveRecord& r = out[static_cast<int>(PrimitiveId::kIdentifyVoice) - 1];
+  r.source = voice_sensor_;
+  const auto entry = view.get(keys::kSpeakerIdentity);
+  if (entry) r.data_stamp = entry->stamp;
+  r.status = observation_status(entry, {voice_sensor_}, tick.stamp);
+  if (r.status == PrimitiveStatus::kStale ||
+      (r.status == PrimitiveStatus::kOk && entry->stamp != tick.stamp))
+    r.status = PrimitiveStatus::kNoData;  // reported once, at the tick it was decided
+  if (r.status != PrimitiveStatus::kOk) return;
+  const SpeakerIdentity& s = *entry->value;
+  r.confidence = entry->confidence;
+  r.value = {{"speaker_id", s.speaker_id}, {"name", s.name},       {"score", s.score},
+             {"start_ns", s.start.ns()},   {"end_ns", s.end.ns()}, {"method", s.method}};
+  r.legacy = std::vector<double>{s.speaker_id == "child"       ? 1.0
+                                 : s.speaker_id == "therapist" ? 0.0
+                                                               : -1.0};
 }
 
 // F7 getFaces: faces across cameras with their 3-D position, plus what each camera saw (so that
@@ -151,6 +199,161 @@ void Evaluator::evaluate_faces(const MultiFrame& tick, const BlackboardView& vie
     r.source = sel->camera;
   else if (!faces.empty())
     r.source = faces.front().camera;
+}
+
+// F10 getHead, F11 getHeadGaze, F12 getHeadGaze (plane) from the head pose (keys::kHeadPose).
+void Evaluator::evaluate_head(const MultiFrame& tick, const BlackboardView& view,
+                              std::vector<PrimitiveRecord>& out) {
+  std::vector<SensorId> sensors;
+  for (const auto& [id, m] : face_cameras_) sensors.push_back(id);
+  const auto entry = view.get(keys::kHeadPose);
+  const PrimitiveStatus status = observation_status(entry, sensors, tick.stamp);
+  PrimitiveRecord& head = out[static_cast<int>(PrimitiveId::kGetHead) - 1];
+  PrimitiveRecord& gaze = out[static_cast<int>(PrimitiveId::kGetHeadGaze) - 1];
+  PrimitiveRecord& plane = out[static_cast<int>(PrimitiveId::kGetHeadGazePlane) - 1];
+  const auto& pts = options_.head_gaze_plane;
+  plane.query = {{"p1", vec_json(pts[0])}, {"p2", vec_json(pts[1])}, {"p3", vec_json(pts[2])}};
+  for (PrimitiveRecord* r : {&head, &gaze, &plane}) {
+    r->status = status;
+    if (entry) r->data_stamp = entry->stamp;
+    if (status == PrimitiveStatus::kOk) {
+      r->confidence = entry->confidence;
+      r->source = entry->value->camera;
+    }
+  }
+  if (status != PrimitiveStatus::kOk) return;
+  const HeadPose& p = *entry->value;
+  head.value = {{"position_m", vec_json(p.position_world_m)}, {"camera", p.camera}};
+  head.legacy.emplace();
+  append_mm(*head.legacy, p.position_world_m);
+  gaze.value = {{"origin", vec_json(p.gaze_origin_world_m)},
+                {"direction", vec_json(p.gaze_direction_world)},
+                {"roll_deg", p.roll_deg},
+                {"yaw_deg", p.yaw_deg},
+                {"pitch_deg", p.pitch_deg},
+                {"camera", p.camera}};
+  gaze.legacy = std::vector<double>{p.gaze_direction_world[0], p.gaze_direction_world[1],
+                                    p.gaze_direction_world[2]};
+  // Ray-plane intersection; no_data when the ray is parallel to the plane or points away.
+  cv::Vec3d n = (pts[1] - pts[0]).cross(pts[2] - pts[0]);
+  n /= cv::norm(n);
+  const double denom = n.dot(p.gaze_direction_world);
+  const double t = std::abs(denom) < 1e-9 ? -1.0 : n.dot(pts[0] - p.gaze_origin_world_m) / denom;
+  if (!(t > 0)) {
+    plane.status = PrimitiveStatus::kNoData;
+    plane.confidence = 0;
+    return;
+  }
+  const cv::Vec3d hit = p.gaze_origin_world_m + t * p.gaze_direction_world;
+  plane.value = {{"point_m", vec_json(hit)}, {"distance_m", t}, {"camera", p.camera}};
+  plane.legacy.emplace();
+  append_mm(*plane.legacy, hit);
+}
+
+// F23 trackFace(seed, dt): the face track nearest the seed, predicted dt ahead (constant
+// velocity). Default query: the seed is the newest track's position (the child's face).
+void Evaluator::evaluate_track_face(const MultiFrame& tick, const BlackboardView& view,
+                                    std::vector<PrimitiveRecord>& out) {
+  PrimitiveRecord& r = out[static_cast<int>(PrimitiveId::kTrackFace) - 1];
+  std::vector<SensorId> sensors;
+  for (const auto& [id, m] : face_cameras_) sensors.push_back(id);
+  const auto entry = view.get(keys::kFaceTracks);
+  if (entry) r.data_stamp = entry->stamp;
+  r.status = observation_status(entry, sensors, tick.stamp);
+  if (r.status != PrimitiveStatus::kOk) return;
+  const FaceTracks& tracks = *entry->value;
+  if (tracks.tracks.empty()) {
+    r.status = PrimitiveStatus::kNoData;
+    return;
+  }
+  const FaceTrack& seed_track = tracks.tracks.front();
+  const cv::Vec3d seed = seed_track.position_world_m;
+  const double dt = options_.track_face_dt_s;
+  r.query = {{"seed_m", vec_json(seed)}, {"dt_s", dt}};
+  // Prediction from the track's last update to tick + dt.
+  const double ahead = dt + (tick.stamp - seed_track.last_update).seconds();
+  const cv::Vec3d p = seed_track.position_world_m + ahead * seed_track.velocity_world_mps;
+  r.confidence = entry->confidence;
+  r.value = {{"position_m", vec_json(p)},
+             {"track_id", seed_track.id},
+             {"velocity_mps", vec_json(seed_track.velocity_world_mps)}};
+  r.legacy.emplace();
+  append_mm(*r.legacy, p);
+}
+
+// F1 checkMutualGaze, F5 getEyeGaze, F6 getEyes from the gaze analyser (keys::kEyeGaze,
+// keys::kMutualGaze) and the eye centres (keys::kEyeCenters).
+void Evaluator::evaluate_gaze(const MultiFrame& tick, const BlackboardView& view,
+                              std::vector<PrimitiveRecord>& out) {
+  std::vector<SensorId> sensors;
+  for (const auto& [id, m] : face_cameras_) sensors.push_back(id);
+  PrimitiveRecord& mutual = out[static_cast<int>(PrimitiveId::kCheckMutualGaze) - 1];
+  PrimitiveRecord& eye_gaze = out[static_cast<int>(PrimitiveId::kGetEyeGaze) - 1];
+  PrimitiveRecord& eyes = out[static_cast<int>(PrimitiveId::kGetEyes) - 1];
+
+  const auto m = view.get(keys::kMutualGaze);
+  mutual.status = observation_status(m, sensors, tick.stamp);
+  if (m) mutual.data_stamp = m->stamp;
+  if (mutual.status == PrimitiveStatus::kOk) {
+    const MutualGaze& g = *m->value;
+    mutual.confidence = m->confidence;
+    mutual.value = {{"mutual", g.mutual}, {"held_s", g.held_s},
+                    {"target", g.target}, {"raw", g.raw},
+                    {"mode", g.mode},     {"miss_distance_m", g.miss_distance_m}};
+    mutual.legacy = std::vector<double>{g.mutual ? 1.0 : 0.0};
+  } else if (mutual.status == PrimitiveStatus::kNoData) {
+    mutual.legacy = std::vector<double>{-1.0};  // DREAM: no face
+  }
+
+  const auto g = view.get(keys::kEyeGaze);
+  eye_gaze.status = observation_status(g, sensors, tick.stamp);
+  if (g) eye_gaze.data_stamp = g->stamp;
+  if (eye_gaze.status == PrimitiveStatus::kOk) {
+    const EyeGaze& e = *g->value;
+    eye_gaze.confidence = g->confidence;
+    eye_gaze.source = e.camera;
+    eye_gaze.query = {{"eye", "both"}};
+    eye_gaze.value = {{"origin", vec_json(e.both.origin_world_m)},
+                      {"direction", vec_json(e.both.direction_world)},
+                      {"theta_deg", e.both.theta_deg},
+                      {"phi_deg", e.both.phi_deg},
+                      {"camera", e.camera},
+                      {"method", e.method},
+                      {"right", ray_json(e.right)},
+                      {"left", ray_json(e.left)}};
+    eye_gaze.legacy = std::vector<double>{e.both.direction_world[0], e.both.direction_world[1],
+                                          e.both.direction_world[2], dream_camera_id(e.camera)};
+  }
+
+  // getEyes: 2-D centres from the eye-centre locator; 3-D positions from the gaze rays' origins
+  // (head pose + half the interpupillary distance), so only with a gaze.
+  const auto c = view.get(keys::kEyeCenters);
+  eyes.status = observation_status(c, sensors, tick.stamp);
+  if (c) eyes.data_stamp = c->stamp;
+  if (eyes.status != PrimitiveStatus::kOk) return;
+  const EyeCenters& ec = *c->value;
+  if (!ec.right.found && !ec.left.found) {
+    eyes.status = PrimitiveStatus::kNoData;  // e.g. closed eyes
+    return;
+  }
+  auto px = [](const EyeCenter& e) {
+    return e.found ? json::array({e.center_px.x, e.center_px.y}) : json(nullptr);
+  };
+  const bool have_3d = eye_gaze.status == PrimitiveStatus::kOk && g->stamp == c->stamp;
+  auto pos = [&](const GazeRay& r) { return have_3d ? vec_json(r.origin_world_m) : json(nullptr); };
+  eyes.confidence = c->confidence;
+  eyes.source = ec.camera;
+  eyes.value = {{"camera", ec.camera},
+                {"right_px", px(ec.right)},
+                {"left_px", px(ec.left)},
+                {"right_m", have_3d ? pos(g->value->right) : json(nullptr)},
+                {"left_m", have_3d ? pos(g->value->left) : json(nullptr)},
+                {"method", ec.method}};
+  if (have_3d && g->value->right.valid && g->value->left.valid) {
+    eyes.legacy.emplace();
+    append_mm(*eyes.legacy, g->value->left.origin_world_m);  // DREAM: left first
+    append_mm(*eyes.legacy, g->value->right.origin_world_m);
+  }
 }
 
 // F16 getSoundDirection, default query threshold = options_.sound_direction_threshold.

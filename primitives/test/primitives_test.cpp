@@ -1,3 +1,4 @@
+#include "dreamsense/core/perception.hpp"
 #include "dreamsense/primitives/body_primitives.hpp"
 #include "dreamsense/primitives/evaluator.hpp"
 
@@ -103,6 +104,40 @@ TEST(Evaluator, BodyPrimitivesOkNoDataStaleAndOffline) {
   // The skeleton stream goes silent for more than a second.
   r = ev.evaluate(tick(1400, false), bb.snapshot());
   EXPECT_EQ(status(r, PrimitiveId::kGetBody), PrimitiveStatus::kSensorOffline);
+}
+
+TEST(Evaluator, IdentifyVoiceIsOkOnceAtTheUtteranceWithDreamsLegacy) {
+  Evaluator ev({}, "", "mic");
+  ev.enable_voice("mic");
+  Blackboard bb;
+  auto tick = [&](int64_t t) {
+    MultiFrame mf;
+    mf.stamp = ms(t);
+    mf.chunks["mic"].push_back(make_frame("mic", ms(t), 0, AudioChunk{}));
+    return mf;
+  };
+  auto voice = [](const std::vector<PrimitiveRecord>& r) {
+    return r[static_cast<int>(PrimitiveId::kIdentifyVoice) - 1];
+  };
+  EXPECT_EQ(voice(ev.evaluate(tick(0), bb.snapshot())).status, PrimitiveStatus::kNoData);
+  const std::pair<const char*, double> cases[] = {{"child", 1}, {"therapist", 0}, {"unknown", -1}};
+  int64_t t = 40;
+  for (const auto& [who, legacy] : cases) {
+    BlackboardWriter w("voice_id");
+    w.set(keys::kSpeakerIdentity,
+          SpeakerIdentity{who, who, 0.8, ms(t - 1000), ms(t - 500), "mic", "gmm_ubm"}, ms(t), 0.8f);
+    bb.commit(w, ms(t));
+    const auto r = voice(ev.evaluate(tick(t), bb.snapshot()));
+    ASSERT_EQ(r.status, PrimitiveStatus::kOk) << who;
+    EXPECT_EQ(r.value["speaker_id"], who);
+    EXPECT_EQ(r.value["method"], "gmm_ubm");
+    EXPECT_EQ(r.value["start_ns"], ms(t - 1000).ns());
+    ASSERT_TRUE(r.legacy);
+    EXPECT_EQ(*r.legacy, std::vector<double>{legacy});
+    // The next tick repeats nothing.
+    EXPECT_EQ(voice(ev.evaluate(tick(t + 40), bb.snapshot())).status, PrimitiveStatus::kNoData);
+    t += 80;
+  }
 }
 
 TEST(Evaluator, RecordJsonHasTheContractFields) {

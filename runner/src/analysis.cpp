@@ -4,12 +4,24 @@
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/core/perception.hpp"
+#include "dreamsense/export/overlay.hpp"
 #include "dreamsense/export/report.hpp"
 #include "dreamsense/export/writers.hpp"
+#include "dreamsense/eye_centers/eye_center_analyzer.hpp"
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
+#include "dreamsense/face_landmarks/face_landmarks_analyzer.hpp"
+#include "dreamsense/face_tracks/face_tracks_analyzer.hpp"
+#include "dreamsense/gaze/gaze_analyzer.hpp"
+#include "dreamsense/head_pose/head_pose_analyzer.hpp"
 #include "dreamsense/sound_direction/sound_direction_analyzer.hpp"
 #include "dreamsense/sources/session.hpp"
 #include "dreamsense/speech/speech_analyzer.hpp"
+#include "dreamsense/voice_id/audio_files.hpp"
+#include "dreamsense/voice_id/voice_id_analyzer.hpp"
+
+#include <cmath>
+#include <optional>
+#include <sstream>
 
 namespace dreamsense::runner {
 namespace fs = std::filesystem;
@@ -17,6 +29,9 @@ namespace fs = std::filesystem;
 Status AnalysisOptions::check() const {
   if (session_dir.empty())
     return make_error(ErrorCode::kInvalidArgument, "analysis: no session folder given");
+  if (voice_method != "off")
+    if (auto m = voice_id::parse_voice_id_method(voice_method); !m)
+      return tl::unexpected(m.error());
   return evaluator.check();
 }
 
@@ -57,6 +72,59 @@ Status sensor_pose(const sources::SessionReader& reader, const sources::StreamEn
   R = m->R.t();
   t = -(m->R.t() * m->t);
   return ok_status();
+}
+
+// "x y z" (spaces and/or commas) -> a vector; nullopt unless exactly three finite numbers.
+std::optional<cv::Vec3d> parse_vec3(std::string text) {
+  std::replace(text.begin(), text.end(), ',', ' ');
+  std::istringstream in(text);
+  cv::Vec3d v;
+  if (!(in >> v[0] >> v[1] >> v[2])) return std::nullopt;
+  std::string rest;
+  if (in >> rest) return std::nullopt;
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(v[i])) return std::nullopt;
+  return v;
+}
+
+// The voice id analyser that the options and the session ask for; null: identifyVoice disabled.
+Result<std::unique_ptr<Analyzer>> make_voice_analyzer(const AnalysisOptions& o,
+                                                      const sources::SessionManifest& manifest,
+                                                      const fs::path& session_dir,
+                                                      const SensorId& audio) {
+  if (o.voice_method == "off") return std::unique_ptr<Analyzer>{};
+  auto method = voice_id::parse_voice_id_method(o.voice_method);
+  if (!method) return tl::unexpected(method.error());
+  voice_id::VoiceIdAnalyzerOptions vo;
+  vo.audio_sensor = audio;
+  vo.method = *method;
+  if (vo.method == voice_id::VoiceIdMethod::kGmmUbm) {
+    const auto enroll = manifest.metadata.find("voice_enroll");
+    if (!o.voice_model.empty()) {
+      vo.model_file = o.voice_model;
+    } else if (enroll == manifest.metadata.end()) {
+      log::info(
+          "identifyVoice disabled: no voice model given and the session has no enrolment "
+          "audio (metadata voice_enroll)");
+      return std::unique_ptr<Analyzer>{};
+    } else {
+      auto audio_files = voice_id::read_speaker_folders(session_dir / enroll->second);
+      if (!audio_files) return tl::unexpected(audio_files.error());
+      auto m = voice_id::train_voice_model(*audio_files, {}, voice_id::VoiceTrainOptions{});
+      if (!m)
+        return make_error(m.error().code, "{}: {}", (session_dir / enroll->second).string(),
+                          m.error().message);
+      std::string who;
+      for (const auto& s : m->speakers)
+        who += fmt::format("{}{} ({:.1f} s)", who.empty() ? "" : ", ", s.id,
+                           s.frames * m->features.hop_s);
+      log::info("voice models from the session's enrolment: {}", who);
+      vo.model = std::make_shared<const voice_id::VoiceModel>(std::move(*m));
+    }
+  }
+  auto a = voice_id::make_voice_id_analyzer(vo);
+  if (!a) return tl::unexpected(a.error());
+  return std::move(*a);
 }
 
 // Session errors name files relative to the session folder; show where that folder is.
@@ -101,6 +169,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   // Sound direction on the first audio stream: array geometry from its calibration file
   // (calib/<id>.yaml: mic positions, rate, extrinsics), Kinect v1 when it has none.
   SensorId audio_sensor;
+  std::vector<cv::Vec3d> audio_mics;  // the array's geometry, for the speech beamformer
   for (const auto& s : manifest.streams) {
     if (s.kind != SensorKind::kAudio || !audio_sensor.empty()) continue;
     sound_direction::SoundDirectionAnalyzerOptions so;
@@ -126,6 +195,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     if (!a) return tl::unexpected(a.error());
     analyzers.push_back(std::move(*a));
     audio_sensor = s.id;
+    audio_mics = so.geometry.mics_m;
     used.push_back(s.id);
   }
 
@@ -141,10 +211,23 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
       speech::SpeechAnalyzerOptions so;
       so.audio_sensor = audio_sensor;
       so.grammar = grammar;
+      so.mic_positions_m = audio_mics;  // steers toward the sound direction (runs before it)
       auto a = speech::make_speech_analyzer(so);
       if (!a) return tl::unexpected(a.error());
       analyzers.push_back(std::move(*a));
       speech_sensor = audio_sensor;
+    }
+  }
+
+  // Speaker identification on the same audio stream, after the sound direction analyser (the
+  // direction rule reads its directions).
+  SensorId voice_sensor;
+  if (!audio_sensor.empty()) {
+    auto a = make_voice_analyzer(options, manifest, (*full)->dir(), audio_sensor);
+    if (!a) return tl::unexpected(a.error());
+    if (*a) {
+      analyzers.push_back(std::move(*a));
+      voice_sensor = audio_sensor;
     }
   }
 
@@ -164,6 +247,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   if (!face_cameras.empty()) {
     face_detection::FaceDetectionAnalyzerOptions fo;
     fo.cameras.clear();
+    fo.camera_models = face_cameras;  // select the camera by head yaw (D4.2)
     for (const auto& [id, m] : face_cameras) {
       fo.cameras.push_back(id);
       used.push_back(id);
@@ -171,6 +255,63 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     auto a = face_detection::make_face_detection_analyzer(fo);
     if (!a) return tl::unexpected(a.error());
     analyzers.push_back(std::move(*a));
+
+    // Landmarks and head pose on the selected camera's face.
+    face_landmarks::FaceLandmarksAnalyzerOptions lo;
+    lo.cameras = fo.cameras;
+    auto l = face_landmarks::make_face_landmarks_analyzer(lo);
+    if (!l) return tl::unexpected(l.error());
+    analyzers.push_back(std::move(*l));
+    head_pose::HeadPoseAnalyzerOptions ho;
+    ho.cameras = face_cameras;
+    std::optional<gaze::GazeModelFile> gaze_model;
+    if (!options.gaze_model.empty()) {
+      auto m = gaze::read_gaze_model(options.gaze_model);
+      if (!m) return tl::unexpected(m.error());
+      gaze_model = *m;
+      ho.model_from_head = m->model_from_head;  // the subject's head-model offset
+    }
+    auto h = head_pose::make_head_pose_analyzer(ho);
+    if (!h) return tl::unexpected(h.error());
+    analyzers.push_back(std::move(*h));
+    // Pupil centres in the landmarks' eye regions, then gaze and mutual gaze.
+    eye_centers::EyeCenterAnalyzerOptions eo;
+    eo.cameras = fo.cameras;
+    auto e = eye_centers::make_eye_center_analyzer(eo);
+    if (!e) return tl::unexpected(e.error());
+    analyzers.push_back(std::move(*e));
+    gaze::GazeAnalyzerOptions go;
+    go.cameras = face_cameras;
+    go.mutual = options.mutual_gaze;
+    if (gaze_model) {
+      go.estimator.plane = gaze_model->plane;
+      go.estimator.right_eye = gaze_model->right_eye;
+      go.estimator.left_eye = gaze_model->left_eye;
+    }
+    if (options.robot_head_from_session) {
+      if (auto it = manifest.metadata.find("robot_head_m"); it != manifest.metadata.end()) {
+        auto v = parse_vec3(it->second);
+        if (!v)
+          return make_error(ErrorCode::kCorruptData,
+                            "{}: metadata robot_head_m must be three numbers \"x y z\" in metres "
+                            "(got \"{}\")",
+                            (options.session_dir / sources::kManifestName).string(), it->second);
+        go.mutual.robot_head_m = *v;
+      } else {
+        log::info("the session has no robot_head_m metadata: mutual gaze uses ({}, {}, {}) m",
+                  go.mutual.robot_head_m[0], go.mutual.robot_head_m[1], go.mutual.robot_head_m[2]);
+      }
+    }
+    auto g = gaze::make_gaze_analyzer(go);
+    if (!g) return tl::unexpected(g.error());
+    analyzers.push_back(std::move(*g));
+
+    // 3-D face tracks (F23 trackFace).
+    face_tracks::FaceTracksAnalyzerOptions to;
+    to.cameras = face_cameras;
+    auto t = face_tracks::make_face_tracks_analyzer(to);
+    if (!t) return tl::unexpected(t.error());
+    analyzers.push_back(std::move(*t));
   }
 
   sources::SessionReaderOptions ro;
@@ -203,10 +344,25 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
       return tl::unexpected(s.error());
   }
   primitives::Evaluator evaluator(options.evaluator, body_sensor, audio_sensor);
-  if (!face_cameras.empty()) evaluator.enable_faces(face_cameras);
+  if (!face_cameras.empty()) {
+    evaluator.enable_faces(face_cameras);
+    evaluator.enable_gaze();
+  }
   if (!speech_sensor.empty()) evaluator.enable_speech(speech_sensor);
+  if (!voice_sensor.empty()) evaluator.enable_voice(voice_sensor);
 
+  exporters::OverlayWriter overlay;
+  const bool want_overlay = write && options.overlay && !face_cameras.empty();
+  if (want_overlay) {
+    exporters::OverlayOptions oo;
+    oo.cameras = face_cameras;
+    oo.fps = manifest.frame_rate > 0 ? manifest.frame_rate : 25.0;
+    if (auto s = overlay.open(options.out_dir / "overlay.mp4", oo); !s)
+      return tl::unexpected(s.error());
+  }
   auto on_tick = [&](const MultiFrame& tick, const BlackboardView& view) -> Status {
+    if (want_overlay)
+      if (auto s = overlay.add(tick, view); !s) return s;
     const auto records = evaluator.evaluate(tick, view);
     for (const auto& r : records)
       summary.status_counts[primitives::info(r.id).name][primitives::to_string(r.status)]++;
@@ -218,6 +374,12 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     if (auto body = view.get(keys::kChildBody);
         body && body->present() && tick.stamp - body->stamp <= options.evaluator.freshness)
       f.skeleton = body->value->body;
+    if (auto h = view.get(keys::kHeadPose);
+        h && h->present() && tick.stamp - h->stamp <= options.evaluator.freshness)
+      f.head_gaze = h->value->gaze_direction_world;
+    if (auto g = view.get(keys::kEyeGaze);
+        g && g->present() && tick.stamp - g->stamp <= options.evaluator.freshness)
+      f.eye_gaze = g->value->both.direction_world;
     dream.add(f);
     return ok_status();
   };
@@ -233,6 +395,9 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   if (write) {
     if (auto s = jsonl.commit(); !s) return tl::unexpected(s.error());
     if (auto s = events.commit(); !s) return tl::unexpected(s.error());
+    if (want_overlay) {
+      if (auto s = overlay.commit(); !s) return tl::unexpected(s.error());
+    }
     if (auto s = dream.write(options.out_dir / "dream.json", manifest); !s)
       return tl::unexpected(s.error());
     std::string names;
@@ -247,6 +412,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     summary.outputs = {options.out_dir / "primitives.jsonl", options.out_dir / "events.log",
                        options.out_dir / "dream.json", options.out_dir / "report.html",
                        options.out_dir / "summary.json"};
+    if (want_overlay) summary.outputs.push_back(options.out_dir / "overlay.mp4");
     exporters::OutputFile f;
     if (auto s = f.open(options.out_dir / "summary.json"); !s) return tl::unexpected(s.error());
     nlohmann::json sj = summary.to_json();

@@ -10,6 +10,7 @@ namespace {
 constexpr double kTwoPi = 2.0 * CV_PI;
 constexpr double kUpperArm = 0.21, kForearm = 0.19, kHand = 0.07;
 constexpr double kTransitionS = 0.5;
+constexpr double kHeadLagS = 0.06;  // the head starts turning after the eyes
 
 double uniform(std::mt19937_64& rng, double lo, double hi) {
   return lo + (hi - lo) * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
@@ -68,6 +69,22 @@ std::string_view action_label(DemoAction action) {
       return "hands_on_head";
   }
   return "none";
+}
+
+std::string_view gaze_target_label(GazeTargetKind kind) {
+  switch (kind) {
+    case GazeTargetKind::kRobot:
+      return "robot";
+    case GazeTargetKind::kObject:
+      return "object";
+    case GazeTargetKind::kTherapist:
+      return "therapist";
+    case GazeTargetKind::kTable:
+      return "table";
+    case GazeTargetKind::kElsewhere:
+      return "elsewhere";
+  }
+  return "elsewhere";
 }
 
 int action_dream_id(DemoAction action) {
@@ -140,20 +157,13 @@ DemoScript::DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry)
         {total * split, uniform(rng, f_lo, f_hi), uniform(rng, 0, kTwoPi)},
         {total * (1 - split), uniform(rng, f2_lo, f2_hi), uniform(rng, 0, kTwoPi)}};
   };
-  yaw_ = two(55.0, 0.05, 0.10, 0.13, 0.25);
-  pitch_ = two(15.0, 0.07, 0.14, 0.18, 0.30);
+  // Free head wander on top of the turns towards the gaze targets (fixations, below).
+  yaw_ = two(6.0, 0.05, 0.10, 0.13, 0.25);
+  pitch_ = two(4.0, 0.07, 0.14, 0.18, 0.30);
   roll_ = two(10.0, 0.06, 0.12, 0.15, 0.28);
   pos_x_ = two(0.03, 0.04, 0.10, 0.12, 0.2);
   pos_y_ = two(0.015, 0.05, 0.12, 0.15, 0.25);
   pos_z_ = two(0.025, 0.04, 0.10, 0.12, 0.2);
-
-  std::mt19937_64 hold_rng(sub_seed(seed, "holds"));
-  double t = uniform(hold_rng, 0.6, 2.5);
-  while (t < duration_s) {
-    const double len = uniform(hold_rng, 1.0, 3.0);
-    holds_.emplace_back(t, t + len);
-    t += len + uniform(hold_rng, 2.5, 5.0);
-  }
 
   actions_ = make_action_schedule(seed, duration_s);
   std::mt19937_64 arm_rng(sub_seed(seed, "arms"));
@@ -184,35 +194,226 @@ DemoScript::DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry)
     p.yaw = {uniform(obj_rng, 10, 30), uniform(obj_rng, 0.03, 0.1), uniform(obj_rng, 0, kTwoPi)};
     paths_.push_back(p);
   }
+
+  std::mt19937_64 therapist_rng(sub_seed(seed, "therapist"));
+  therapist_side_ = (therapist_rng() % 2) ? 1.0 : -1.0;
+  make_fixations();
+  make_blinks();
 }
 
-double DemoScript::hold_weight(double t) const {
-  double w = 0;
-  for (const auto& [a, b] : holds_) {
-    if (t >= a && t <= b) return 1.0;
-    if (t < a) w = std::max(w, smoothstep((t - (a - kTransitionS)) / kTransitionS));
-    if (t > b) w = std::max(w, smoothstep(((b + kTransitionS) - t) / kTransitionS));
+cv::Vec3d DemoScript::therapist_head_m() const {
+  const cv::Vec3d& o = geometry_.therapist_head_m;
+  return {therapist_side_ * std::abs(o[0]), o[1], o[2]};
+}
+
+namespace {
+// Gaze direction for yaw/pitch (degrees), the inverse of look_at_angles.
+cv::Vec3d gaze_from_angles(double yaw_deg, double pitch_deg) {
+  const double y = yaw_deg * CV_PI / 180, p = pitch_deg * CV_PI / 180;
+  return {-std::sin(y) * std::cos(p), std::sin(p), -std::cos(y) * std::cos(p)};
+}
+}  // namespace
+
+// Fixation schedule: the session is cut into cycles of 3.4-5.4 s (rescaled to tile it exactly);
+// each cycle holds one look at the robot taking 36-44 % of it (so the mutual-gaze fraction is
+// ~40 % in every seed) and 1-3 looks elsewhere (a toy 40 %, the therapist 18 %, a point on the
+// table 15 %, elsewhere in the room 27 %), in a seed-dependent order. Consecutive robot looks
+// merge.
+void DemoScript::make_fixations() {
+  std::mt19937_64 rng(sub_seed(seed_, "gaze"));
+  const DemoGeometry& g = geometry_;
+  const int cycles = std::max(1, static_cast<int>(std::lround(duration_s_ / 4.4)));
+  std::vector<double> lengths(static_cast<size_t>(cycles));
+  double sum = 0;
+  for (double& l : lengths) sum += (l = uniform(rng, 3.4, 5.4));
+  for (double& l : lengths) l *= duration_s_ / sum;
+  int last_object = -1;
+  GazeTargetKind last_kind = GazeTargetKind::kRobot;
+  std::vector<Fixation> seq;
+  double t = 0;
+  for (int c = 0; c < cycles; ++c) {
+    const double len = lengths[static_cast<size_t>(c)];
+    const double robot = uniform(rng, 0.36, 0.44) * len;
+    const double other = len - robot;
+    const int k = std::clamp(static_cast<int>(other / 1.1), 1, 3);
+    std::vector<double> w(static_cast<size_t>(k));
+    double wsum = 0;
+    for (double& x : w) wsum += (x = uniform(rng, 0.75, 1.25));
+    const bool robot_first = rng() % 2 == 0;
+    std::vector<Fixation> cycle;
+    for (int i = 0; i < k; ++i) {
+      Fixation f;
+      f.end_s = other * w[static_cast<size_t>(i)] / wsum;  // a duration for now
+      const double u = uniform(rng, 0, 1);
+      f.kind = u < 0.40   ? GazeTargetKind::kObject
+               : u < 0.58 ? GazeTargetKind::kTherapist
+               : u < 0.73 ? GazeTargetKind::kTable
+                          : GazeTargetKind::kElsewhere;
+      if (f.kind == last_kind && f.kind != GazeTargetKind::kObject)
+        f.kind = GazeTargetKind::kObject;
+      if (f.kind == GazeTargetKind::kObject) {
+        f.object = static_cast<int>(rng() % objects_.size());
+        if (f.object == last_object) f.object = (f.object + 1) % static_cast<int>(objects_.size());
+        last_object = f.object;
+      } else if (f.kind == GazeTargetKind::kTherapist) {
+        f.point_m = therapist_head_m();
+      } else if (f.kind == GazeTargetKind::kTable) {
+        f.point_m = cv::Vec3d(uniform(rng, -0.35, 0.35), g.table_top_y_m, uniform(rng, 0.40, 0.62));
+      } else {  // elsewhere in the room: 30-62 deg to a side, 18 deg up .. 8 deg down, 1.6 m
+        const double side = rng() % 2 ? 1.0 : -1.0;
+        f.point_m = g.head_rest_m +
+                    1.6 * gaze_from_angles(side * uniform(rng, 30, 62), uniform(rng, -18, 8));
+      }
+      last_kind = f.kind;
+      cycle.push_back(f);
+    }
+    Fixation r;
+    r.kind = GazeTargetKind::kRobot;
+    r.point_m = g.robot_head_m;
+    r.end_s = robot;
+    if (robot_first)
+      cycle.insert(cycle.begin(), r);
+    else
+      cycle.push_back(r);
+    for (Fixation& f : cycle) {
+      const double d = f.end_s;
+      f.start_s = t;
+      f.end_s = t + d;
+      t += d;
+      if (!seq.empty() && seq.back().kind == GazeTargetKind::kRobot &&
+          f.kind == GazeTargetKind::kRobot)
+        seq.back().end_s = f.end_s;
+      else
+        seq.push_back(f);
+    }
   }
-  return w;
+  seq.back().end_s = std::max(seq.back().end_s, duration_s_);
+  // Head shares and turn times from the target directions seen from the rest position.
+  double prev_yaw = 0, prev_pitch = 0;
+  for (size_t i = 0; i < seq.size(); ++i) {
+    Fixation& f = seq[i];
+    double yaw = 0, pitch = 0;
+    look_at_angles(g.head_rest_m, fixation_point(f, f.start_s), yaw, pitch);
+    // The head turns 45-70 % of the way (35-60 % vertically), and at least far enough that the
+    // eyes stay ~8 deg (yaw) / ~4 deg (pitch) inside their range.
+    f.head_yaw_share =
+        std::min(1.0, std::max(uniform(rng, 0.45, 0.7), 1 - 17 / std::max(std::abs(yaw), 1e-3)));
+    f.head_pitch_share =
+        std::min(1.0, std::max(uniform(rng, 0.35, 0.6), 1 - 14 / std::max(std::abs(pitch), 1e-3)));
+    const double hy = yaw * f.head_yaw_share, hp = pitch * f.head_pitch_share;
+    const double turn = std::hypot(hy - prev_yaw, hp - prev_pitch);
+    f.head_turn_s = std::clamp(0.25 + turn / 90, 0.35, 0.8);
+    f.head_turn_s = std::max(0.05, std::min(f.head_turn_s, f.end_s - f.start_s - kHeadLagS - 0.02));
+    prev_yaw = hy;
+    prev_pitch = hp;
+  }
+  fixations_ = std::move(seq);
+}
+
+// Blinks every 2.5-5.5 s (first after 0.8-3 s): closing 80 ms, closed 60 ms, opening 160 ms.
+void DemoScript::make_blinks() {
+  std::mt19937_64 rng(sub_seed(seed_, "blinks"));
+  for (double t = uniform(rng, 0.8, 3.0); t < duration_s_; t += uniform(rng, 2.5, 5.5))
+    blinks_.push_back(t);
+}
+
+double DemoScript::eyelid_closure(double t) const {
+  double c = 0;
+  for (double b : blinks_) {
+    const double dt = t - b;
+    if (dt < 0 || dt >= 0.30) continue;
+    if (dt < 0.08)
+      c = std::max(c, smoothstep(dt / 0.08));
+    else if (dt < 0.14)
+      c = 1;
+    else
+      c = std::max(c, 1 - smoothstep((dt - 0.14) / 0.16));
+  }
+  return c;
+}
+
+const Fixation& DemoScript::fixation_at(double t) const {
+  auto it = std::upper_bound(fixations_.begin(), fixations_.end(), t,
+                             [](double x, const Fixation& f) { return x < f.start_s; });
+  if (it == fixations_.begin()) return fixations_.front();
+  return *(it - 1);
+}
+
+cv::Vec3d DemoScript::fixation_point(const Fixation& f, double t) const {
+  if (f.kind == GazeTargetKind::kObject) {
+    const auto states = object_states(t);
+    return states[static_cast<size_t>(f.object)].position_m;
+  }
+  return f.point_m;
 }
 
 HeadPose DemoScript::head_pose(double t) const {
   HeadPose p;
   p.position_m =
       geometry_.head_rest_m + cv::Vec3d(eval(pos_x_, t), eval(pos_y_, t), eval(pos_z_, t));
-  const double free_yaw = std::clamp(eval(yaw_, t), -55.0, 55.0);
-  const double free_pitch = std::clamp(eval(pitch_, t), -15.0, 15.0);
-  const double free_roll = std::clamp(eval(roll_, t), -10.0, 10.0);
-  double look_yaw = 0, look_pitch = 0;
-  look_at_angles(p.position_m, geometry_.robot_head_m, look_yaw, look_pitch);
-  // Small fixational jitter while looking at the robot (keeps well inside gaze_radius).
-  look_yaw += 1.5 * std::sin(kTwoPi * 0.7 * t);
-  look_pitch += 1.0 * std::sin(kTwoPi * 0.5 * t + 1.0);
-  const double w = hold_weight(t);
-  p.yaw_deg = (1 - w) * free_yaw + w * look_yaw;
-  p.pitch_deg = (1 - w) * free_pitch + w * look_pitch;
-  p.roll_deg = (1 - w) * free_roll + w * 0.3 * free_roll;
+  // The head turns part of the way towards the current target, blending from the previous one.
+  const size_t i = static_cast<size_t>(&fixation_at(t) - fixations_.data());
+  auto head_angles = [&](size_t k, double& yaw, double& pitch) {
+    const Fixation& f = fixations_[k];
+    look_at_angles(p.position_m, fixation_point(f, t), yaw, pitch);
+    yaw *= f.head_yaw_share;
+    pitch *= f.head_pitch_share;
+  };
+  double yaw = 0, pitch = 0;
+  head_angles(i, yaw, pitch);
+  if (i > 0) {
+    const Fixation& f = fixations_[i];
+    const double w = smoothstep((t - f.start_s - kHeadLagS) / f.head_turn_s);
+    if (w < 1) {
+      double y0 = 0, p0 = 0;
+      head_angles(i - 1, y0, p0);
+      yaw = y0 + w * (yaw - y0);
+      pitch = p0 + w * (pitch - p0);
+    }
+  }
+  p.yaw_deg = std::clamp(yaw + eval(yaw_, t), -55.0, 55.0);
+  p.pitch_deg = std::clamp(pitch + eval(pitch_, t), -15.0, 15.0);
+  p.roll_deg = std::clamp(eval(roll_, t), -10.0, 10.0);
   return p;
+}
+
+GazeState DemoScript::gaze(double t) const {
+  GazeState s;
+  const HeadPose hp = head_pose(t);
+  const cv::Matx33d R = hp.rotation();
+  const Fixation& f = fixation_at(t);
+  // Eye-in-head rotation towards `point` (with fixational jitter), clamped to the eye's range.
+  auto aim = [&](const cv::Vec3d& point, GazeState& g) {
+    g.intended_m = point;
+    const double dist = cv::norm(point - hp.position_m);
+    const cv::Vec3d jittered =
+        point + dist * cv::Vec3d(0.004 * std::sin(kTwoPi * 0.83 * t),
+                                 0.003 * std::sin(kTwoPi * 1.27 * t + 1.0), 0);
+    const cv::Vec3d d = R.t() * normalized(jittered - hp.position_m);
+    const double yaw = std::atan2(-d[0], -d[2]) * 180 / CV_PI;
+    const double pitch = std::asin(std::clamp(d[1], -1.0, 1.0)) * 180 / CV_PI;
+    g.eye_yaw_deg = std::clamp(yaw, -kMaxEyeYawDeg, kMaxEyeYawDeg);
+    g.eye_pitch_deg = std::clamp(pitch, -kMaxEyePitchDeg, kMaxEyePitchDeg);
+    g.target_m = hp.position_m + dist * (R * gaze_from_angles(g.eye_yaw_deg, g.eye_pitch_deg));
+    return g.eye_yaw_deg != yaw || g.eye_pitch_deg != pitch;
+  };
+  s.kind = f.kind;
+  s.object = f.object;
+  const bool clamped = aim(fixation_point(f, t), s);
+  // A target out of the eyes' reach while the head is still turning: the eyes wait for the head
+  // on the previous target rather than pass near the robot (which would be a spurious, brief
+  // mutual gaze).
+  const size_t i = static_cast<size_t>(&f - fixations_.data());
+  if (clamped && i > 0 && f.kind != GazeTargetKind::kRobot &&
+      ray_point_distance(hp.position_m, s.target_m - hp.position_m, geometry_.robot_head_m) <
+          geometry_.gaze_radius_m + 0.08) {
+    const Fixation& prev = fixations_[i - 1];
+    s.kind = prev.kind;
+    s.object = prev.object;
+    aim(fixation_point(prev, t), s);
+  }
+  s.eyelid_closure = eyelid_closure(t);
+  return s;
 }
 
 DemoAction DemoScript::action_at(double t) const {

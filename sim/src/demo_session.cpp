@@ -6,6 +6,7 @@
 #include "dreamsense/sim/scene_renderer.hpp"
 #include "dreamsense/sources/session.hpp"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -164,8 +165,65 @@ const ClipSpec kClips[] = {
      "sense_and_sensibility_01_austen_64kb-0890", "therapist"},
 };
 
+// Enrolment audio for speaker identification (identifyVoice): other recordings of the session's
+// speakers that the session never plays. The child's clips come from two talkers (cards/*.wav;
+// goforward.raw, whose talker also says numbers.raw and something.raw), the therapist's from the
+// LibriVox reader.
+const std::pair<const char*, const char*> kEnrolClips[] = {
+    {"child", "cards/005.wav"},
+    {"child", "numbers.raw"},
+    {"child", "something.raw"},
+    {"therapist", "librivox/sense_and_sensibility_01_austen_64kb-0870.wav"},
+    {"therapist", "librivox/sense_and_sensibility_01_austen_64kb-0920.wav"},
+};
+
+// enroll/<speaker>/<n>.wav (session metadata voice_enroll): what the array's first microphone
+// records in the same room before the session, the child at the head rest, the therapist at the
+// side (45 deg, 1.6 m), with the session's noise level. 16-bit mono at the demo rate.
+Status write_enrolment(const fs::path& dir, const DemoOptions& o, const DemoGeometry& g,
+                       const RoomOptions& room, const std::vector<cv::Vec3d>& mics_room) {
+  std::map<std::string, int> count;
+  uint64_t index = 0;
+  for (const auto& [speaker, file] : kEnrolClips) {
+    auto x = load_clip(o.pocketsphinx_data_dir / file, o.audio_sample_rate);
+    if (!x) return tl::unexpected(x.error());
+    const double az = 45 * CV_PI / 180;
+    const cv::Vec3d source =
+        std::string(speaker) == "child"
+            ? g.head_rest_m + cv::Vec3d(0, 0.075, -0.01)  // mouth
+            : g.mic_array_m + cv::Vec3d(1.6 * std::sin(az), -0.3, 1.6 * std::cos(az));
+    auto wet =
+        simulate(*x, room, AcousticPlacement{g.room_from_world(source), {mics_room.front()}});
+    if (!wet) return tl::unexpected(wet.error());
+    const auto [a, b] = speech_extent(*x, o.audio_sample_rate);
+    const size_t n = (*wet)[0].size();
+    add_noise(*wet, o.snr_db, NoiseColor::kPink, sub_seed(o.seed, "enrol_noise", index++),
+              mean_power(*wet, std::min(n, static_cast<size_t>(a * o.audio_sample_rate)),
+                         std::min(n, static_cast<size_t>(b * o.audio_sample_rate))));
+    double peak = 1e-12;
+    for (double v : (*wet)[0]) peak = std::max(peak, std::abs(v));
+    for (double& v : (*wet)[0]) v *= 0.5 / peak;
+    const fs::path folder = dir / "enroll" / speaker;
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    const fs::path out = folder / fmt::format("{:02d}.wav", count[speaker]++);
+    SF_INFO info{};
+    info.samplerate = o.audio_sample_rate;
+    info.channels = 1;
+    info.format = SF_FORMAT_WAV | SF_FORMAT_PCM_16;
+    SNDFILE* f = sf_open(out.string().c_str(), SFM_WRITE, &info);
+    if (!f) return make_error(ErrorCode::kIoError, "{}: cannot write", out.string());
+    const auto frames = static_cast<sf_count_t>(n);
+    const bool ok = sf_writef_double(f, (*wet)[0].data(), frames) == frames;
+    sf_close(f);
+    if (!ok) return make_error(ErrorCode::kIoError, "{}: write failed", out.string());
+  }
+  return ok_status();
+}
+
 struct Media {
-  std::unique_ptr<PlanarFaceRenderer> face;
+  std::unique_ptr<FaceRenderer> face;
+  bool moving_eyes = false;
   std::vector<std::shared_ptr<const cv::Mat>> object_textures;  // by DREAM label 0..3
   std::shared_ptr<const cv::Mat> poster;
   std::vector<SpeechClipInfo> clips;
@@ -186,11 +244,21 @@ Result<std::shared_ptr<const cv::Mat>> load_texture(const fs::path& path, cv::Re
 Result<Media> load_media(const DemoOptions& o) {
   Media m;
   if (!fs::exists(o.portrait)) return tl::unexpected(media_error(o.portrait, "python3-skimage"));
-  PlanarFaceOptions fo;
-  fo.portrait = o.portrait;
-  auto face = PlanarFaceRenderer::create(fo);
-  if (!face) return tl::unexpected(face.error());
-  m.face = std::move(*face);
+  if (o.face_model == DemoOptions::FaceModel::kMesh) {
+    MeshFaceOptions fo;
+    fo.portrait = o.portrait;
+    fo.landmarks = o.portrait_landmarks;
+    auto face = MeshFaceRenderer::create(fo);
+    if (!face) return tl::unexpected(face.error());
+    m.face = std::move(*face);
+    m.moving_eyes = true;
+  } else {
+    PlanarFaceOptions fo;
+    fo.portrait = o.portrait;
+    auto face = PlanarFaceRenderer::create(fo);
+    if (!face) return tl::unexpected(face.error());
+    m.face = std::move(*face);
+  }
 
   // Toy textures by DREAM label: 0 car, 1 cup, 2 flower, 3 plane (the pictures are stand-ins).
   struct Tex {
@@ -243,9 +311,9 @@ Result<Media> load_media(const DemoOptions& o) {
 
 // ---------------------------------------------------------------- scene
 
-const cv::Vec3f kShirt(150, 95, 45), kSkin(135, 165, 215), kHair(70, 105, 130),
-    kTrousers(70, 60, 55), kTable(80, 130, 175), kWall(195, 205, 212), kFloor(105, 115, 125),
-    kCeiling(230, 230, 230), kShoe(40, 40, 40), kTableLeg(60, 90, 120);
+const cv::Vec3f kShirt(150, 95, 45), kSkin(135, 165, 215), kTrousers(70, 60, 55),
+    kTable(80, 130, 175), kWall(195, 205, 212), kFloor(105, 115, 125), kCeiling(230, 230, 230),
+    kShoe(40, 40, 40), kTableLeg(60, 90, 120);
 
 std::vector<Primitive> static_scene(const DemoGeometry& g, const Media& media) {
   std::vector<Primitive> p;
@@ -287,9 +355,9 @@ std::vector<Primitive> dynamic_scene(const DemoScript& script, const Media& medi
   auto J = [&](JointId id) { return j[static_cast<size_t>(id)]; };
   std::vector<Primitive> p;
   const cv::Matx33d R = hp.rotation();
-  // Head: hair ellipsoid behind the photo plane (shows when the face turns away).
-  p.push_back(
-      Ellipsoid{hp.position_m + R * cv::Vec3d(0, 0.0, 0.10), R, {0.085, 0.105, 0.095}, kHair});
+  // Head: hair ellipsoid behind the face (shows when the face turns away).
+  const FaceRenderer::BackOfHead back = media.face->back_of_head();
+  p.push_back(Ellipsoid{hp.position_m + R * back.centre_head, R, back.radii_m, back.bgr});
   p.push_back(Capsule{J(JointId::kShoulderCenter) + cv::Vec3d(0, -0.02, 0),
                       hp.position_m + R * cv::Vec3d(0, 0.09, 0.07), 0.04, kSkin});
   p.push_back(Ellipsoid{
@@ -329,14 +397,6 @@ std::vector<Primitive> dynamic_scene(const DemoScript& script, const Media& medi
       p.push_back(Quad{c[e], c[(e + 1) % 4] - c[e], c[e + 4] - c[e], side, {}});
   }
   return p;
-}
-
-FaceState face_state(const HeadPose& hp) {
-  FaceState s;
-  s.position_m = hp.position_m;
-  s.world_from_head = hp.rotation();
-  s.eye_gaze_dir = hp.gaze_dir();  // planar photo: eye gaze = head gaze
-  return s;
 }
 
 // Noise tiles shared by every frame of one image size; per frame a seeded offset picks a window.
@@ -454,7 +514,7 @@ class Generator {
         }
       }
     }
-    media_.face->render(cam, face_state(hp), light_, target);
+    media_.face->render(cam, demo_face_state(script_, t), light_, target);
     if (bgr) {
       cv::GaussianBlur(target.bgr, *bgr, cv::Size(3, 3), 0.6);
       if (o_.image_noise_sigma > 0) {
@@ -495,17 +555,18 @@ json face_record(const Generator& gen, int64_t stamp) {
   const DemoGeometry& g = s.geometry();
   const double t = static_cast<double>(stamp) * 1e-9;
   const HeadPose hp = s.head_pose(t);
-  const FaceState fs = face_state(hp);
+  const FaceState fs = demo_face_state(s, t);
   const auto& face = *gen.media().face;
-  const cv::Vec3d left = fs.to_world(face.left_eye_head()),
-                  right = fs.to_world(face.right_eye_head());
+  const EyesState eyes = face.eyes(fs);
+  const cv::Vec3d left = eyes.left.pupil_m, right = eyes.right.pupil_m;
   const cv::Vec3d gaze = hp.gaze_dir();
-  const cv::Vec3d eye_gaze = fs.eye_gaze_dir;
-  const cv::Vec3d eye_mid = 0.5 * (left + right);
+  const cv::Vec3d eye_gaze = eyes.gaze_dir();
+  const cv::Vec3d eye_mid = eyes.eye_midpoint();
   const bool mutual = ray_point_distance(eye_mid, eye_gaze, g.robot_head_m) <= g.gaze_radius_m;
   json cams = json::object();
   std::string best;
   double best_yaw = 1e9;
+  const auto region = face.face_region_head();
   for (size_t c = 0; c < kCameraIds.size(); ++c) {
     const CameraModel& cam = gen.cameras()[c];
     const cv::Vec3d gc = cam.R * gaze;
@@ -519,9 +580,9 @@ json face_record(const Generator& gen, int64_t stamp) {
     json rec;
     json box = nullptr;
     std::vector<cv::Point2d> pts;
-    for (const auto& hpnt : face.face_region_head())
+    for (const auto& hpnt : region)
       if (auto p = cam.project(fs.to_world(hpnt))) pts.push_back(*p);
-    if (pts.size() == 4) {
+    if (!pts.empty() && pts.size() == region.size()) {
       double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
       for (const auto& p : pts) {
         x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x),
@@ -550,6 +611,18 @@ json face_record(const Generator& gen, int64_t stamp) {
   r["head_gaze_dir"] = vec_json(gaze);
   r["eye_gaze_dir"] = vec_json(eye_gaze);
   r["eyes_m"] = json{{"left", vec_json(left)}, {"right", vec_json(right)}};
+  r["eyeballs_m"] =
+      json{{"left", vec_json(eyes.left.centre_m)}, {"right", vec_json(eyes.right.centre_m)}};
+  r["eye_gaze_dirs"] =
+      json{{"left", vec_json(eyes.left.gaze_dir)}, {"right", vec_json(eyes.right.gaze_dir)}};
+  r["eyes_open"] = eyes.open;
+  if (gen.media().moving_eyes) {
+    const GazeState gs = s.gaze(t);
+    r["gaze_target"] = std::string(gaze_target_label(gs.kind));
+    if (gs.kind == GazeTargetKind::kObject) r["gaze_target_object"] = gs.object;
+    r["gaze_target_m"] = vec_json(gs.target_m);
+    r["eye_in_head_deg"] = json::array({q(gs.eye_yaw_deg, 1e4), q(gs.eye_pitch_deg, 1e4)});
+  }
   r["mutual_gaze"] = mutual;
   r["robot_gaze_distance_m"] = q(ray_point_distance(eye_mid, eye_gaze, g.robot_head_m));
   r["best_camera"] = best.empty() ? json(nullptr) : json(best);
@@ -645,6 +718,18 @@ std::vector<CameraModel> make_demo_cameras(const DemoGeometry& g) {
   return out;
 }
 
+FaceState demo_face_state(const DemoScript& script, double t) {
+  const HeadPose hp = script.head_pose(t);
+  const GazeState gs = script.gaze(t);
+  FaceState s;
+  s.position_m = hp.position_m;
+  s.world_from_head = hp.rotation();
+  s.gaze_target_m = gs.target_m;
+  s.eye_gaze_dir = cv::normalize(gs.target_m - hp.position_m);
+  s.eyelid_closure = gs.eyelid_closure;
+  return s;
+}
+
 std::vector<cv::Vec3d> demo_mic_positions(const DemoGeometry& g) {
   std::vector<cv::Vec3d> out;
   for (double x : g.mic_x_m) out.emplace_back(x, 0, 0);
@@ -668,7 +753,8 @@ std::vector<PlannedUtterance> plan_utterances(const DemoScript& script,
       std::swap(pool[i - 1], pool[static_cast<size_t>(rng() % i)]);
   const int target = 3 + static_cast<int>(rng() % 3);
   int speaker = static_cast<int>(rng() % 2);
-  const double side = (rng() % 2) ? 1.0 : -1.0;
+  rng();  // (was the therapist's side; kept so the later draws do not shift)
+  const double side = script.therapist_side();  // the side the child looks at the therapist
   const double min_gap = 0.3, tail = 0.5;
   std::vector<size_t> chosen;
   size_t next[2] = {0, 0};
@@ -772,9 +858,14 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
   manifest.task = "TT";
   manifest.frame_rate = options.camera_rate_hz;
   manifest.truth = "truth.jsonl";
-  manifest.metadata = {{"generator", kGenerator},
-                       {"seed", std::to_string(options.seed)},
-                       {"speech_grammar", "speech.gram"}};
+  manifest.metadata = {
+      {"generator", kGenerator},
+      {"seed", std::to_string(options.seed)},
+      {"speech_grammar", "speech.gram"},
+      {"voice_enroll", "enroll"},  // speaker enrolment audio (identifyVoice)
+      // Where the robot's head is (world, m): a setup calibration, for mutual gaze.
+      {"robot_head_m",
+       fmt::format("{} {} {}", g.robot_head_m[0], g.robot_head_m[1], g.robot_head_m[2])}};
   const int channels = static_cast<int>(g.mic_x_m.size());
   for (const auto& p : plans) {
     sources::StreamEntry e;
@@ -842,6 +933,8 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
   std::vector<cv::Vec3d> mics_room;
   for (const auto& m : demo_mic_positions(g))
     mics_room.push_back(g.room_from_world(m + g.mic_array_m));
+  if (auto st = write_enrolment(dir, options, g, room, mics_room); !st)
+    return tl::unexpected(st.error());
   std::vector<std::pair<size_t, size_t>> active;
   std::vector<json> speech_truth;
   for (const auto& u : utterances) {

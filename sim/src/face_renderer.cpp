@@ -9,6 +9,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "portrait.hpp"
+
 namespace dreamsense::sim {
 
 Status PlanarFaceOptions::check() const {
@@ -27,10 +29,9 @@ PlanarFaceRenderer::PlanarFaceRenderer(PlanarFaceOptions options) : options_(std
   origin_px_ = 0.5 * (options_.left_eye_px + options_.right_eye_px);
 }
 
-namespace {
-// Debian's astronaut.png carries an sRGB profile that libpng calls "known incorrect" on every
-// read, on stderr, bypassing our logger; the image itself is fine. Read it with stderr muted.
-cv::Mat read_image_without_libpng_warnings(const std::string& path) {
+namespace detail {
+
+cv::Mat read_portrait_image(const std::string& path) {
   std::fflush(stderr);
   const int saved = ::dup(STDERR_FILENO);
   const int devnull = ::open("/dev/null", O_WRONLY);
@@ -43,7 +44,61 @@ cv::Mat read_image_without_libpng_warnings(const std::string& path) {
   if (devnull >= 0) ::close(devnull);
   return img;
 }
-}  // namespace
+
+std::vector<cv::Mat> make_texture_levels(const cv::Mat& img, const cv::Rect& c,
+                                         const cv::Point2d& mask_centre,
+                                         const cv::Size2d& mask_axes, const cv::Mat& subject) {
+  cv::Mat crop = img(c).clone();
+  cv::Mat alpha(crop.size(), CV_8U, cv::Scalar(0));
+  cv::ellipse(alpha,
+              cv::RotatedRect(cv::Point2f(static_cast<float>(mask_centre.x - c.x),
+                                          static_cast<float>(mask_centre.y - c.y)),
+                              cv::Size2f(static_cast<float>(2 * mask_axes.width),
+                                         static_cast<float>(2 * mask_axes.height)),
+                              0.f),
+              cv::Scalar(255), cv::FILLED, cv::LINE_AA);
+  cv::GaussianBlur(alpha, alpha, cv::Size(0, 0), 2.5);
+  if (!subject.empty()) cv::multiply(alpha, subject, alpha, 1.0 / 255);
+  cv::Mat bgra;
+  cv::merge(std::vector<cv::Mat>{crop, alpha}, bgra);
+  std::vector<cv::Mat> levels;
+  for (double sigma : {0.0, 0.7, 1.2, 2.0, 3.0}) {
+    if (sigma == 0) {
+      levels.push_back(bgra);
+    } else {
+      cv::Mat b;
+      cv::GaussianBlur(bgra, b, cv::Size(0, 0), sigma);
+      levels.push_back(b);
+    }
+  }
+  return levels;
+}
+
+int texture_level(double scale) {
+  if (scale < 0.25) return 4;
+  if (scale < 0.4) return 3;
+  if (scale < 0.6) return 2;
+  if (scale < 0.85) return 1;
+  return 0;
+}
+
+}  // namespace detail
+
+cv::Vec3d EyesState::gaze_dir() const {
+  const cv::Vec3d s = left.gaze_dir + right.gaze_dir;
+  const double n = cv::norm(s);
+  return n > 1e-12 ? s / n : left.gaze_dir;
+}
+
+EyesState FaceRenderer::eyes(const FaceState& state) const {
+  EyesState e;
+  const cv::Vec3d g = state.head_gaze_dir();
+  const cv::Vec3d l = state.to_world(left_eye_head()), r = state.to_world(right_eye_head());
+  e.left = {l, l, g};
+  e.right = {r, r, g};
+  e.open = state.eyelid_closure < 0.5;
+  return e;
+}
 
 Result<std::unique_ptr<PlanarFaceRenderer>> PlanarFaceRenderer::create(
     const PlanarFaceOptions& options) {
@@ -52,7 +107,7 @@ Result<std::unique_ptr<PlanarFaceRenderer>> PlanarFaceRenderer::create(
     return make_error(ErrorCode::kNotFound,
                       "{}: portrait image not found (install the Debian package python3-skimage)",
                       options.portrait.string());
-  cv::Mat img = read_image_without_libpng_warnings(options.portrait.string());
+  cv::Mat img = detail::read_portrait_image(options.portrait.string());
   if (img.empty())
     return make_error(ErrorCode::kCorruptData, "{}: cannot decode the portrait image",
                       options.portrait.string());
@@ -61,29 +116,8 @@ Result<std::unique_ptr<PlanarFaceRenderer>> PlanarFaceRenderer::create(
                       options.portrait.string(), options.crop_px.width, options.crop_px.height,
                       options.crop_px.x, options.crop_px.y, img.cols, img.rows);
   std::unique_ptr<PlanarFaceRenderer> r(new PlanarFaceRenderer(options));
-  const cv::Rect& c = options.crop_px;
-  cv::Mat crop = img(c).clone();
-  cv::Mat alpha(crop.size(), CV_8U, cv::Scalar(0));
-  cv::ellipse(alpha,
-              cv::RotatedRect(cv::Point2f(static_cast<float>(options.mask_centre_px.x - c.x),
-                                          static_cast<float>(options.mask_centre_px.y - c.y)),
-                              cv::Size2f(static_cast<float>(2 * options.mask_axes_px.width),
-                                         static_cast<float>(2 * options.mask_axes_px.height)),
-                              0.f),
-              cv::Scalar(255), cv::FILLED, cv::LINE_AA);
-  cv::GaussianBlur(alpha, alpha, cv::Size(0, 0), 2.5);
-  cv::Mat bgra;
-  cv::merge(std::vector<cv::Mat>{crop, alpha}, bgra);
-  // Pre-blurred levels for minification (texture pixels per image pixel > 1).
-  for (double sigma : {0.0, 0.7, 1.2, 2.0, 3.0}) {
-    if (sigma == 0) {
-      r->texture_levels_.push_back(bgra);
-    } else {
-      cv::Mat b;
-      cv::GaussianBlur(bgra, b, cv::Size(0, 0), sigma);
-      r->texture_levels_.push_back(b);
-    }
-  }
+  r->texture_levels_ = detail::make_texture_levels(img, options.crop_px, options.mask_centre_px,
+                                                   options.mask_axes_px);
   return r;
 }
 
@@ -135,11 +169,7 @@ void PlanarFaceRenderer::render(const CameraModel& camera, const FaceState& stat
   const double z = camera.to_camera(state.position_m)[2];
   if (z <= 0.05) return;
   const double scale = camera.K(0, 0) * metres_per_px_ / z * std::sqrt(std::max(facing, 0.1));
-  int level = 0;
-  if (scale < 0.85) level = 1;
-  if (scale < 0.6) level = 2;
-  if (scale < 0.4) level = 3;
-  if (scale < 0.25) level = 4;
+  const int level = detail::texture_level(scale);
   const cv::Mat& tex = texture_levels_[static_cast<size_t>(level)];
 
   const cv::Matx33d H_crop = homography(camera, state) *

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -44,31 +45,105 @@ TEST(DemoScene, SeedsChangeTheScript) {
   EXPECT_NE(a.object_states(1.0)[0].position_m, b.object_states(1.0)[0].position_m);
 }
 
-TEST(DemoScene, HeadPoseStaysInRangeAndMutualGazeHappens) {
+TEST(DemoScene, HeadPoseStaysInRangeAndIsSmooth) {
   for (uint64_t seed : {1, 2, 3, 7, 42}) {
     const DemoScript s(seed, 20);
     const auto& g = s.geometry();
-    int mutual = 0, n = 0;
+    int n = 0;
     cv::Vec3d prev_pos;
-    double prev_yaw = 0;
+    double prev_yaw = 0, prev_pitch = 0, max_yaw = 0;
     for (double t = 0; t < 20; t += 0.04, ++n) {
       const HeadPose hp = s.head_pose(t);
       EXPECT_LE(std::abs(hp.yaw_deg), 55.0 + 1e-9);
-      EXPECT_LE(std::abs(hp.pitch_deg), 15.0 + 1e-9);
+      EXPECT_GE(hp.pitch_deg, -15.0 - 1e-9);
+      EXPECT_LE(hp.pitch_deg, 22.0 + 1e-9);
       EXPECT_LE(std::abs(hp.roll_deg), 10.0 + 1e-9);
       EXPECT_LT(cv::norm(hp.position_m - g.head_rest_m), 0.06);
       if (n > 0) {  // smooth: < 200 deg/s, < 0.3 m/s
-        EXPECT_LT(std::abs(hp.yaw_deg - prev_yaw), 8.0);
+        EXPECT_LT(std::abs(hp.yaw_deg - prev_yaw), 8.0) << "seed " << seed << " t " << t;
+        EXPECT_LT(std::abs(hp.pitch_deg - prev_pitch), 8.0) << "seed " << seed << " t " << t;
         EXPECT_LT(cv::norm(hp.position_m - prev_pos), 0.012);
       }
       prev_yaw = hp.yaw_deg;
+      prev_pitch = hp.pitch_deg;
       prev_pos = hp.position_m;
-      if (ray_point_distance(hp.position_m, hp.gaze_dir(), g.robot_head_m) <= g.gaze_radius_m)
-        ++mutual;
+      max_yaw = std::max(max_yaw, std::abs(hp.yaw_deg));
     }
-    EXPECT_GT(mutual, n / 10) << "seed " << seed;
-    EXPECT_LT(mutual, n * 9 / 10) << "seed " << seed;
+    EXPECT_GT(max_yaw, 25.0) << "seed " << seed << ": the head should turn";
   }
+}
+
+TEST(DemoScene, FixationsTileTheSessionAndEveryCycleLooksAtTheRobot) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    for (double duration : {2.0, 4.0, 20.0}) {
+      const DemoScript s(seed, duration);
+      const auto& f = s.fixations();
+      ASSERT_FALSE(f.empty());
+      EXPECT_DOUBLE_EQ(f.front().start_s, 0.0);
+      EXPECT_GE(f.back().end_s, duration - 1e-9);
+      double robot = 0;
+      for (size_t i = 0; i < f.size(); ++i) {
+        if (i > 0) EXPECT_DOUBLE_EQ(f[i].start_s, f[i - 1].end_s);
+        EXPECT_GE(f[i].end_s - f[i].start_s, 0.5) << "seed " << seed << " fixation " << i;
+        if (f[i].kind == GazeTargetKind::kRobot) robot += f[i].end_s - f[i].start_s;
+        if (i > 0 && f[i].kind == GazeTargetKind::kRobot)
+          EXPECT_NE(f[i - 1].kind, GazeTargetKind::kRobot);  // consecutive robot looks merge
+      }
+      EXPECT_GE(robot / duration, 0.35) << "seed " << seed;
+      EXPECT_LE(robot / duration, 0.45) << "seed " << seed;
+    }
+  }
+}
+
+TEST(DemoScene, EyeGazeDiffersFromHeadGazeWithinTheEyeRange) {
+  for (uint64_t seed : {1, 2, 3}) {
+    const DemoScript s(seed, 20);
+    int n = 0, different = 0;
+    std::set<GazeTargetKind> kinds;
+    for (double t = 0; t < 20; t += 0.04, ++n) {
+      const HeadPose hp = s.head_pose(t);
+      const GazeState g = s.gaze(t);
+      kinds.insert(g.kind);
+      EXPECT_LE(std::abs(g.eye_yaw_deg), DemoScript::kMaxEyeYawDeg + 1e-9);
+      EXPECT_LE(std::abs(g.eye_pitch_deg), DemoScript::kMaxEyePitchDeg + 1e-9);
+      const cv::Vec3d eye = cv::normalize(g.target_m - hp.position_m);
+      const double angle = std::acos(std::clamp(eye.dot(hp.gaze_dir()), -1.0, 1.0)) * 180 / CV_PI;
+      if (angle > 5) ++different;
+      // The eye-in-head angles are the angle between eye gaze and head gaze.
+      EXPECT_NEAR(std::cos(angle * CV_PI / 180),
+                  std::cos(g.eye_yaw_deg * CV_PI / 180) * std::cos(g.eye_pitch_deg * CV_PI / 180),
+                  1e-6);
+    }
+    EXPECT_GT(different, n / 3) << "seed " << seed;
+    EXPECT_GE(kinds.size(), 3u) << "seed " << seed;
+  }
+}
+
+TEST(DemoScene, BlinksCloseTheEyesBriefly) {
+  const DemoScript s(4, 20);
+  ASSERT_GE(s.blink_starts().size(), 3u);
+  int closed = 0, n = 0;
+  for (double t = 0; t < 20; t += 0.01, ++n) {
+    const double c = s.eyelid_closure(t);
+    EXPECT_GE(c, 0.0);
+    EXPECT_LE(c, 1.0);
+    if (c >= 0.5) ++closed;
+  }
+  EXPECT_GT(closed, 0);
+  EXPECT_LT(closed, n / 20);  // < 5 % of the time
+  EXPECT_DOUBLE_EQ(s.eyelid_closure(s.blink_starts()[0] + 0.1), 1.0);
+  EXPECT_DOUBLE_EQ(s.eyelid_closure(s.blink_starts()[0] - 0.01), 0.0);
+}
+
+TEST(DemoScene, TheTherapistIsOnTheSideItSpeaksFrom) {
+  int left = 0, right = 0;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    const DemoScript s(seed, 20);
+    EXPECT_EQ(s.therapist_head_m()[0] > 0, s.therapist_side() > 0);
+    (s.therapist_side() > 0 ? right : left)++;
+  }
+  EXPECT_GT(left, 0);
+  EXPECT_GT(right, 0);
 }
 
 TEST(DemoScene, HeadPoseZeroLooksAlongMinusZ) {

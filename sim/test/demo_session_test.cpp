@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -127,6 +128,29 @@ TEST_F(DemoSessionTest, ManifestAndTruthAreSane) {
     }
   }
   EXPECT_EQ(counts["face"], 50);
+  // Eye truth: pupils, eyeballs, per-eye gaze, eyes_open; eyes_px = projected pupils.
+  int differs = 0;
+  for (const auto& r : truth) {
+    if (r["type"] != "face") continue;
+    for (const char* key : {"eyes_m", "eyeballs_m", "eye_gaze_dirs"}) {
+      ASSERT_TRUE(r.contains(key)) << key;
+      ASSERT_TRUE(r[key].contains("left") && r[key].contains("right")) << key;
+    }
+    ASSERT_TRUE(r["eyes_open"].is_boolean());
+    ASSERT_TRUE(r["gaze_target"].is_string());
+    auto v3 = [](const nlohmann::json& j) {
+      return cv::Vec3d(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+    };
+    const cv::Vec3d pupil = v3(r["eyes_m"]["left"]), ball = v3(r["eyeballs_m"]["left"]);
+    EXPECT_NEAR(cv::norm(pupil - ball), 0.012, 2e-6);
+    const cv::Vec3d eye = v3(r["eye_gaze_dir"]), head = v3(r["head_gaze_dir"]);
+    if (std::acos(std::min(1.0, eye.dot(head))) > 5 * CV_PI / 180) ++differs;
+    const auto p = cam->project(pupil);
+    ASSERT_TRUE(p.has_value());
+    EXPECT_NEAR(r["cameras"]["camera_right"]["eyes_px"]["left"][0].get<double>(), p->x, 2e-3);
+    EXPECT_NEAR(r["cameras"]["camera_right"]["eyes_px"]["left"][1].get<double>(), p->y, 2e-3);
+  }
+  EXPECT_GT(differs, 0) << "eye gaze should differ from head gaze in some frames";
   EXPECT_EQ(counts["skeleton"], 60);
   EXPECT_EQ(counts["object"], 60 * 4);
   EXPECT_GE(counts["action"], 1);
@@ -171,6 +195,53 @@ TEST_F(DemoSessionTest, MissingMediaNamesTheDebianPackage) {
   EXPECT_EQ(r.error().message.find('\n'), std::string::npos);
 }
 
+TEST_F(DemoSessionTest, PlanarFaceOptionStillWorks) {
+  DemoOptions o;
+  o.out_dir = root_ / "p";
+  o.seed = 2;
+  o.duration_s = 1.0;
+  o.face_model = DemoOptions::FaceModel::kPlanar;
+  auto s = generate_demo_session(o);
+  ASSERT_TRUE(s) << s.error().to_string();
+  for (const auto& r : read_jsonl(root_ / "p" / "truth.jsonl"))
+    if (r["type"] == "face") EXPECT_EQ(r["eye_gaze_dir"], r["head_gaze_dir"]);  // painted eyes
+}
+
+// The same computation as the face truth: script -> face state -> the mesh's eyes.
+TEST(DemoMutualGaze, FractionIsInTheBandAndRunsLastInEverySeed) {
+  const DemoOptions defaults;
+  if (!fs::exists(defaults.portrait) || !fs::exists(defaults.portrait_landmarks))
+    GTEST_SKIP() << "portrait or landmark file missing";
+  auto face = MeshFaceRenderer::create({});
+  ASSERT_TRUE(face) << face.error().to_string();
+  for (uint64_t seed = 1; seed <= 12; ++seed) {
+    const DemoScript script(seed, 20);
+    const DemoGeometry& g = script.geometry();
+    std::vector<bool> mutual;
+    for (int k = 0; k < 500; ++k) {  // the 25 Hz camera frames
+      const EyesState e = (*face)->eyes(demo_face_state(script, k / 25.0));
+      mutual.push_back(ray_point_distance(e.eye_midpoint(), e.gaze_dir(), g.robot_head_m) <=
+                       g.gaze_radius_m);
+    }
+    const double fraction =
+        static_cast<double>(std::count(mutual.begin(), mutual.end(), true)) / mutual.size();
+    EXPECT_GE(fraction, 0.30) << "seed " << seed;
+    EXPECT_LE(fraction, 0.50) << "seed " << seed;
+    // Runs of mutual gaze last >= 0.5 s (unless cut by the end of the session).
+    for (size_t i = 0; i < mutual.size();) {
+      if (!mutual[i]) {
+        ++i;
+        continue;
+      }
+      size_t j = i;
+      while (j < mutual.size() && mutual[j]) ++j;
+      if (i > 0 && j < mutual.size())
+        EXPECT_GE(j - i, 13u) << "seed " << seed << " run at frame " << i;
+      i = j;
+    }
+  }
+}
+
 TEST(DemoOptions, CheckRejectsBadValues) {
   DemoOptions o;
   EXPECT_FALSE(o.check());  // no out_dir
@@ -199,6 +270,9 @@ TEST(DemoUtterances, PlacementIsNonOverlappingAndSpeakersAlternate) {
       EXPECT_LE(d, 2.05);
       if (i > 0) {
         EXPECT_GE(u[i].clip_start_s, u[i - 1].clip_start_s + clips[u[i - 1].clip].duration_s);
+      }
+      if (clips[u[i].clip].speaker == "therapist") {
+        EXPECT_EQ(u[i].source_m[0] > 0, script.therapist_side() > 0);  // where the child looks
       }
       EXPECT_LE(u[i].clip_start_s + clips[u[i].clip].duration_s, 20.0);
     }

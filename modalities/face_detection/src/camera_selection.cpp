@@ -1,6 +1,7 @@
 #include "dreamsense/face_detection/camera_selection.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace dreamsense::face_detection {
 
@@ -8,13 +9,23 @@ float selection_quality(const DetectedFace& face) {
   return face.frontalness * std::min(1.f, face.score / kConfidentFaceScore);
 }
 
+float selection_quality_from_yaw(const DetectedFace& face, double yaw_deg) {
+  const double frontal = std::clamp(1.0 - std::abs(yaw_deg) / 90.0, 0.0, 1.0);
+  return static_cast<float>(frontal) * std::min(1.f, face.score / kConfidentFaceScore);
+}
+
 Status CameraSelectorOptions::check() const {
   if (!(switch_margin >= 0 && switch_margin <= 1))
     return make_error(ErrorCode::kInvalidArgument,
                       "CameraSelectorOptions: switch_margin {} not in [0, 1]", switch_margin);
-  if (switch_ticks < 1)
-    return make_error(ErrorCode::kInvalidArgument, "CameraSelectorOptions: switch_ticks {} < 1",
-                      switch_ticks);
+  if (!(yaw_switch_margin >= 0 && yaw_switch_margin <= 1))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "CameraSelectorOptions: yaw_switch_margin {} not in [0, 1]",
+                      yaw_switch_margin);
+  if (switch_ticks < 1 || yaw_switch_ticks < 1)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "CameraSelectorOptions: switch_ticks {} / yaw_switch_ticks {} < 1",
+                      switch_ticks, yaw_switch_ticks);
   return ok_status();
 }
 
@@ -28,16 +39,27 @@ void CameraSelector::reset() {
   challenger_ticks_ = 0;
 }
 
-std::optional<SelectedCamera> CameraSelector::update(const FaceDetections& detections) {
+std::optional<SelectedCamera> CameraSelector::update(const FaceDetections& detections,
+                                                     const std::vector<HeadYawHint>& yaw_hints) {
   // The best face of each camera (by quality), and the best camera overall.
   std::map<SensorId, SelectedCamera> candidates;
+  std::map<SensorId, bool> rated_by_yaw;
   const SelectedCamera* best = nullptr;
   for (const auto& [id, cam] : detections.cameras) {
     for (size_t i = 0; i < cam.faces.size(); ++i) {
-      const float q = selection_quality(cam.faces[i]);
+      const DetectedFace& face = cam.faces[i];
+      float q = selection_quality(face);
+      bool by_yaw = false;
+      for (const auto& h : yaw_hints)
+        if (h.camera == id && h.face_box_px == face.box_px) {
+          q = selection_quality_from_yaw(face, h.yaw_deg);
+          by_yaw = true;
+        }
       auto it = candidates.find(id);
-      if (it == candidates.end() || q > it->second.quality)
-        candidates[id] = SelectedCamera{id, i, cam.faces[i], q};
+      if (it == candidates.end() || q > it->second.quality) {
+        candidates[id] = SelectedCamera{id, i, face, q};
+        rated_by_yaw[id] = by_yaw;
+      }
     }
   }
   for (const auto& [id, c] : candidates)
@@ -53,15 +75,17 @@ std::optional<SelectedCamera> CameraSelector::update(const FaceDetections& detec
     challenger_ticks_ = 0;
     return *best;
   }
-  if (best->camera != *current_ &&
-      best->quality > current->second.quality + options_.switch_margin) {
+  const bool both_by_yaw = rated_by_yaw[best->camera] && rated_by_yaw[*current_];
+  const double margin = both_by_yaw ? options_.yaw_switch_margin : options_.switch_margin;
+  const int ticks = both_by_yaw ? options_.yaw_switch_ticks : options_.switch_ticks;
+  if (best->camera != *current_ && best->quality > current->second.quality + margin) {
     if (challenger_ == best->camera)
       ++challenger_ticks_;
     else {
       challenger_ = best->camera;
       challenger_ticks_ = 1;
     }
-    if (challenger_ticks_ >= options_.switch_ticks) {
+    if (challenger_ticks_ >= ticks) {
       current_ = best->camera;
       challenger_.reset();
       challenger_ticks_ = 0;

@@ -20,10 +20,14 @@ class FaceDetectionAnalyzer : public Analyzer {
 
   std::string_view name() const override { return "face_detection"; }
   AnalyzerContract contract() const override {
-    return {{}, options_.cameras, {}, {keys::kFaceDetections.name, keys::kSelectedCamera.name}};
+    AnalyzerContract c{
+        {}, options_.cameras, {}, {keys::kFaceDetections.name, keys::kSelectedCamera.name}};
+    if (!options_.camera_models.empty()) c.reads_previous = {keys::kHeadPose.name};
+    return c;
   }
 
-  Status process(const MultiFrame& in, const BlackboardView&, BlackboardWriter& out) override {
+  Status process(const MultiFrame& in, const BlackboardView& prior,
+                 BlackboardWriter& out) override {
     // Collect the frames of this tick; check them before any work.
     std::vector<std::pair<size_t, FramePtr>> work;
     for (size_t i = 0; i < cameras_.size(); ++i) {
@@ -72,7 +76,8 @@ class FaceDetectionAnalyzer : public Analyzer {
       for (const DetectedFace& f : results[w].faces) best_score = std::max(best_score, f.score);
       detections.cameras.emplace(cameras_[work[w].first].id, std::move(results[w]));
     }
-    const std::optional<SelectedCamera> selected = selector_.update(detections);
+    const std::optional<SelectedCamera> selected =
+        selector_.update(detections, yaw_hints(detections, prior, in.stamp));
     if (detections.face_count() == 0) {
       out.set_absent(keys::kFaceDetections, in.stamp);
       out.set_absent(keys::kSelectedCamera, in.stamp);
@@ -84,6 +89,33 @@ class FaceDetectionAnalyzer : public Analyzer {
     else
       out.set_absent(keys::kSelectedCamera, in.stamp);
     return ok_status();
+  }
+
+  // Head yaw relative to each camera from the last head pose, for the face (per camera) whose
+  // box holds the projected head position.
+  std::vector<HeadYawHint> yaw_hints(const FaceDetections& detections, const BlackboardView& prior,
+                                     Timestamp now) const {
+    std::vector<HeadYawHint> hints;
+    if (options_.camera_models.empty()) return hints;
+    const auto pose = prior.get(keys::kHeadPose);
+    if (!pose || !pose->present() || now - pose->stamp > options_.head_pose_max_age) return hints;
+    const HeadPose& p = *pose->value;
+    for (const auto& [id, cam] : detections.cameras) {
+      const auto model = options_.camera_models.find(id);
+      if (model == options_.camera_models.end()) continue;
+      const auto px = model->second.project(p.position_world_m);
+      if (!px) continue;
+      for (const DetectedFace& f : cam.faces) {
+        const cv::Rect2d grown(f.box_px.x - 0.1 * f.box_px.width,
+                               f.box_px.y - 0.1 * f.box_px.height, 1.2 * f.box_px.width,
+                               1.2 * f.box_px.height);
+        if (!grown.contains(*px)) continue;
+        const cv::Vec3d g = model->second.R * p.gaze_direction_world;
+        hints.push_back({id, f.box_px, std::atan2(-g[0], -g[2]) * 180.0 / CV_PI});
+        break;
+      }
+    }
+    return hints;
   }
 
   void reset() override {

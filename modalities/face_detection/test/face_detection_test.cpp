@@ -239,6 +239,30 @@ TEST(CameraSelector, HysteresisAndImmediateFallback) {
   EXPECT_EQ(dream_camera_id(std::nullopt), -1);
 }
 
+TEST(CameraSelector, HeadYawHintsOverrideTheProxy) {
+  CameraSelectorOptions o;
+  o.yaw_switch_margin = 0.02;
+  o.yaw_switch_ticks = 1;
+  CameraSelector s(o);
+  const cv::Rect2d box(100, 100, 150, 150);
+  // The proxy prefers camera_left; the head yaw says camera_middle is the frontal one.
+  auto d = dets({{"camera_left", {face(0.9f, 0.9f)}}, {"camera_middle", {face(0.9f, 0.5f)}}});
+  std::vector<HeadYawHint> hints{{"camera_left", box, 30.0}, {"camera_middle", box, 5.0}};
+  auto r = s.update(d, hints);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->camera, "camera_middle");
+  EXPECT_NEAR(r->quality, 1.0 - 5.0 / 90, 1e-6);
+  // 1 deg better is within the yaw margin (1.8 deg): no switch; 4 deg better switches at once.
+  hints = {{"camera_left", box, 4.0}, {"camera_middle", box, 5.0}};
+  EXPECT_EQ(s.update(d, hints)->camera, "camera_middle");
+  hints = {{"camera_left", box, -1.0}, {"camera_middle", box, 5.0}};
+  EXPECT_EQ(s.update(d, hints)->camera, "camera_left");
+  // A hint for another box (another person) does not apply to this face.
+  CameraSelector fresh(o);
+  hints = {{"camera_middle", cv::Rect2d(400, 100, 150, 150), 0.0}};
+  EXPECT_EQ(fresh.update(d, hints)->camera, "camera_left");
+}
+
 TEST(FaceDetectionAnalyzer, DemoRecallFalsePositivesAndCameraSelection) {
   auto a = make_face_detection_analyzer();
   ASSERT_TRUE(a) << a.error().to_string();

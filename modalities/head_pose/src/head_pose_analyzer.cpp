@@ -33,6 +33,7 @@ class HeadPoseAnalyzer : public Analyzer {
       out.set_absent(keys::kHeadPose, in.stamp);
       return ok_status();
     }
+    (*fit)->camera_from_head = (*fit)->camera_from_head * options_.model_from_head;
     HeadPose pose = make_head_pose(**fit, cam->second, l.camera, l.frame_stamp);
     filter_.apply(pose);
     const double iod = cv::norm(l.right_eye_px() - l.left_eye_px());

@@ -115,10 +115,10 @@ TEST(HeadPoseDemo, GenericModelVsPlanarModel) {
   RecordProperty("head_pose_median_deg_generic", std::to_string(face_testing::median(generic.rot)));
   RecordProperty("head_pose_median_deg_planar", std::to_string(face_testing::median(planar.rot)));
   ASSERT_GT(generic.fitted, 40);
-  // Method error (model matches the renderer) is small. The 3-D models' large error on the planar
-  // photo is model mismatch, almost all in pitch (a constant bias, README.md); yaw and roll stay
-  // small. Tighten these when the demo face becomes a 3-D mesh.
-  EXPECT_LT(face_testing::median(planar.rot), 2.5);
+  // The demo face is a 3-D mesh over the portrait on an analytic head (sim/README.md): no model
+  // matches it exactly. The flat model and the generic 3-D model both miss by a pitch bias
+  // (face proportions); `train gaze` calibrates that per subject. Regression guards:
+  EXPECT_LT(face_testing::median(planar.rot), 6.0);
   EXPECT_LT(face_testing::median(generic.rot), 35.0);
   EXPECT_LT(face_testing::median(generic.yaw), 5.0);
   EXPECT_LT(face_testing::median(generic.roll), 6.0);

@@ -2,8 +2,11 @@
 
 #include <sndfile.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <random>
 #include <regex>
 
@@ -70,14 +73,11 @@ struct GrammarSet {
   std::vector<std::pair<fs::path, std::string>> utterances;  // file, reference
 };
 
-}  // namespace
-
-Result<json> run_speech_eval(const SpeechEvalOptions& o,
-                             const std::function<void(double)>& progress) {
-  if (o.dataset != "pocketsphinx")
-    return make_error(ErrorCode::kUnsupported,
-                      "eval speech: dataset layout {} is not supported (use pocketsphinx)",
-                      o.dataset);
+Result<json> run_pocketsphinx(const SpeechEvalOptions& o,
+                              const std::function<void(double)>& progress) {
+  RecognizerOptions ro = o.recognizer;
+  if (o.garbage_phone_weight) ro.garbage_phone_weight = *o.garbage_phone_weight;
+  if (o.min_confidence) ro.min_confidence = *o.min_confidence;
   const fs::path d = o.dir;
   for (const char* f :
        {"goforward.raw", "goforward.gram", "cards/cards.gram", "cards/cards.transcription"})
@@ -136,7 +136,7 @@ Result<json> run_speech_eval(const SpeechEvalOptions& o,
     const auto& set = sets[i];
     auto grammar = Grammar::from_file(set.grammar);
     if (!grammar) return tl::unexpected(grammar.error());
-    auto rec = Recognizer::create(o.recognizer, *grammar);
+    auto rec = Recognizer::create(ro, *grammar);
     if (!rec) return tl::unexpected(rec.error());
     size_t s_in = 0, s_ok = 0, s_oog = 0, s_fa = 0;
     auto run = [&](const Clip& clip, const std::string& reference, bool in_grammar) -> Status {
@@ -155,14 +155,15 @@ Result<json> run_speech_eval(const SpeechEvalOptions& o,
         ++s_oog;
         s_fa += !ok;
       }
-      items.push_back({{"grammar", set.name},
-                       {"clip", clip.name},
-                       {"in_grammar", in_grammar},
-                       {"reference", reference},
-                       {"hypothesis", hyp},
-                       {"best_grammar_path", dec->grammar_hypothesis},
-                       {"confidence", dec->confidence},
-                       {"correct", ok}});
+      if (o.list_items)
+        items.push_back({{"grammar", set.name},
+                         {"clip", clip.name},
+                         {"in_grammar", in_grammar},
+                         {"reference", reference},
+                         {"hypothesis", hyp},
+                         {"best_grammar_path", dec->grammar_hypothesis},
+                         {"confidence", dec->confidence},
+                         {"correct", ok}});
       tick();
       return ok_status();
     };
@@ -210,8 +211,311 @@ Result<json> run_speech_eval(const SpeechEvalOptions& o,
       {"out_of_grammar_items", oog_items}};
   j["timing"] = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0}, {"audio_seconds", audio_s}};
   j["per_class"] = per_class;
-  j["items"] = items;
+  if (o.list_items) j["items"] = items;
   return j;
+}
+
+double ratio(size_t a, size_t b) { return b ? static_cast<double>(a) / b : 0.0; }
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+json confusion_json(const std::vector<std::string>& labels,
+                    const std::map<std::string, std::map<std::string, size_t>>& conf) {
+  json c = json::object();
+  for (const auto& t : labels) {
+    json row = json::object();
+    const auto it = conf.find(t);
+    for (const auto& h : labels) {
+      size_t n = 0;
+      if (it != conf.end())
+        if (const auto jt = it->second.find(h); jt != it->second.end()) n = jt->second;
+      row[h] = n;
+    }
+    // Hypotheses outside the label set (e.g. "none": no result in a closed-set decode).
+    if (it != conf.end())
+      for (const auto& [h, n] : it->second)
+        if (std::find(labels.begin(), labels.end(), h) == labels.end()) row[h] = n;
+    c[t] = row;
+  }
+  return c;
+}
+
+// FSDD clips are trimmed to the word, often into its first consonant; the decoder needs some
+// silence on both sides to place its silence model. Low-level noise rather than digital zero
+// (log-energy floor). Deterministic per clip.
+std::vector<int16_t> padded(const std::vector<int16_t>& s, size_t n, double rms, size_t seed) {
+  std::mt19937 gen(static_cast<unsigned>(seed * 7919 + 1));
+  std::normal_distribution<double> nd(0, rms);
+  std::vector<int16_t> out;
+  out.reserve(s.size() + 2 * n);
+  auto noise = [&] {
+    for (size_t i = 0; i < n; ++i) out.push_back(static_cast<int16_t>(std::lround(nd(gen))));
+  };
+  noise();
+  out.insert(out.end(), s.begin(), s.end());
+  noise();
+  return out;
+}
+
+// The ten digit words; "oh" is a second spelling of 0.
+constexpr const char* kDigitGrammar =
+    "#JSGF V1.0;\ngrammar digits;\npublic <digit> = zero | oh | one | two | three | four | "
+    "five | six | seven | eight | nine;\n";
+
+std::string digit_of(const std::string& word) {
+  static const std::map<std::string, std::string> m = {
+      {"zero", "0"}, {"oh", "0"},  {"one", "1"},   {"two", "2"},   {"three", "3"}, {"four", "4"},
+      {"five", "5"}, {"six", "6"}, {"seven", "7"}, {"eight", "8"}, {"nine", "9"}};
+  const auto it = m.find(word);
+  return it == m.end() ? "none" : it->second;
+}
+
+Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(double)>& progress) {
+  auto items = load_fsdd(o.dir, o.fsdd);
+  if (!items) return tl::unexpected(items.error());
+  RecognizerOptions ro = o.recognizer;
+  // Closed set: every clip is a digit, so the best grammar path is the answer (a rejection
+  // could only turn a right answer into a wrong one).
+  ro.reject_out_of_grammar = false;
+  if (o.garbage_phone_weight) ro.garbage_phone_weight = *o.garbage_phone_weight;
+  std::string model_note;
+  if (o.fsdd_model == "tidigits") {
+    ro.model_dir = kTidigitsModel;
+    ro.dictionary = kTidigitsDictionary;
+    ro.model_rate_hz = 8000;  // its filters end at 4 kHz: FSDD is decoded at its own rate
+    ro.front_end_rate_hz = 0;
+    ro.front_end_upper_hz = 0;
+    if (!o.frequency_warp) ro.frequency_warp = kFsddTidigitsWarp;
+    if (!fs::exists(ro.model_dir / "mdef"))
+      return make_error(ErrorCode::kNotFound,
+                        "eval speech: TIDIGITS model not found at {} (Debian package "
+                        "pocketsphinx-testdata; or --fsdd-model en-us)",
+                        ro.model_dir.string());
+    model_note = fmt::format(
+        "PocketSphinx TIDIGITS digit model (pocketsphinx-testdata; filters 1-4000 Hz) at 8 kHz, "
+        "frequency warp {}",
+        ro.frequency_warp);
+  } else if (o.fsdd_model == "en-us") {
+    if (o.frequency_warp) ro.frequency_warp = *o.frequency_warp;
+    model_note =
+        ro.front_end_rate_hz == 8000
+            ? fmt::format("PocketSphinx en-us through an 8 kHz front end (filters to {} Hz)",
+                          ro.front_end_upper_hz)
+            : fmt::format("PocketSphinx en-us, audio resampled to {} Hz ({})", ro.model_rate_hz,
+                          to_string(ro.resampler));
+  } else {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "eval speech: --fsdd-model must be tidigits or en-us (got {})", o.fsdd_model);
+  }
+  const double pad_s = o.pad_seconds.value_or(kFsddPadSeconds);
+  const double pad_rms = kFsddPadRms;
+  const size_t pad_samples = static_cast<size_t>(std::lround(pad_s * 8000));
+  auto grammar = Grammar::from_jsgf(kDigitGrammar, "<fsdd digits>");
+  if (!grammar) return tl::unexpected(grammar.error());
+  auto rec = Recognizer::create(ro, *grammar);
+  if (!rec) return tl::unexpected(rec.error());
+
+  std::vector<std::string> labels;
+  for (int i = 0; i < 10; ++i) labels.push_back(std::to_string(i));
+  std::map<std::string, std::map<std::string, size_t>> conf;
+  std::map<std::string, std::pair<size_t, size_t>> per_speaker, per_digit;  // correct, total
+  json records = json::array();
+  double decode_s = 0, audio_s = 0;
+  std::vector<double> ms;
+  size_t correct = 0, no_result = 0;
+  for (size_t i = 0; i < items->size(); ++i) {
+    const AudioItem& it = (*items)[i];
+    auto a = read_mono_wav(it.path, 8000, "fsdd");
+    if (!a) return tl::unexpected(a.error());
+    if (pad_samples > 0) a->samples = padded(a->samples, pad_samples, pad_rms, i);
+    auto d = (*rec)->decode(a->samples, a->rate_hz);
+    if (!d) return tl::unexpected(d.error());
+    const std::string hyp =
+        d->grammar_hypothesis.empty() ? "none" : digit_of(d->grammar_hypothesis);
+    const bool ok = hyp == it.label;
+    correct += ok;
+    no_result += hyp == "none";
+    ++conf[it.label][hyp];
+    auto& sp = per_speaker[it.speaker];
+    sp.first += ok;
+    ++sp.second;
+    auto& dg = per_digit[it.label];
+    dg.first += ok;
+    ++dg.second;
+    decode_s += d->decode_seconds;
+    audio_s += static_cast<double>(a->samples.size()) / a->rate_hz;
+    ms.push_back(d->decode_seconds * 1000);
+    if (o.list_items)
+      records.push_back({{"clip", it.path.filename().string()},
+                         {"speaker", it.speaker},
+                         {"label", it.label},
+                         {"hypothesis", hyp},
+                         {"words", d->grammar_hypothesis},
+                         {"score_per_frame", d->score_per_frame},
+                         {"confidence", d->confidence},
+                         {"correct", ok}});
+    if (progress) progress(static_cast<double>(i + 1) / items->size());
+  }
+  json j;
+  j["task"] = "speech";
+  j["dataset"] = {
+      {"name", "fsdd"}, {"items", items->size()}, {"dir", fs::absolute(o.dir).string()}};
+  std::string speakers;
+  for (const auto& [s, _] : per_speaker) speakers += (speakers.empty() ? "" : ",") + s;
+  j["protocol"] = fmt::format(
+      "isolated digits, closed set, no training on FSDD: {}; grammar of the ten digit words "
+      "(zero|oh, one..nine); each trimmed clip padded with {} s of -70 dBFS noise at both ends; "
+      "speakers {}; take indices {}-{}",
+      model_note, pad_s, speakers, o.fsdd.first_index, std::min(o.fsdd.last_index, 49));
+  json spk = json::object();
+  for (const auto& [s, c] : per_speaker)
+    spk[s] = {{"accuracy", ratio(c.first, c.second)}, {"items", c.second}};
+  j["metrics"] = {{"accuracy", ratio(correct, items->size())},
+                  {"no_result_rate", ratio(no_result, items->size())},
+                  {"per_speaker", spk},
+                  {"confusion", confusion_json(labels, conf)}};
+  j["timing"] = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0},
+                 {"audio_seconds", audio_s},
+                 {"ms_per_clip_median", median(ms)}};
+  json pc = json::object();
+  for (const auto& l : labels) {
+    const auto c = per_digit[l];
+    pc[l] = {{"recall", c.second ? json(ratio(c.first, c.second)) : json(nullptr)},
+             {"items", c.second}};
+  }
+  j["per_class"] = pc;
+  if (o.list_items) j["items"] = records;
+  return j;
+}
+
+Result<json> run_speech_commands(const SpeechEvalOptions& o,
+                                 const std::function<void(double)>& progress) {
+  if (auto st = o.presence.check(); !st) return tl::unexpected(st.error());
+  auto items = load_speech_commands(o.dir);
+  if (!items) return tl::unexpected(items.error());
+  RecognizerOptions ro = o.recognizer;
+  ro.garbage_phone_weight = o.garbage_phone_weight.value_or(kCommandsGarbageWeight);
+  ro.min_confidence = o.min_confidence.value_or(kCommandsMinConfidence);
+  std::string jsgf = "#JSGF V1.0;\ngrammar commands;\npublic <command> = ";
+  for (size_t i = 0; i < std::size(kCommandWords); ++i)
+    jsgf += std::string(i ? " | " : "") + kCommandWords[i];
+  jsgf += ";\n";
+  auto grammar = Grammar::from_jsgf(jsgf, "<speech-commands words>");
+  if (!grammar) return tl::unexpected(grammar.error());
+  auto rec = Recognizer::create(ro, *grammar);
+  if (!rec) return tl::unexpected(rec.error());
+
+  std::vector<std::string> labels(std::begin(kCommandWords), std::end(kCommandWords));
+  labels.push_back(kUnknownLabel);
+  labels.push_back(kSilenceLabel);
+  std::map<std::string, std::map<std::string, size_t>> conf;
+  std::map<std::string, std::pair<size_t, size_t>> per_label;
+  json records = json::array();
+  double decode_s = 0, audio_s = 0;
+  std::vector<double> ms;
+  size_t correct = 0, negatives = 0, false_accepts = 0;
+  std::map<std::string, std::pair<size_t, size_t>> fa_by;  // negatives class -> (fa, total)
+  for (size_t i = 0; i < items->size(); ++i) {
+    const AudioItem& it = (*items)[i];
+    auto a = read_mono_wav(it.path, 16000, "speech-commands");
+    if (!a) return tl::unexpected(a.error());
+    const auto t0 = std::chrono::steady_clock::now();
+    const SpeechPresence presence = detect_speech(a->samples, a->rate_hz, o.presence);
+    std::string hyp = kSilenceLabel;
+    Decoding d;
+    if (presence.speech) {
+      // Decode the active span plus a margin: the noise around the word is not the
+      // recogniser's business (the garbage loop would otherwise have to explain it).
+      std::span<const int16_t> span(a->samples);
+      if (o.trim_margin_s >= 0) {
+        const auto b =
+            static_cast<size_t>(std::max(0.0, presence.start_s - o.trim_margin_s) * a->rate_hz);
+        const auto e =
+            std::min(a->samples.size(),
+                     static_cast<size_t>((presence.end_s + o.trim_margin_s) * a->rate_hz));
+        if (e > b) span = span.subspan(b, e - b);
+      }
+      auto r = (*rec)->decode(span, a->rate_hz);
+      if (!r) return tl::unexpected(r.error());
+      d = *r;
+      hyp = d.accepted && !d.grammar_hypothesis.empty() ? d.grammar_hypothesis : kUnknownLabel;
+    }
+    const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const bool ok = hyp == it.label;
+    correct += ok;
+    ++conf[it.label][hyp];
+    auto& pl = per_label[it.label];
+    pl.first += ok;
+    ++pl.second;
+    const bool negative = it.label == kUnknownLabel || it.label == kSilenceLabel;
+    const bool accepted_word = hyp != kUnknownLabel && hyp != kSilenceLabel;
+    if (negative) {
+      ++negatives;
+      false_accepts += accepted_word;
+      fa_by[it.label].first += accepted_word;
+      ++fa_by[it.label].second;
+    }
+    decode_s += sec;
+    audio_s += static_cast<double>(a->samples.size()) / a->rate_hz;
+    ms.push_back(sec * 1000);
+    if (o.list_items)
+      records.push_back({{"clip", (it.path.parent_path().filename() / it.path.filename()).string()},
+                         {"label", it.label},
+                         {"hypothesis", hyp},
+                         {"best_grammar_path", d.grammar_hypothesis},
+                         {"confidence", d.confidence},
+                         {"word_frames", d.last_frame >= 0 ? d.last_frame - d.first_frame + 1 : 0},
+                         {"margin_per_frame", d.margin_per_frame},
+                         {"voiced_s", presence.voiced_s},
+                         {"peak_dbfs", presence.peak_dbfs},
+                         {"correct", ok}});
+    if (progress) progress(static_cast<double>(i + 1) / items->size());
+  }
+  json j;
+  j["task"] = "speech";
+  j["dataset"] = {
+      {"name", "speech-commands"}, {"items", items->size()}, {"dir", fs::absolute(o.dir).string()}};
+  j["protocol"] = fmt::format(
+      "12 classes (10 words, _unknown_, _silence_): voiced-energy silence check, then "
+      "PocketSphinx en-us under the 10-word grammar with phone-loop rejection (garbage weight "
+      "{}) and confidence >= {}; rejected -> _unknown_; no training",
+      ro.garbage_phone_weight, ro.min_confidence);
+  j["metrics"] = {
+      {"accuracy", ratio(correct, items->size())},
+      {"false_accept_rate", ratio(false_accepts, negatives)},
+      {"unknown_false_accept_rate", ratio(fa_by[kUnknownLabel].first, fa_by[kUnknownLabel].second)},
+      {"silence_false_accept_rate", ratio(fa_by[kSilenceLabel].first, fa_by[kSilenceLabel].second)},
+      {"confusion", confusion_json(labels, conf)}};
+  j["timing"] = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0},
+                 {"audio_seconds", audio_s},
+                 {"ms_per_clip_median", median(ms)}};
+  json pc = json::object();
+  for (const auto& l : labels) {
+    const auto c = per_label[l];
+    pc[l] = {{"recall", c.second ? json(ratio(c.first, c.second)) : json(nullptr)},
+             {"items", c.second}};
+  }
+  j["per_class"] = pc;
+  if (o.list_items) j["items"] = records;
+  return j;
+}
+
+}  // namespace
+
+Result<json> run_speech_eval(const SpeechEvalOptions& o,
+                             const std::function<void(double)>& progress) {
+  if (auto st = o.recognizer.check(); !st) return tl::unexpected(st.error());
+  if (o.dataset == "pocketsphinx") return run_pocketsphinx(o, progress);
+  if (o.dataset == "fsdd") return run_fsdd(o, progress);
+  if (o.dataset == "speech-commands") return run_speech_commands(o, progress);
+  return make_error(ErrorCode::kUnsupported,
+                    "eval speech: dataset layout {} is not supported (pocketsphinx, fsdd, "
+                    "speech-commands)",
+                    o.dataset);
 }
 
 }  // namespace dreamsense::speech

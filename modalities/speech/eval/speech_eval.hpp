@@ -1,22 +1,62 @@
 #pragma once
-// `dreamsense eval speech --dataset pocketsphinx DIR`: grammar recognition on Debian's
-// pocketsphinx-testdata layout (or its copy with TRANSCRIPTS.txt), JSON of spec/cli.md.
+// `dreamsense eval speech --dataset pocketsphinx|fsdd|speech-commands DIR`: grammar recognition
+// on Debian's pocketsphinx-testdata, the Free Spoken Digit Dataset and the Speech Commands
+// layout; JSON of spec/cli.md. Protocols and measured numbers: modalities/speech/README.md.
 
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/speech/recognizer.hpp"
+#include "dreamsense/speech/voice_activity.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <functional>
+#include <optional>
+
+#include "speech_datasets.hpp"
 
 namespace dreamsense::speech {
 
 struct SpeechEvalOptions {
-  std::string dataset = "pocketsphinx";  // only layout supported here
+  std::string dataset = "pocketsphinx";  // pocketsphinx | fsdd | speech-commands
   std::filesystem::path dir;
+  // Base recogniser options. The layouts override a few (below) unless set here.
   RecognizerOptions recognizer;
+  // Layout defaults when unset: pocketsphinx 1.0 / 0; fsdd: closed set (no rejection);
+  // speech-commands: kCommandsGarbageWeight / kCommandsMinConfidence.
+  std::optional<double> garbage_phone_weight, min_confidence;
+  FsddSelection fsdd;                    // fsdd: speakers and take indices
+  std::string fsdd_model = "tidigits";   // fsdd: tidigits (default) | en-us (options above)
+  std::optional<double> pad_seconds;     // fsdd: silence added at both ends (kFsddPadSeconds)
+  std::optional<double> frequency_warp;  // fsdd: overrides kFsddTidigitsWarp
+  SpeechPresenceOptions presence;        // speech-commands: the silence check
+  double trim_margin_s = -1;  // speech-commands: decode the active span +- this (<0: all)
+  bool list_items = true;     // per-item records in the JSON ("items")
 };
+
+// FSDD protocol constants, tuned on speaker george only (leave-speaker-out; README).
+inline const std::filesystem::path kTidigitsModel =
+    "/usr/share/pocketsphinx/test/data/tidigits/hmm";
+inline const std::filesystem::path kTidigitsDictionary =
+    "/usr/share/pocketsphinx/test/data/tidigits/lm/tidigits.dic";
+inline constexpr double kFsddTidigitsWarp = 1.0;  // off: 1.6, best on george, did not transfer
+inline constexpr double kFsddPadSeconds = 0.2;
+inline constexpr double kFsddPadRms = 10.0;  // about -70 dBFS
+
+// Speech Commands decision constants, chosen on the synthetic espeak-ng *tuning* voices plus
+// FSDD speaker george's digits (real speech, all out of the 10-word grammar); see README.md.
+inline constexpr double kCommandsGarbageWeight = 0.01;
+inline constexpr double kCommandsMinConfidence = 0.56;
+
+// FSDD (`digit_speaker_index.wav`, 8 kHz): each clip, padded with kFsddPadSeconds of quiet
+// noise, decoded under a grammar of the ten digit words (zero | oh | one ... nine), closed set;
+// by default with PocketSphinx's TIDIGITS model at 8 kHz (fsdd_model "en-us": the en-us model
+// with `recognizer`'s resampler / front end). Metrics accuracy, per-speaker accuracy,
+// no_result_rate, confusion; per_class.<digit>.recall.
+// Speech Commands (12 class folders, 16 kHz): silence check (detect_speech) -> _silence_;
+// otherwise the 10-word grammar with phone-loop rejection and min_confidence: accepted word ->
+// that word, anything else -> _unknown_. accuracy over all 12 classes, false_accept_rate =
+// _unknown_ and _silence_ clips given a command word, per_class.<label>.recall, confusion.
 
 // In-grammar items: cards/*.wav under cards/cards.gram (references cards.transcription) and
 // goforward.raw under goforward.gram ("go forward ten meters"). Out-of-grammar items, per

@@ -1,31 +1,57 @@
 #include "ps_backend.hpp"
 
-#include <array>
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <map>
+#include <mutex>
 #include <pocketsphinx.h>
 #include <regex>
+#include <set>
 #include <sphinxbase/err.h>
 #include <sphinxbase/fsg_model.h>
 #include <sphinxbase/jsgf.h>
 #include <sphinxbase/logmath.h>
 #include <sstream>
+#include <unistd.h>
 #include <vector>
 
 namespace dreamsense::speech::detail {
 namespace {
 
-// The 39 phones of the CMU dictionary (the en-us model's context-independent units).
-constexpr std::array<const char*, 39> kPhones = {
-    "AA", "AE", "AH", "AO", "AW", "AY", "B",  "CH", "D", "DH", "EH", "ER", "EY",
-    "F",  "G",  "HH", "IH", "IY", "JH", "K",  "L",  "M", "N",  "NG", "OW", "OY",
-    "P",  "R",  "S",  "SH", "T",  "TH", "UH", "UW", "V", "W",  "Y",  "Z",  "ZH"};
+// The garbage loop runs over every phone the dictionary uses (the 39 CMU phones for
+// cmudict-en-us; the whole-word digit units for the TIDIGITS model).
+Result<std::vector<std::string>> dictionary_phones(const std::string& dictionary) {
+  static std::mutex mutex;
+  static std::map<std::string, std::vector<std::string>> cache;
+  std::lock_guard lock(mutex);
+  if (auto it = cache.find(dictionary); it != cache.end()) return it->second;
+  std::ifstream in(dictionary);
+  if (!in)
+    return make_error(ErrorCode::kNotFound, "pocketsphinx: cannot read dictionary {}", dictionary);
+  std::set<std::string> phones;
+  std::string line, word, phone;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == ';' || line[0] == '#') continue;
+    std::istringstream ls(line);
+    ls >> word;
+    while (ls >> phone) {
+      if (phone[0] == '#') break;  // trailing comment
+      phones.insert(phone);
+    }
+  }
+  if (phones.empty())
+    return make_error(ErrorCode::kCorruptData, "pocketsphinx: no pronunciations in {}", dictionary);
+  return cache[dictionary] = std::vector<std::string>(phones.begin(), phones.end());
+}
+
 constexpr const char* kGarbagePrefix = "__garbage_";
 
-std::string garbage_word(const char* phone) {
+std::string garbage_word(const std::string& phone) {
   std::string w = kGarbagePrefix;
-  for (const char* p = phone; *p; ++p) w += static_cast<char>(std::tolower(*p));
+  for (char c : phone) w += static_cast<char>(std::tolower(c));
   return w;
 }
 bool is_garbage(const std::string& w) { return w.rfind(kGarbagePrefix, 0) == 0; }
@@ -90,7 +116,8 @@ Result<std::string> jsgf_to_fsg_text(const std::string& jsgf, const std::string&
 
 // Adds a garbage state looping over all phones between the start and the final state.
 // With grammar == false the grammar's transitions are dropped (garbage branch alone).
-std::string add_garbage(const std::string& fsg_text, double phone_weight, bool keep_grammar) {
+std::string add_garbage(const std::string& fsg_text, const std::vector<std::string>& phones,
+                        double phone_weight, bool keep_grammar) {
   std::istringstream in(fsg_text);
   std::string line, out;
   int n = 0, start = 0, final_state = 0;
@@ -104,7 +131,7 @@ std::string add_garbage(const std::string& fsg_text, double phone_weight, bool k
     if (line.rfind("FINAL_STATE", 0) == 0) final_state = std::stoi(line.substr(11));
     if (line.rfind("TRANSITION", 0) == 0 && !keep_grammar) continue;
     if (line.rfind("FSG_END", 0) == 0) {
-      for (const char* p : kPhones) {
+      for (const auto& p : phones) {
         const std::string w = garbage_word(p);
         out += fmt::format("TRANSITION {} {} {} {}\n", start, n, phone_weight, w);
         out += fmt::format("TRANSITION {} {} {} {}\n", n, n, phone_weight, w);
@@ -114,6 +141,37 @@ std::string add_garbage(const std::string& fsg_text, double phone_weight, bool k
     out += line + "\n";
   }
   return out;
+}
+
+// A copy of the model's feat.params with some values replaced, in a temporary file.
+Result<std::string> featparams_with(const std::string& model_dir,
+                                    const std::map<std::string, std::string>& values) {
+  std::ifstream in(model_dir + "/feat.params");
+  std::string text, line;
+  std::set<std::string> done;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string key;
+    ls >> key;
+    if (auto it = values.find(key); it != values.end()) {
+      line = key + " " + it->second;
+      done.insert(key);
+    }
+    text += line + "\n";
+  }
+  for (const auto& [k, v] : values)
+    if (!done.count(k)) text += k + " " + v + "\n";
+  char path[] = "/tmp/dreamsense_featparams_XXXXXX";
+  const int fd = mkstemp(path);
+  if (fd < 0)
+    return make_error(ErrorCode::kIoError, "pocketsphinx: cannot create a temporary feat.params");
+  const bool ok = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  close(fd);
+  if (!ok) {
+    std::remove(path);
+    return make_error(ErrorCode::kIoError, "pocketsphinx: cannot write {}", path);
+  }
+  return std::string(path);
 }
 
 fsg_model_t* read_fsg(const std::string& text, logmath_t* lmath, float lw) {
@@ -132,10 +190,33 @@ PsDecoder::~PsDecoder() {
 
 Result<std::unique_ptr<PsDecoder>> PsDecoder::create(const PsConfig& c) {
   const std::string rate = std::to_string(c.rate_hz);
-  cmd_ln_t* config =
-      cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", c.model_dir.c_str(), "-dict",
-                  c.dictionary.c_str(), "-samprate", rate.c_str(), "-logfn", "/dev/null", nullptr);
+  // ps_init() applies the model's feat.params (-upperf 6800 ...) over anything set here, so a
+  // different upper filter edge (narrow-band front end) needs its own copy of feat.params.
+  std::map<std::string, std::string> feat;
+  if (c.upper_hz > 0) feat["-upperf"] = fmt::format("{}", c.upper_hz);
+  std::string featparams;
+  if (!feat.empty()) {
+    auto f = featparams_with(c.model_dir, feat);
+    if (!f) return tl::unexpected(f.error());
+    featparams = *f;
+  }
+  struct Unlink {
+    const std::string& p;
+    ~Unlink() {
+      if (!p.empty()) std::remove(p.c_str());
+    }
+  } unlink_featparams{featparams};
+  cmd_ln_t* config = cmd_ln_init(
+      nullptr, ps_args(), TRUE, "-hmm", c.model_dir.c_str(), "-dict", c.dictionary.c_str(),
+      "-samprate", rate.c_str(), "-logfn", "/dev/null", "-remove_silence",
+      c.remove_silence ? "yes" : "no", "-remove_noise", c.remove_noise ? "yes" : "no",
+      featparams.empty() ? nullptr : "-featparams", featparams.c_str(), nullptr);
   if (!config) return make_error(ErrorCode::kInternal, "pocketsphinx: bad configuration");
+  if (c.frequency_warp != 1.0) {
+    const std::string warp = fmt::format("{}", c.frequency_warp);
+    cmd_ln_set_str_r(config, "-warp_type", "inverse_linear");
+    cmd_ln_set_str_r(config, "-warp_params", warp.c_str());
+  }
   std::unique_ptr<PsDecoder> d(new PsDecoder());
   ps_decoder_t* ps = ps_init(config);
   cmd_ln_free_r(config);  // the decoder keeps its own reference
@@ -172,13 +253,17 @@ Result<std::unique_ptr<PsDecoder>> PsDecoder::create(const PsConfig& c) {
                         c.source, c.dictionary, list);
     }
   }
-  for (const char* p : kPhones)
-    if (ps_add_word(ps, garbage_word(p).c_str(), p, TRUE) < 0)
-      return make_error(ErrorCode::kInternal, "pocketsphinx: cannot add garbage word for {}", p);
+  auto phones = dictionary_phones(c.dictionary);
+  if (!phones) return tl::unexpected(phones.error());
+  for (const auto& p : *phones)
+    if (ps_add_word(ps, garbage_word(p).c_str(), p.c_str(), TRUE) < 0)
+      return make_error(ErrorCode::kCorruptData,
+                        "pocketsphinx: phone {} of {} is not in the acoustic model {}", p,
+                        c.dictionary, c.model_dir);
 
   const std::string main_text =
-      c.reject ? add_garbage(*fsg_text, c.garbage_phone_weight, true) : *fsg_text;
-  const std::string garbage_text = add_garbage(*fsg_text, c.garbage_phone_weight, false);
+      c.reject ? add_garbage(*fsg_text, *phones, c.garbage_phone_weight, true) : *fsg_text;
+  const std::string garbage_text = add_garbage(*fsg_text, *phones, c.garbage_phone_weight, false);
   for (auto [name, text] :
        {std::pair{"grammar", &main_text}, std::pair{"garbage", &garbage_text}}) {
     fsg_model_t* fsg = read_fsg(*text, lmath, lw);
@@ -213,8 +298,12 @@ Result<PsPass> PsDecoder::run(bool garbage_only, std::span<const int16_t> s) {
   bool garbage = false;
   std::string words;
   for (ps_seg_t* seg = ps_seg_iter(ps); seg; seg = ps_seg_next(seg)) {
-    const std::string w = ps_seg_word(seg);
+    std::string w = ps_seg_word(seg);
     if (is_filler(w)) continue;
+    // Alternative pronunciations come back as "one(2)": report the word.
+    if (const size_t paren = w.find('(');
+        paren != std::string::npos && paren > 0 && w.back() == ')')
+      w.erase(paren);
     p.any_word = true;
     if (is_garbage(w)) {
       garbage = true;

@@ -22,9 +22,12 @@ struct PsPass {
 struct PsConfig {
   std::string model_dir, dictionary;
   int rate_hz = 16000;
+  double upper_hz = 0;  // 0 = the model's feat.params
+  bool remove_silence = true, remove_noise = true;
   std::string jsgf, source;
   bool reject = true;
   double garbage_phone_weight = 1.0;
+  double frequency_warp = 1.0;  // 1 = off
 };
 
 class PsDecoder {

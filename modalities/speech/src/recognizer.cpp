@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <numbers>
+#include <soxr.h>
 #include <sstream>
 
 #include "ps_backend.hpp"
@@ -24,7 +25,17 @@ std::string read_text(const fs::path& p, bool& ok) {
   return ss.str();
 }
 
+std::vector<int16_t> resample_sinc(std::span<const int16_t> in, int from_hz, int to_hz);
+std::vector<int16_t> resample_soxr(std::span<const int16_t> in, int from_hz, int to_hz);
+
 }  // namespace
+
+Result<Resampler> parse_resampler(std::string_view name) {
+  if (name == "soxr") return Resampler::kSoxr;
+  if (name == "sinc") return Resampler::kSinc;
+  return make_error(ErrorCode::kInvalidArgument, "unknown resampler '{}' (soxr or sinc)", name);
+}
+std::string_view to_string(Resampler r) { return r == Resampler::kSoxr ? "soxr" : "sinc"; }
 
 Status RecognizerOptions::check() const {
   std::vector<std::string> bad;
@@ -35,6 +46,21 @@ Status RecognizerOptions::check() const {
         fmt::format("garbage_phone_weight must be in (0, 1] (got {})", garbage_phone_weight));
   if (!(min_confidence >= 0 && min_confidence <= 1))
     bad.push_back(fmt::format("min_confidence must be in [0, 1] (got {})", min_confidence));
+  if (front_end_rate_hz < 0)
+    bad.push_back(fmt::format("front_end_rate_hz must be >= 0 (got {})", front_end_rate_hz));
+  const int fe_rate = front_end_rate_hz > 0 ? front_end_rate_hz : model_rate_hz;
+  if (front_end_upper_hz < 0 || (front_end_upper_hz > 0 && front_end_upper_hz >= fe_rate / 2.0))
+    bad.push_back(
+        fmt::format("front_end_upper_hz must be 0 (model default) or below {} Hz "
+                    "(half the front-end rate; got {})",
+                    fe_rate / 2.0, front_end_upper_hz));
+  if (front_end_upper_hz == 0 && fe_rate < model_rate_hz)
+    bad.push_back(
+        fmt::format("a {} Hz front end needs front_end_upper_hz below {} Hz (the "
+                    "model's filters reach 6800 Hz)",
+                    fe_rate, fe_rate / 2.0));
+  if (!(frequency_warp >= 0.5 && frequency_warp <= 2.0))
+    bad.push_back(fmt::format("frequency_warp must be in [0.5, 2] (got {})", frequency_warp));
   if (!(confidence_scale > 0))
     bad.push_back(fmt::format("confidence_scale must be > 0 (got {})", confidence_scale));
   if (bad.empty()) return ok_status();
@@ -101,7 +127,11 @@ Result<std::unique_ptr<Recognizer>> Recognizer::create(const RecognizerOptions& 
   detail::PsConfig c;
   c.model_dir = options.model_dir.string();
   c.dictionary = options.dictionary.string();
-  c.rate_hz = options.model_rate_hz;
+  c.rate_hz = options.front_end_rate_hz > 0 ? options.front_end_rate_hz : options.model_rate_hz;
+  c.upper_hz = options.front_end_upper_hz;
+  c.remove_silence = options.remove_silence;
+  c.remove_noise = options.remove_noise;
+  c.frequency_warp = options.frequency_warp;
   c.jsgf = grammar.jsgf;
   c.source = grammar.source;
   c.reject = options.reject_out_of_grammar;
@@ -120,14 +150,19 @@ Result<Decoding> Recognizer::decode(std::span<const int16_t> samples, int sample
     return make_error(ErrorCode::kInvalidArgument, "speech: sample rate must be > 0 (got {})",
                       sample_rate_hz);
   const auto t0 = std::chrono::steady_clock::now();
+  const int fe_rate = impl_->options.front_end_rate_hz > 0 ? impl_->options.front_end_rate_hz
+                                                           : impl_->options.model_rate_hz;
   std::vector<int16_t> resampled;
-  if (sample_rate_hz != impl_->options.model_rate_hz) {
-    resampled = resample(samples, sample_rate_hz, impl_->options.model_rate_hz);
+  if (sample_rate_hz != fe_rate) {
+    resampled = resample(samples, sample_rate_hz, fe_rate, impl_->options.resampler);
     samples = resampled;
   }
   Decoding d;
   auto main = impl_->decoder->run(false, samples);
   if (!main) return tl::unexpected(main.error());
+  const double frames =
+      std::max<double>(1.0, static_cast<double>(samples.size()) * 100.0 / fe_rate);
+  d.score_per_frame = static_cast<double>(main->score) / frames;
   d.heard_speech = main->any_word;
   d.grammar_hypothesis = main->hyp;
   if (!main->hyp.empty()) {
@@ -135,12 +170,11 @@ Result<Decoding> Recognizer::decode(std::span<const int16_t> samples, int sample
     d.last_frame = main->last;
     auto garbage = impl_->decoder->run(true, samples);
     if (!garbage) return tl::unexpected(garbage.error());
-    const double frames = std::max<double>(
-        1.0, static_cast<double>(samples.size()) * 100.0 / impl_->options.model_rate_hz);
     // No garbage path survived the beam: the grammar wins by a wide margin.
     const double margin = garbage->any_word
                               ? (static_cast<double>(main->score) - garbage->score) / frames
                               : 10.0 * impl_->options.confidence_scale;
+    d.margin_per_frame = margin;
     d.confidence = 1.0 / (1.0 + std::exp(-margin / impl_->options.confidence_scale));
     d.accepted =
         !impl_->options.reject_out_of_grammar || d.confidence >= impl_->options.min_confidence;
@@ -177,8 +211,33 @@ Result<std::optional<RecognizedSpeech>> Recognizer::recognize(std::span<const fl
   return recognize(std::span<const int16_t>(s), sample_rate_hz, start);
 }
 
-std::vector<int16_t> resample(std::span<const int16_t> in, int from_hz, int to_hz) {
-  if (from_hz == to_hz || in.empty()) return {in.begin(), in.end()};
+std::vector<int16_t> resample(std::span<const int16_t> in, int from_hz, int to_hz,
+                              Resampler method) {
+  if (from_hz == to_hz || in.empty() || from_hz <= 0 || to_hz <= 0) return {in.begin(), in.end()};
+  return method == Resampler::kSoxr ? resample_soxr(in, from_hz, to_hz)
+                                    : resample_sinc(in, from_hz, to_hz);
+}
+
+namespace {
+
+std::vector<int16_t> resample_soxr(std::span<const int16_t> in, int from_hz, int to_hz) {
+  const size_t n_out =
+      static_cast<size_t>(std::floor(static_cast<double>(in.size()) * to_hz / from_hz));
+  std::vector<int16_t> out(n_out + 64);
+  size_t done = 0;
+  // Very high quality, linear phase; soxr_oneshot compensates the filter delay and flushes.
+  soxr_io_spec_t io = soxr_io_spec(SOXR_INT16_I, SOXR_INT16_I);
+  io.flags |= SOXR_NO_DITHER;  // deterministic output
+  const soxr_quality_spec_t q = soxr_quality_spec(SOXR_VHQ | SOXR_LINEAR_PHASE, 0);
+  const soxr_error_t err = soxr_oneshot(from_hz, to_hz, 1, in.data(), in.size(), nullptr,
+                                        out.data(), out.size(), &done, &io, &q, nullptr);
+  if (err) done = 0;  // only on allocation failure; never for valid rates
+  out.resize(done);
+  out.resize(n_out, 0);
+  return out;
+}
+
+std::vector<int16_t> resample_sinc(std::span<const int16_t> in, int from_hz, int to_hz) {
   constexpr int kZeros = 32;
   constexpr double kBeta = 8.0;
   const double ratio = static_cast<double>(to_hz) / from_hz;
@@ -212,5 +271,7 @@ std::vector<int16_t> resample(std::span<const int16_t> in, int from_hz, int to_h
   }
   return out;
 }
+
+}  // namespace
 
 }  // namespace dreamsense::speech

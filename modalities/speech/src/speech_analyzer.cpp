@@ -1,5 +1,6 @@
 #include "dreamsense/speech/speech_analyzer.hpp"
 
+#include "dreamsense/audio/stamped_audio.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/core/perception.hpp"
 
@@ -9,22 +10,19 @@
 
 namespace dreamsense::speech {
 
-Status UtteranceGateOptions::check() const {
-  if (!(frame_s > 0 && threshold_db > 0 && min_speech_s >= 0 && hangover_s > 0 && padding_s >= 0 &&
-        max_utterance_s > hangover_s))
-    return make_error(ErrorCode::kInvalidArgument,
-                      "UtteranceGateOptions: frame_s, threshold_db, hangover_s must be > 0 and "
-                      "max_utterance_s > hangover_s");
-  return ok_status();
-}
-
 Status SpeechAnalyzerOptions::check() const {
   if (audio_sensor.empty())
     return make_error(ErrorCode::kInvalidArgument, "SpeechAnalyzerOptions: audio_sensor is empty");
   if (grammar.empty())
     return make_error(ErrorCode::kInvalidArgument, "SpeechAnalyzerOptions: no grammar file");
   if (auto s = recognizer.check(); !s) return s;
-  return gate.check();
+  if (direction_margin < Duration())
+    return make_error(ErrorCode::kInvalidArgument,
+                      "SpeechAnalyzerOptions: direction_margin must be >= 0");
+  // The stream's rate and channel count replace these when it starts; check the rest now.
+  audio::UtteranceSegmenterOptions so = segmenter;
+  so.channels = std::max(so.channels, so.vad_channel + 1);
+  return so.check();
 }
 
 namespace {
@@ -35,88 +33,116 @@ class SpeechAnalyzer : public Analyzer {
       : options_(std::move(o)), recognizer_(std::move(r)) {}
   std::string_view name() const override { return "speech"; }
   AnalyzerContract contract() const override {
-    return {{options_.audio_sensor}, {}, {}, {keys::kRecognizedSpeech.name}};
+    AnalyzerContract c{{options_.audio_sensor}, {}, {}, {keys::kRecognizedSpeech.name}};
+    if (options_.beamforming()) c.reads.push_back(keys::kSoundDirection.name);
+    return c;
   }
 
-  Status process(const MultiFrame& in, const BlackboardView&, BlackboardWriter& out) override {
+  Status process(const MultiFrame& in, const BlackboardView& prior,
+                 BlackboardWriter& out) override {
+    if (options_.beamforming()) note_direction(prior);
+    utterances_.clear();
     for (const FramePtr& f : in.chunks_of(options_.audio_sensor)) {
       const AudioChunk* c = f->as<AudioChunk>();
-      if (c == nullptr || c->channels <= 0)
+      if (c == nullptr || c->channels <= 0 || c->sample_rate <= 0)
         return make_error(ErrorCode::kInvalidArgument, "speech: '{}' is not an audio stream",
                           options_.audio_sensor);
       if (rate_ == 0) {
-        rate_ = c->sample_rate;
-        frame_len_ = std::max(1, static_cast<int>(std::lround(options_.gate.frame_s * rate_)));
+        if (auto s = start_stream(*c); !s) return s;
+      } else if (c->sample_rate != rate_ || c->channels != channels_) {
+        return make_error(ErrorCode::kInvalidArgument,
+                          "speech: stream '{}' changed from {} ch at {} Hz to {} ch at {} Hz",
+                          options_.audio_sensor, channels_, rate_, c->channels, c->sample_rate);
       }
-      // Mono = channel 0 (the array's microphones are 15-23 cm apart: averaging them would
-      // comb-filter the speech).
-      const int64_t n = c->frames();
-      for (int64_t i = 0; i < n; ++i) {
-        if (buffer_.empty())
-          buffer_start_ = f->stamp + Duration::from_ns(i * 1'000'000'000LL / rate_);
-        buffer_.push_back(c->samples[static_cast<size_t>(i * c->channels)]);
-        if (static_cast<int>(buffer_.size() - analysed_) >= frame_len_) {
-          if (auto s = gate_frame(out, in.stamp); !s) return s;
-        }
+      if (auto s = segmenter_->push(c->samples, f->stamp, utterances_); !s) {
+        return make_error(s.error().code, "speech: {} (stream '{}' at {})", s.error().message,
+                          options_.audio_sensor, f->stamp.to_string());
       }
     }
+    for (const auto& u : utterances_)
+      if (auto s = decode(u, out, in.stamp); !s) return s;
     return ok_status();
   }
 
   void reset() override {
-    buffer_.clear();
-    analysed_ = 0;
-    in_speech_ = false;
+    rate_ = channels_ = 0;
+    segmenter_.reset();
+    beamformer_.reset();
+    directions_.clear();
   }
 
  private:
-  // Energy of the next frame; tracks the noise floor; opens/closes utterances.
-  Status gate_frame(BlackboardWriter& out, Timestamp tick) {
-    double e = 0;
-    for (int i = 0; i < frame_len_; ++i) {
-      const double v = buffer_[analysed_ + static_cast<size_t>(i)];
-      e += v * v;
+  struct HeardDirection {
+    Timestamp stamp;
+    cv::Vec3d direction;
+    double weight;
+  };
+
+  Status start_stream(const AudioChunk& c) {
+    rate_ = c.sample_rate;
+    channels_ = c.channels;
+    audio::UtteranceSegmenterOptions so = options_.segmenter;
+    so.vad.sample_rate = rate_;
+    so.channels = channels_;
+    so.vad_channel = std::min(so.vad_channel, channels_ - 1);
+    auto s = audio::UtteranceSegmenter::create(so);
+    if (!s)
+      return make_error(s.error().code, "speech: stream '{}': {}", options_.audio_sensor,
+                        s.error().message);
+    segmenter_ = std::move(*s);
+    if (options_.beamforming()) {
+      if (static_cast<size_t>(channels_) != options_.mic_positions_m.size())
+        return make_error(ErrorCode::kInvalidArgument,
+                          "speech: stream '{}' has {} channel(s) but the microphone array has {} "
+                          "microphones",
+                          options_.audio_sensor, channels_, options_.mic_positions_m.size());
+      audio::BeamformerOptions bo;
+      bo.sample_rate = rate_;
+      bo.mic_positions_m = options_.mic_positions_m;
+      bo.method = options_.beamformer;
+      auto b = audio::Beamformer::create(bo);
+      if (!b) return make_error(b.error().code, "speech: {}", b.error().message);
+      beamformer_ = std::move(*b);
     }
-    const double db = 10 * std::log10(e / frame_len_ + 1e-12);
-    analysed_ += static_cast<size_t>(frame_len_);
-    // Noise floor: follows drops at once, rises slowly (3 dB per second).
-    noise_db_ = std::min(db, noise_db_ + 3.0 * options_.gate.frame_s);
-    const bool loud = db > noise_db_ + options_.gate.threshold_db;
-    const size_t frames_per_s = static_cast<size_t>(rate_);
-    if (!in_speech_) {
-      run_ = loud ? run_ + 1 : 0;
-      if (run_ * options_.gate.frame_s >= options_.gate.min_speech_s) {
-        in_speech_ = true;
-        silence_ = 0;
-        // Keep padding before the first loud frame.
-        const size_t first_loud = analysed_ - run_ * static_cast<size_t>(frame_len_);
-        const size_t pad = static_cast<size_t>(options_.gate.padding_s * rate_);
-        utt_begin_ = first_loud > pad ? first_loud - pad : 0;
-      } else {
-        // Drop audio that can no longer be padding.
-        const size_t keep = static_cast<size_t>(options_.gate.padding_s * rate_) +
-                            run_ * static_cast<size_t>(frame_len_);
-        if (analysed_ > keep + frames_per_s) drop_front(analysed_ - keep);
-      }
-      return ok_status();
-    }
-    silence_ = loud ? 0 : silence_ + 1;
-    const double length_s = static_cast<double>(analysed_ - utt_begin_) / rate_;
-    if (silence_ * options_.gate.frame_s >= options_.gate.hangover_s ||
-        length_s >= options_.gate.max_utterance_s)
-      return finish_utterance(out, tick);
     return ok_status();
   }
 
-  Status finish_utterance(BlackboardWriter& out, Timestamp tick) {
-    std::vector<float> samples(buffer_.begin() + static_cast<std::ptrdiff_t>(utt_begin_),
-                               buffer_.begin() + static_cast<std::ptrdiff_t>(analysed_));
-    const Timestamp start = buffer_start_ + Duration::from_ns(static_cast<int64_t>(utt_begin_) *
-                                                              1'000'000'000LL / rate_);
-    in_speech_ = false;
-    run_ = 0;
-    drop_front(analysed_);
-    auto r = recognizer_->recognize(std::span<const float>(samples), rate_, start);
+  // Keeps the sound directions of the last seconds (one per new blackboard entry).
+  void note_direction(const BlackboardView& prior) {
+    auto e = prior.get(keys::kSoundDirection);
+    if (e && e->present() && e->value->sensor == options_.audio_sensor &&
+        (directions_.empty() || e->stamp > directions_.back().stamp))
+      directions_.push_back({e->stamp, e->value->direction_array,
+                             std::max(1e-3, static_cast<double>(e->confidence))});
+    const double keep_s = options_.segmenter.max_utterance_s + 5.0;
+    while (!directions_.empty() && e && (e->stamp - directions_.front().stamp).seconds() > keep_s)
+      directions_.pop_front();
+  }
+
+  // Confidence-weighted mean direction heard during the utterance's speech, if any.
+  std::optional<cv::Vec3d> direction_of(const audio::Utterance& u) const {
+    cv::Vec3d sum(0, 0, 0);
+    for (const auto& d : directions_)
+      if (d.stamp >= u.speech_start - options_.direction_margin &&
+          d.stamp <= u.speech_end + options_.direction_margin)
+        sum += d.weight * d.direction;
+    if (cv::norm(sum) < 1e-9) return std::nullopt;
+    return sum / cv::norm(sum);
+  }
+
+  Status decode(const audio::Utterance& u, BlackboardWriter& out, Timestamp tick) {
+    std::vector<float> mono;
+    std::optional<cv::Vec3d> dir;
+    if (beamformer_) dir = direction_of(u);
+    if (dir) {
+      beamformer_->steer(*dir);
+      auto y = beamformer_->apply(u.samples);
+      if (!y) return tl::unexpected(y.error());
+      mono = std::move(*y);
+    } else {
+      mono = u.channel(0);  // no array or no direction: channel 0 (see the header)
+    }
+    auto r = recognizer_->recognize(std::span<const float>(mono), rate_, u.start);
     if (!r) return tl::unexpected(r.error());
     if (!*r) return ok_status();  // out of grammar or noise: nothing to report
     RecognizedSpeech s = **r;
@@ -126,24 +152,13 @@ class SpeechAnalyzer : public Analyzer {
     return ok_status();
   }
 
-  void drop_front(size_t n) {
-    n = std::min(n, buffer_.size());
-    buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(n));
-    buffer_start_ =
-        buffer_start_ + Duration::from_ns(static_cast<int64_t>(n) * 1'000'000'000LL / rate_);
-    analysed_ -= std::min(analysed_, n);
-    utt_begin_ -= std::min(utt_begin_, n);
-  }
-
   SpeechAnalyzerOptions options_;
   std::unique_ptr<Recognizer> recognizer_;
-  std::deque<float> buffer_;  // mono samples not yet discarded
-  Timestamp buffer_start_;    // stamp of buffer_.front()
-  size_t analysed_ = 0;       // samples of buffer_ already gated
-  int rate_ = 0, frame_len_ = 0;
-  double noise_db_ = 0;  // starts high: the first frames pull it down
-  bool in_speech_ = false;
-  size_t run_ = 0, silence_ = 0, utt_begin_ = 0;
+  int rate_ = 0, channels_ = 0;
+  std::unique_ptr<audio::UtteranceSegmenter> segmenter_;
+  std::unique_ptr<audio::Beamformer> beamformer_;
+  std::deque<HeardDirection> directions_;
+  std::vector<audio::Utterance> utterances_;  // scratch
 };
 
 }  // namespace

@@ -1,4 +1,5 @@
-// Dataset check (label dataset): 0 % sentence error on cards and goforward. Skips without data.
+// Dataset checks (label dataset): 0 % sentence error on cards and goforward; FSDD's official
+// test split (take indices 0-4) with the default protocol. Skip without data.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -29,6 +30,31 @@ TEST(SpeechDataset, PocketsphinxGrammarsHaveNoSentenceErrors) {
   EXPECT_EQ((*r)["per_class"]["cards"]["grammar_sentence_accuracy"].get<double>(), 1.0);
   EXPECT_EQ((*r)["per_class"]["goforward"]["grammar_sentence_accuracy"].get<double>(), 1.0);
   EXPECT_LE(m["false_accept_rate"].get<double>(), 0.1);
+  EXPECT_LT((*r)["timing"]["rtf"].get<double>(), 1.0);
+}
+
+// $DREAMSENSE_DATA/fsdd, else ../shared/data/fsdd next to the source tree.
+std::filesystem::path fsdd_dir() {
+  if (const char* d = std::getenv("DREAMSENSE_DATA")) return std::filesystem::path(d) / "fsdd";
+  return std::filesystem::path(DREAMSENSE_SOURCE_DIR) / "../shared/data/fsdd";
+}
+
+TEST(SpeechDataset, FsddTestSplit) {
+  SpeechEvalOptions o;
+  o.dataset = "fsdd";
+  o.dir = fsdd_dir();
+  if (!std::filesystem::exists(o.dir)) GTEST_SKIP() << "FSDD absent (" << o.dir << ")";
+  if (!std::filesystem::exists(kTidigitsModel / "mdef"))
+    GTEST_SKIP() << "needs pocketsphinx-testdata (TIDIGITS model)";
+  o.fsdd.first_index = 0;
+  o.fsdd.last_index = 4;
+  auto r = run_speech_eval(o);
+  ASSERT_TRUE(r) << r.error().to_string();
+  const auto& m = (*r)["metrics"];
+  // Measured 0.81 on george/jackson/nicolas (README); the bar guards against regressions.
+  EXPECT_GE(m["accuracy"].get<double>(), 0.72) << m.dump(1);
+  EXPECT_EQ((*r)["per_class"].size(), 10u);
+  for (const auto& [spk, v] : m["per_speaker"].items()) EXPECT_EQ(v["items"].get<int>(), 50) << spk;
   EXPECT_LT((*r)["timing"]["rtf"].get<double>(), 1.0);
 }
 

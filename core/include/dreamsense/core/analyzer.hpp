@@ -21,6 +21,9 @@ struct AnalyzerContract {
   std::vector<std::string> reads;
   // Blackboard keys this analyser writes; two analysers may not write the same key.
   std::vector<std::string> writes;
+  // Keys read as feedback from earlier ticks (e.g. face detection reads the last head pose to
+  // select the most frontal camera). Any analyser may write them, or none: then they are absent.
+  std::vector<std::string> reads_previous = {};
 };
 
 class Analyzer {

@@ -10,6 +10,7 @@
 #include "dreamsense/primitives/catalogue.hpp"
 #include "dreamsense/primitives/face_primitives.hpp"
 
+#include <array>
 #include <map>
 #include <set>
 #include <string>
@@ -28,6 +29,12 @@ struct EvaluatorOptions {
   // about 90 % of the time in eval doa's rooms, >= 0.7 (DREAM's consumer) about 98 %.
   double sound_direction_threshold = 0.5;
   FaceGeometryOptions face_geometry;
+  // Default query of getHeadGaze (plane), F12: three points (world, m) spanning the plane; the
+  // default is the world plane z = 0 (the front sensor's image plane, where the robot stands).
+  std::array<cv::Vec3d, 3> head_gaze_plane{cv::Vec3d(0, 0, 0), cv::Vec3d(1, 0, 0),
+                                           cv::Vec3d(0, 1, 0)};
+  // Default query of trackFace (F23): predict the face this far ahead.
+  double track_face_dt_s = 0.2;
   Status check() const;
 };
 
@@ -40,8 +47,13 @@ class Evaluator {
   // Enables the face primitives (getFaces today) for these cameras (their calibrations give the
   // 3-D positions).
   void enable_faces(std::map<SensorId, CameraModel> cameras);
+  // Enables the eye primitives (F1 checkMutualGaze, F5 getEyeGaze, F6 getEyes); needs
+  // enable_faces and the eye-centre and gaze analysers.
+  void enable_gaze() { gaze_enabled_ = true; }
   // Enables recognizeSpeech (F22) for the speech analyser's audio stream.
   void enable_speech(SensorId audio_sensor) { speech_sensor_ = std::move(audio_sensor); }
+  // Enables identifyVoice (F21) for the voice id analyser's audio stream.
+  void enable_voice(SensorId audio_sensor) { voice_sensor_ = std::move(audio_sensor); }
 
   std::vector<PrimitiveRecord> evaluate(const MultiFrame& tick, const BlackboardView& view);
 
@@ -53,8 +65,16 @@ class Evaluator {
                                      const std::vector<SensorId>& sensors, Timestamp tick) const;
   void evaluate_faces(const MultiFrame& tick, const BlackboardView& view,
                       std::vector<PrimitiveRecord>& out);
+  void evaluate_head(const MultiFrame& tick, const BlackboardView& view,
+                     std::vector<PrimitiveRecord>& out);
+  void evaluate_gaze(const MultiFrame& tick, const BlackboardView& view,
+                     std::vector<PrimitiveRecord>& out);
+  void evaluate_track_face(const MultiFrame& tick, const BlackboardView& view,
+                           std::vector<PrimitiveRecord>& out);
   void evaluate_speech(const MultiFrame& tick, const BlackboardView& view,
                        std::vector<PrimitiveRecord>& out);
+  void evaluate_voice(const MultiFrame& tick, const BlackboardView& view,
+                      std::vector<PrimitiveRecord>& out);
   PrimitiveRecord base(PrimitiveId id, Timestamp stamp) const;
   void evaluate_body(const MultiFrame& tick, const BlackboardView& view,
                      std::vector<PrimitiveRecord>& out);
@@ -65,6 +85,8 @@ class Evaluator {
   SensorId audio_sensor_;
   std::map<SensorId, CameraModel> face_cameras_;
   SensorId speech_sensor_;
+  SensorId voice_sensor_;
+  bool gaze_enabled_ = false;
   std::map<SensorId, Timestamp> last_seen_;
   Timestamp first_tick_ = Timestamp::unset();
 };

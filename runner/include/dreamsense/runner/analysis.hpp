@@ -5,6 +5,7 @@
 // into the output folder. Outputs appear under their final names only when complete.
 
 #include "dreamsense/core/pipeline.hpp"
+#include "dreamsense/gaze/mutual_gaze.hpp"
 #include "dreamsense/primitives/evaluator.hpp"
 
 #include <nlohmann/json.hpp>
@@ -25,6 +26,23 @@ struct AnalysisOptions {
   // Grammar for recognizeSpeech (JSGF or SRGS .grxml). Empty: the session's own
   // (metadata speech_grammar, relative to the session folder), else speech recognition is off.
   std::filesystem::path speech_grammar;
+  // Speaker identification (identifyVoice, modalities/voice_id), chosen explicitly:
+  //  "gmm_ubm": speaker models, from voice_model (a file from `train voices`) or, when that is
+  //    empty, trained here from the session's enrolment audio (metadata voice_enroll: a folder,
+  //    relative to the session, with one subfolder of recordings per speaker); with neither,
+  //    identifyVoice is disabled (never a silent switch to the direction rule);
+  //  "direction_rule": DREAM's rule on the sound direction, no speaker models;
+  //  "off".
+  std::string voice_method = "gmm_ubm";
+  std::filesystem::path voice_model;
+  // Gaze constants (`dreamsense train gaze`); empty: the built-in ones (modalities/gaze/README.md).
+  std::filesystem::path gaze_model;
+  // Mutual gaze (F1). Its robot_head_m is replaced by the session's metadata `robot_head_m`
+  // ("x y z" in metres, world) when the session has one and robot_head_from_session is true.
+  gaze::MutualGazeOptions mutual_gaze;
+  bool robot_head_from_session = true;
+  // Also write overlay.mp4 (boxes, landmarks, head axes, gaze rays, selected camera).
+  bool overlay = false;
   Status check() const;
 };
 

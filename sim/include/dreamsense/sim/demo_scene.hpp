@@ -24,6 +24,9 @@ struct DemoGeometry {
   cv::Vec3d robot_head_m{0.0, -0.05, 0.15};
   double gaze_radius_m = 0.20;
   cv::Vec3d head_rest_m{0.0, -0.05, 1.10};  // child's eye midpoint, mean position
+  // The therapist's head (a gaze target, not rendered): x = side * therapist_head_m[0] with a
+  // seed-dependent side (DemoScript::therapist_side(), also the side the therapist speaks from).
+  cv::Vec3d therapist_head_m{0.80, -0.30, 0.55};
   // Table: top plane y = table_top_y_m, rectangle x in [x_min, x_max], z in [z_min, z_max].
   double table_top_y_m = 0.30;
   double table_x_min_m = -0.55, table_x_max_m = 0.55;
@@ -52,6 +55,34 @@ struct ActionSegment {
 // seed-dependent permutation of wave / fly / hands_on_head (so 20 s always contains all three),
 // later ones are drawn at random. Segments tile [0, duration_s).
 std::vector<ActionSegment> make_action_schedule(uint64_t seed, double duration_s);
+
+// What the child looks at. Fixations tile the session; the eyes jump to each new target at once
+// (a saccade is shorter than a frame), the head follows over head_turn_s (after a short lag) and
+// turns only part of the way (head_yaw_share / head_pitch_share of the target's direction); the
+// eyes rotate in the head for the rest, within kMaxEyeYawDeg / kMaxEyePitchDeg.
+enum class GazeTargetKind { kRobot, kObject, kTherapist, kTable, kElsewhere };
+std::string_view gaze_target_label(
+    GazeTargetKind kind);  // robot, object, therapist, table, elsewhere
+
+struct Fixation {
+  double start_s = 0, end_s = 0;
+  GazeTargetKind kind = GazeTargetKind::kRobot;
+  int object = -1;             // table object id (kObject: its moving top centre is tracked)
+  cv::Vec3d point_m{0, 0, 0};  // world target for kRobot, kTherapist, kTable, kElsewhere
+  double head_yaw_share = 0.6, head_pitch_share = 0.5;
+  double head_turn_s = 0.5;
+};
+
+struct GazeState {
+  GazeTargetKind kind = GazeTargetKind::kRobot;
+  int object = -1;
+  cv::Vec3d intended_m{0, 0, 0};  // the target's point
+  // The point both eyes fixate: intended_m plus fixational jitter (a few mm), pulled inside the
+  // eye-in-head range if the head has not turned far enough yet.
+  cv::Vec3d target_m{0, 0, 0};
+  double eye_yaw_deg = 0, eye_pitch_deg = 0;  // eye-in-head rotation seen from the head origin
+  double eyelid_closure = 0;                  // 0 open .. 1 closed (blinks)
+};
 
 struct HeadPose {
   cv::Vec3d position_m{0, 0, 1};  // eye midpoint (world)
@@ -89,10 +120,17 @@ class DemoScript {
   uint64_t seed() const { return seed_; }
   double duration_s() const { return duration_s_; }
 
+  static constexpr double kMaxEyeYawDeg = 25, kMaxEyePitchDeg = 18;  // eye-in-head range
+
   HeadPose head_pose(double t) const;
-  // 1 inside a "look at the robot" hold, 0 outside, smooth ramps in between.
-  double hold_weight(double t) const;
-  const std::vector<std::pair<double, double>>& holds() const { return holds_; }
+  GazeState gaze(double t) const;
+  const std::vector<Fixation>& fixations() const { return fixations_; }
+  const Fixation& fixation_at(double t) const;
+  cv::Vec3d fixation_point(const Fixation& f, double t) const;  // world, at time t
+  double eyelid_closure(double t) const;
+  const std::vector<double>& blink_starts() const { return blinks_; }
+  double therapist_side() const { return therapist_side_; }  // +1 world +x, -1 world -x
+  cv::Vec3d therapist_head_m() const;
 
   const std::vector<ActionSegment>& actions() const { return actions_; }
   DemoAction action_at(double t) const;
@@ -107,6 +145,8 @@ class DemoScript {
     double amplitude, freq_hz, phase;
   };
   static double eval(const std::vector<Sinusoid>& s, double t);
+  void make_fixations();
+  void make_blinks();
   std::array<cv::Vec3d, 6> arm_pose(DemoAction action, double t, const cv::Vec3d& head_centre,
                                     const cv::Vec3d& shoulder_l, const cv::Vec3d& shoulder_r) const;
 
@@ -114,7 +154,9 @@ class DemoScript {
   double duration_s_;
   DemoGeometry geometry_;
   std::vector<Sinusoid> yaw_, pitch_, roll_, pos_x_, pos_y_, pos_z_;
-  std::vector<std::pair<double, double>> holds_;  // [start, end] at full weight
+  std::vector<Fixation> fixations_;
+  std::vector<double> blinks_;  // blink start times
+  double therapist_side_ = 1;
   std::vector<ActionSegment> actions_;
   double wave_hz_ = 1.8, fly_hz_ = 0.8;
   std::vector<TableObjectSpec> objects_;

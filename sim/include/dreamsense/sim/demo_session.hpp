@@ -9,6 +9,7 @@
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/sim/demo_scene.hpp"
+#include "dreamsense/sim/face_renderer.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -34,9 +35,15 @@ struct DemoOptions {
   int jpeg_quality = 90;
   int threads = 2;         // render threads (>= 1); never changes the output
   bool overwrite = false;  // replace an existing session folder (only if it has session.yaml)
+  // The child's face: the textured 3-D mesh with moving eyes (default), or the flat photo
+  // (painted eyes: the truth eye gaze is then the head gaze).
+  enum class FaceModel { kMesh, kPlanar };
+  FaceModel face_model = FaceModel::kMesh;
   // Media shipped by Debian packages.
   std::filesystem::path portrait =
       "/usr/lib/python3/dist-packages/skimage/data/astronaut.png";  // python3-skimage
+  // The portrait's 68 landmarks (in the dreamsense source tree; mesh face only).
+  std::filesystem::path portrait_landmarks = default_portrait_landmarks_path();
   std::filesystem::path opencv_samples_dir =
       "/usr/share/doc/opencv-doc/examples/data";  // opencv-doc
   std::filesystem::path pocketsphinx_data_dir =
@@ -63,6 +70,9 @@ Result<DemoSummary> generate_demo_session(
 // All demo cameras, in manifest order: camera_left, camera_middle, camera_right, front.color,
 // front.depth (same model as front.color: registered depth), top.color.
 std::vector<CameraModel> make_demo_cameras(const DemoGeometry& geometry = {});
+
+// The face's state at time t: head pose, eyes fixating the script's gaze target, blinks.
+FaceState demo_face_state(const DemoScript& script, double t);
 
 // Kinect v1 microphone positions in the array frame (metres), Nx3 rows.
 std::vector<cv::Vec3d> demo_mic_positions(const DemoGeometry& geometry = {});

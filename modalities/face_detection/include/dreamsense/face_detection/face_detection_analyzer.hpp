@@ -12,10 +12,12 @@
 //    (empty list = searched, no face), and kSelectedCamera (confidence = the chosen face's score).
 
 #include "dreamsense/core/analyzer.hpp"
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/face_detection/camera_selection.hpp"
 #include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/face_detection/face_tracker.hpp"
 
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -28,6 +30,11 @@ struct FaceDetectionAnalyzerOptions {
   // full_search_phase is set per camera by the analyser (cameras spread over the interval).
   FaceTrackerOptions tracker;
   CameraSelectorOptions selection;
+  // Calibrated cameras: camera selection then rates faces by the head yaw relative to each camera
+  // (D4.2), from the last head pose (keys::kHeadPose of an earlier tick, at most
+  // head_pose_max_age old); without models or a recent pose, by the frontalness proxy.
+  std::map<SensorId, CameraModel> camera_models;
+  Duration head_pose_max_age = Duration::from_ms(200);
   bool parallel = true;  // search the cameras with cv::parallel_for_
   Status check() const;
 };

@@ -22,6 +22,10 @@ struct HeadPoseAnalyzerOptions {
   std::map<SensorId, CameraModel> cameras;  // intrinsics + camera_from_world per colour stream
   HeadPoseEstimatorOptions estimator;
   PoseFilterOptions filter;
+  // Subject calibration (`dreamsense train gaze`): rotation from the subject's head frame to the
+  // face model's frame. A generic model's "straight ahead" differs from a given face's by a few
+  // to ~15 degrees (face proportions); identity = uncalibrated.
+  cv::Matx33d model_from_head = cv::Matx33d::eye();
   Status check() const;
 };
 

@@ -21,14 +21,41 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace dreamsense::speech {
+
+// How inputs at another rate than the front end's are converted.
+enum class Resampler {
+  kSoxr,  // libsoxr, very-high quality (linear phase, 28-bit), no dither: the default
+  kSinc,  // our windowed-sinc interpolator (Kaiser beta 8, 32 zero crossings per side)
+};
+Result<Resampler> parse_resampler(std::string_view name);  // "soxr" | "sinc"
+std::string_view to_string(Resampler r);
 
 struct RecognizerOptions {
   // Debian package pocketsphinx-en-us.
   std::filesystem::path model_dir = "/usr/share/pocketsphinx/model/en-us/en-us";
   std::filesystem::path dictionary = "/usr/share/pocketsphinx/model/en-us/cmudict-en-us.dict";
   int model_rate_hz = 16000;  // the acoustic model's rate; other input rates are resampled
+  // Rate of the MFCC front end; 0 = model_rate_hz. Setting 8000 runs the front end natively on
+  // narrow-band audio (no upsampling); the mel filters then end at front_end_upper_hz. Inputs
+  // at any other rate are resampled to this rate.
+  int front_end_rate_hz = 0;
+  // Upper edge of the mel filter bank (Hz); 0 = the model's feat.params (6800 Hz for en-us).
+  // Must be below half the front-end rate.
+  double front_end_upper_hz = 0;
+  Resampler resampler = Resampler::kSoxr;
+  // PocketSphinx's own energy VAD (-remove_silence): drops frames it judges silent before
+  // the search. On by default (as in PocketSphinx).
+  bool remove_silence = true;
+  // PocketSphinx's spectral subtraction (-remove_noise); its noise estimate starts from the
+  // first frames, which in tightly trimmed clips are already speech.
+  bool remove_noise = true;
+  // Vocal-tract-length warp of the filter bank (PocketSphinx -warp_type inverse_linear,
+  // filters at f / warp); 1 = off. A speaker/channel normalisation tuned per model (README).
+  double frequency_warp = 1.0;
   bool reject_out_of_grammar = true;
   // Weight of each phone in the garbage loop (FSG transition probability, (0, 1]). Higher =
   // more rejections (fewer false accepts, more false rejects). 1 was measured best (README).
@@ -65,6 +92,8 @@ struct Decoding {
   bool heard_speech = false;       // the decoder produced any word (grammar or garbage)
   bool accepted = false;           // grammar path won and confidence >= min_confidence
   double confidence = 0;
+  double score_per_frame = 0;   // best path's log score (PocketSphinx units) per 10 ms frame
+  double margin_per_frame = 0;  // (grammar - garbage-alone path score) per frame of the input
   int first_frame = -1, last_frame = -1;  // 10 ms frames of the grammar words
   double decode_seconds = 0;
 };
@@ -98,8 +127,10 @@ class Recognizer {
   std::unique_ptr<Impl> impl_;
 };
 
-// Band-limited resampling (windowed-sinc, Kaiser beta 8, 32 zero crossings per side, low-pass at
-// the lower Nyquist), e.g. 8 kHz telephone/FSDD audio to the model's 16 kHz.
-std::vector<int16_t> resample(std::span<const int16_t> in, int from_hz, int to_hz);
+// Band-limited resampling (low-pass at the lower Nyquist), e.g. 8 kHz telephone/FSDD audio to
+// the model's 16 kHz. Output length floor(in.size() * to_hz / from_hz); both methods are
+// linear phase with the delay compensated (output sample 0 = input sample 0).
+std::vector<int16_t> resample(std::span<const int16_t> in, int from_hz, int to_hz,
+                              Resampler method = Resampler::kSoxr);
 
 }  // namespace dreamsense::speech

@@ -1,31 +1,55 @@
 #pragma once
-// Speech analyser (F22 recognizeSpeech): cuts the audio stream into utterances with an energy
-// gate and decodes each finished utterance against the grammar; writes keys::kRecognizedSpeech
-// only when something in the grammar was said (out-of-grammar speech and noise write nothing).
+// Speech analyser (F22 recognizeSpeech): cuts the audio stream into utterances with the shared
+// audio::UtteranceSegmenter and decodes each finished utterance against the grammar; writes
+// keys::kRecognizedSpeech only when something in the grammar was said (out-of-grammar speech and
+// noise write nothing).
+//
+// Voice activity is decided on the mean of the channels (for an array: an unsteered beam, whose
+// noise is ~10 log10(M) dB lower than one microphone's while speech below ~1 kHz passes from any
+// direction).
+//
+// Beamforming: with a microphone array (mic_positions_m, > 1 channel) and steer_to_sound_direction,
+// the analyser reads keys::kSoundDirection (written by the sound-direction analyser, which must run
+// before it in the same tick), averages the directions heard during the utterance's speech
+// (confidence-weighted unit vectors) and steers an audio::Beamformer (delay-and-sum) at it before
+// decoding. Without a direction during the utterance, or without an array, it decodes channel 0
+// (the array's microphones are 15-23 cm apart: averaging them unsteered would comb-filter the
+// speech of an off-axis talker). Measured on the demo sessions: audio/README.md.
 
+#include "dreamsense/audio/beamformer.hpp"
+#include "dreamsense/audio/utterance_segmenter.hpp"
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/speech/recognizer.hpp"
 
+#include <opencv2/core.hpp>
+
 #include <filesystem>
 #include <memory>
+#include <vector>
 
 namespace dreamsense::speech {
 
-struct UtteranceGateOptions {
-  double frame_s = 0.02;          // energy frames
-  double threshold_db = 10.0;     // speech when a frame is this far above the noise floor
-  double min_speech_s = 0.15;     // shorter bursts are ignored
-  double hangover_s = 0.5;        // silence that ends an utterance
-  double padding_s = 0.25;        // audio kept before the detected start
-  double max_utterance_s = 10.0;  // longer utterances are cut and decoded
-  Status check() const;
-};
+// The segmenter's defaults for speech: VAD on the mean of all channels (vad_channel -1); the
+// stream's rate and channel count are filled in from the first chunk.
+inline audio::UtteranceSegmenterOptions default_speech_segmenter() {
+  audio::UtteranceSegmenterOptions o;
+  o.vad_channel = -1;
+  return o;
+}
 
 struct SpeechAnalyzerOptions {
   SensorId audio_sensor = "mic_array";
   std::filesystem::path grammar;  // JSGF, or SRGS (.grxml) as DREAM used
   RecognizerOptions recognizer;
-  UtteranceGateOptions gate;
+  audio::UtteranceSegmenterOptions segmenter = default_speech_segmenter();
+  // Microphone positions (metres, array frame, channel order) of the audio stream; empty = no
+  // array (decode channel 0).
+  std::vector<cv::Vec3d> mic_positions_m;
+  bool steer_to_sound_direction = true;  // beamform toward keys::kSoundDirection
+  audio::BeamformerMethod beamformer = audio::BeamformerMethod::kDelayAndSum;
+  // Directions from this long before the utterance's speech to this long after it are used.
+  Duration direction_margin = Duration::from_ms(200);
+  bool beamforming() const { return steer_to_sound_direction && mic_positions_m.size() > 1; }
   Status check() const;
 };
 

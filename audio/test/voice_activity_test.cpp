@@ -1,0 +1,112 @@
+// Voice activity: a tone burst in noise is found where it is; stationary noise gives nothing.
+
+#include "dreamsense/audio/voice_activity.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+namespace dreamsense::audio {
+namespace {
+
+std::vector<float> noise(int64_t n, double rms, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> d(0.f, static_cast<float>(rms));
+  std::vector<float> x(static_cast<size_t>(n));
+  for (auto& v : x) v = d(rng);
+  return x;
+}
+
+// Pink-ish noise (first-order low-pass of white noise + white): the demo's kind of noise.
+std::vector<float> coloured_noise(int64_t n, double rms, uint32_t seed) {
+  auto w = noise(n, 1.0, seed);
+  std::vector<float> x(w.size());
+  double lp = 0, s2 = 0;
+  for (size_t i = 0; i < w.size(); ++i) {
+    lp = 0.97 * lp + 0.03 * w[i];
+    x[i] = static_cast<float>(4 * lp + 0.2 * w[i]);
+    s2 += x[i] * x[i];
+  }
+  const double g = rms / std::sqrt(s2 / static_cast<double>(x.size()));
+  for (auto& v : x) v = static_cast<float>(v * g);
+  return x;
+}
+
+std::vector<VoiceActivityFrame> run(const std::vector<float>& x, VoiceActivityOptions o = {}) {
+  auto vad = VoiceActivityDetector::create(o);
+  EXPECT_TRUE(vad);
+  std::vector<VoiceActivityFrame> frames;
+  for (size_t i = 0; i < x.size(); i += 640)  // 40 ms chunks, not a multiple of the frame
+    (*vad)->push(std::span<const float>(x).subspan(i, std::min<size_t>(640, x.size() - i)), frames);
+  return frames;
+}
+
+TEST(VoiceActivity, FindsToneBurstInNoise) {
+  const int rate = 16000;
+  auto x = noise(rate * 6, 0.01, 1);
+  // 1 kHz tone from 2.0 s to 3.0 s, 10 dB above the noise.
+  const double amp = 0.01 * std::sqrt(10.0) * std::sqrt(2.0);
+  for (int64_t i = 2 * rate; i < 3 * rate; ++i)
+    x[static_cast<size_t>(i)] +=
+        static_cast<float>(amp * std::sin(2 * std::numbers::pi * 1000.0 * i / rate));
+  const auto frames = run(x);
+  ASSERT_EQ(frames.size(), static_cast<size_t>(6 * rate / 320));
+  int inside = 0, inside_speech = 0, outside_speech = 0;
+  for (const auto& f : frames) {
+    const double t = static_cast<double>(f.first_sample) / rate;
+    if (t >= 2.02 && t < 2.98) {
+      ++inside;
+      inside_speech += f.speech;
+      EXPECT_GT(f.probability, 0.5f);
+    } else if (t < 1.98 || t >= 3.02) {
+      outside_speech += f.speech;
+    }
+  }
+  EXPECT_EQ(inside_speech, inside) << "every frame of the burst";
+  EXPECT_LE(outside_speech, 2) << "at most a stray frame of noise";
+}
+
+TEST(VoiceActivity, StationaryNoiseIsNotSpeech) {
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    for (bool coloured : {false, true}) {
+      const auto x =
+          coloured ? coloured_noise(16000 * 20, 0.05, seed) : noise(16000 * 20, 0.05, seed);
+      const auto frames = run(x);
+      int speech = 0;
+      for (const auto& f : frames) speech += f.speech;
+      EXPECT_LE(speech, 2) << "seed " << seed << (coloured ? " coloured" : " white") << ": "
+                           << speech << " of " << frames.size() << " frames";
+    }
+  }
+}
+
+TEST(VoiceActivity, DigitalSilenceAndLevelSteps) {
+  // Silence, then noise 30 dB louder for 10 s: after the minimum-statistics window the louder
+  // noise is accepted as the new floor.
+  std::vector<float> x(16000 * 2, 0.f);
+  const auto loud = noise(16000 * 10, 0.03, 7);
+  x.insert(x.end(), loud.begin(), loud.end());
+  const auto frames = run(x);
+  int late_speech = 0;
+  for (const auto& f : frames) {
+    EXPECT_TRUE(std::isfinite(f.energy_snr_db));
+    if (f.first_sample > 16000 * 7) late_speech += f.speech;
+  }
+  EXPECT_EQ(late_speech, 0) << "the floor caught up with the new noise level";
+}
+
+TEST(VoiceActivity, OptionsAreChecked) {
+  VoiceActivityOptions o;
+  o.sample_rate = 100;
+  o.frame_s = 1;
+  auto v = VoiceActivityDetector::create(o);
+  ASSERT_FALSE(v);
+  EXPECT_NE(v.error().message.find("sample_rate"), std::string::npos);
+  EXPECT_NE(v.error().message.find("frame_s"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace dreamsense::audio

@@ -1,0 +1,144 @@
+#include "dreamsense/eval/gaze_fit.hpp"
+
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/sources/session.hpp"
+#include "dreamsense/sources/truth.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <map>
+#include <optional>
+
+namespace dreamsense::eval {
+namespace {
+using nlohmann::json;
+
+cv::Vec3d vec3(const json& a) {
+  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+}
+
+cv::Matx33d est_rotation(const json& head_gaze_value) {
+  return rotation_from_ypr_deg(head_gaze_value["yaw_deg"].get<double>(),
+                               head_gaze_value["pitch_deg"].get<double>(),
+                               head_gaze_value["roll_deg"].get<double>());
+}
+
+}  // namespace
+
+Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inputs) {
+  std::vector<gaze::EyeAngleSample> right, left;
+  std::optional<std::string> method;
+  std::string provenance;
+  struct Run {
+    std::map<int64_t, json> head, eye;
+    std::map<int64_t, cv::Vec3d> truth_gaze;
+  };
+  std::vector<Run> runs;
+  std::vector<std::string> names;
+  cv::Matx33d offset_sum = cv::Matx33d::zeros();
+  int offset_count = 0;
+  for (const auto& in : inputs) {
+    auto manifest = sources::read_manifest(in.session_dir);
+    if (!manifest) return tl::unexpected(manifest.error());
+    if (manifest->truth.empty())
+      return make_error(ErrorCode::kNotFound, "{}: the session has no truth to fit gaze on",
+                        in.session_dir.string());
+    auto truth = sources::read_truth(in.session_dir / manifest->truth);
+    if (!truth) return tl::unexpected(truth.error());
+    std::map<int64_t, cv::Vec3d> truth_gaze;
+    std::map<int64_t, cv::Matx33d> truth_head;
+    for (const auto& t : *truth)
+      if (t.value("type", "") == "face" && t.contains("eye_gaze_dir")) {
+        truth_gaze[t.value("stamp_ns", int64_t{0})] = vec3(t["eye_gaze_dir"]);
+        truth_head[t.value("stamp_ns", int64_t{0})] = rotation_from_ypr_deg(
+            t["yaw_deg"].get<double>(), t["pitch_deg"].get<double>(), t["roll_deg"].get<double>());
+      }
+
+    const auto path = in.analysis_dir / "primitives.jsonl";
+    std::ifstream f(path);
+    if (!f) return make_error(ErrorCode::kNotFound, "{}: missing", path.string());
+    std::map<int64_t, json> head, eye;
+    std::string line;
+    int n = 0;
+    while (std::getline(f, line)) {
+      ++n;
+      if (line.empty()) continue;
+      json r;
+      try {
+        r = json::parse(line);
+      } catch (const json::exception& e) {
+        return make_error(ErrorCode::kCorruptData, "{}: line {}: {}", path.string(), n, e.what());
+      }
+      if (r.value("status", "") != "ok") continue;
+      const std::string p = r.value("primitive", "");
+      if (p == "getHeadGaze") head[r.value("stamp_ns", int64_t{0})] = r["value"];
+      if (p == "getEyeGaze") eye[r.value("stamp_ns", int64_t{0})] = r["value"];
+    }
+    // The head-model offset of this subject: the rotation R minimising sum |R_est R - R_true|
+    // (the orthogonal projection of sum R_est^T R_true).
+    for (const auto& [stamp, h] : head) {
+      const auto t = truth_head.find(stamp);
+      if (t == truth_head.end()) continue;
+      offset_sum += est_rotation(h).t() * t->second;
+      ++offset_count;
+    }
+    runs.push_back({std::move(head), std::move(eye), std::move(truth_gaze)});
+    names.push_back(manifest->name);
+  }
+  if (offset_count == 0)
+    return make_error(ErrorCode::kNotFound,
+                      "train gaze: no tick with an ok getHeadGaze and a truth head pose");
+  cv::Mat w, u, vt;
+  cv::SVD::compute(cv::Mat(offset_sum), w, u, vt);
+  cv::Matx33d offset(cv::Mat(u * vt));
+  if (cv::determinant(offset) < 0) {
+    cv::Mat u2 = u.clone();
+    u2.col(2) *= -1;
+    offset = cv::Matx33d(cv::Mat(u2 * vt));
+  }
+  for (size_t k = 0; k < runs.size(); ++k) {
+    auto& [head, eye, truth_gaze] = runs[k];
+    const size_t before = right.size() + left.size();
+    for (const auto& [stamp, e] : eye) {
+      const auto h = head.find(stamp);
+      const auto t = truth_gaze.find(stamp);
+      if (h == head.end() || t == truth_gaze.end()) continue;
+      const std::string m = e.value("method", "");
+      if (method && *method != m)
+        return make_error(ErrorCode::kInvalidArgument,
+                          "train gaze: analyses use different methods ({} and {})", *method, m);
+      method = m;
+      const cv::Matx33d R = est_rotation(h->second) * offset;
+      const gaze::EyeAngles truth_angles = gaze::angles_of_head_direction(R.t() * t->second);
+      for (auto [name, samples] : {std::pair{"right", &right}, std::pair{"left", &left}}) {
+        const json& ray = e[name];
+        if (ray.is_null() || !ray.contains("offset")) continue;
+        samples->push_back(
+            {{ray["offset"][0].get<double>(), ray["offset"][1].get<double>()}, truth_angles});
+      }
+    }
+    provenance += fmt::format("{}{} ({} eye samples)", provenance.empty() ? "" : ", ", names[k],
+                              right.size() + left.size() - before);
+  }
+  if (!method)
+    return make_error(ErrorCode::kNotFound,
+                      "train gaze: no tick with both getEyeGaze and getHeadGaze ok and a truth "
+                      "eye gaze");
+  gaze::GazeModelFile model;
+  model.plane =
+      *method == "d42_eq4_image" ? gaze::OffsetPlane::kImage : gaze::OffsetPlane::kHeadPlane;
+  auto r = gaze::fit_eye_angle_model(right);
+  if (!r) return make_error(r.error().code, "right eye: {}", r.error().message);
+  auto l = gaze::fit_eye_angle_model(left);
+  if (!l) return make_error(l.error().code, "left eye: {}", l.error().message);
+  model.model_from_head = offset;
+  model.right_eye = *r;
+  model.left_eye = *l;
+  model.samples = static_cast<int>(right.size() + left.size());
+  model.provenance = "fitted by `dreamsense train gaze` on " + provenance;
+  return model;
+}
+
+}  // namespace dreamsense::eval

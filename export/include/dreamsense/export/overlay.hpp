@@ -1,0 +1,100 @@
+#pragma once
+// overlay.mp4: the analysis drawn on the camera images, one video frame per tick.
+//
+// Per tick (OverlayWriter::add), on a copy of the shown camera's frame scaled to the output size
+// (letterboxed when cameras differ in aspect ratio), it draws what the blackboard holds for that
+// tick (entries stamped with another tick are ignored; a missing key is simply not drawn):
+//  - every face box of that camera (keys::kFaceDetections) with its score; the selected face
+//    (keys::kSelectedCamera) thicker and in another colour;
+//  - the shown camera's name and DREAM SelectCameraID (0 middle, 1 left, 2 right, -1 other),
+//    and which camera is selected;
+//  - the 68 landmarks (keys::kFaceLandmarks) when they belong to that camera;
+//  - head axes (keys::kHeadPose): the head frame's x/y/z axes, head_axis_length_m long, projected
+//    with the camera model (x red, y green, z blue; z points to the back of the head);
+//  - the eye centres (keys::kEyeCenters) of that camera;
+//  - the gaze rays (keys::kEyeGaze): origin to origin + gaze_length_m * direction, projected, for
+//    the right and left eye (thin) and both eyes (thick);
+//  - mutual gaze (keys::kMutualGaze): a green "MUTUAL 1.2 s" box, grey "no mutual gaze", or grey
+//    "no gaze" when the key is absent;
+//  - the tick time (session clock, seconds) and tick index.
+// Which camera: options.camera = "selected" follows keys::kSelectedCamera (the picture switches
+// camera with it; while no camera is selected the last one shown stays, and before any selection
+// camera_middle or else the first colour stream of the tick is shown), or a fixed stream id.
+// A tick without a frame of the shown camera repeats the last picture (ticks before the first
+// picture repeat the first one), so the video has exactly one frame per tick.
+// Head axes and gaze rays need the camera's model (options.cameras); without one they are not
+// drawn. Nothing here throws on missing data.
+//
+// The file is encoded with cv::VideoWriter (FFmpeg backend) as MPEG-4 Part 2 ('mp4v') in .mp4,
+// written as "<stem>.partial<ext>" next to the final path (FFmpeg picks the container from the
+// extension, so the extension stays last) and renamed by commit(); on failure or without
+// commit() nothing is left under the final name.
+
+#include "dreamsense/core/blackboard.hpp"
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/core/multi_frame.hpp"
+#include "dreamsense/core/status.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+
+namespace dreamsense::exporters {
+
+struct OverlayOptions {
+  std::string camera = "selected";  // "selected" or a colour stream id
+  int width_px = 960;               // output width; height from the first picture's aspect (even)
+  double fps = 25;                  // the session's frame (tick) rate
+  std::string fourcc = "mp4v";      // "MJPG" with an .avi path also works with Debian's OpenCV
+  std::map<SensorId, CameraModel> cameras;  // for head axes and gaze rays (world -> pixels)
+  double head_axis_length_m = 0.08;
+  double gaze_length_m = 0.3;
+  Status check() const;
+};
+
+// Colours used (BGR), e.g. to find them in a decoded frame.
+namespace overlay_colors {
+inline const cv::Scalar kFaceBox{255, 200, 0};          // light blue
+inline const cv::Scalar kSelectedFaceBox{0, 230, 255};  // yellow
+inline const cv::Scalar kLandmark{255, 255, 255};
+inline const cv::Scalar kEyeCenter{255, 0, 255};  // magenta
+inline const cv::Scalar kGaze{0, 140, 255};       // orange
+inline const cv::Scalar kMutual{0, 190, 0};       // green
+inline const cv::Scalar kNoMutual{110, 110, 110};
+}  // namespace overlay_colors
+
+// Draws the overlay of `camera`'s `image` for one tick into a picture of `out_size` (the image
+// scaled to fit, letterboxed). Never fails: missing entries are not drawn.
+cv::Mat draw_overlay(const cv::Mat& image, const SensorId& camera, const MultiFrame& tick,
+                     const BlackboardView& view, const OverlayOptions& options, cv::Size out_size);
+
+class OverlayWriter {
+ public:
+  OverlayWriter();
+  ~OverlayWriter();  // abandons an uncommitted video
+  OverlayWriter(const OverlayWriter&) = delete;
+  OverlayWriter& operator=(const OverlayWriter&) = delete;
+
+  // Checks the options and that the folder is writable; the encoder starts at the first picture
+  // (its size is needed). An existing file at `path` is removed.
+  Status open(const std::filesystem::path& path, const OverlayOptions& options = {});
+  // One video frame for this tick (the blackboard after the tick's analysers ran).
+  Status add(const MultiFrame& tick, const BlackboardView& view);
+  // Finishes the file and renames it to the final path. An error when no picture was ever
+  // available (no frame of the shown camera in any tick): then no file is left.
+  Status commit();
+  void abandon();
+  bool is_open() const;
+  int64_t frames_written() const;
+  cv::Size frame_size() const;  // empty until the first picture
+  const std::filesystem::path& path() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dreamsense::exporters

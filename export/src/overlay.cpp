@@ -1,0 +1,386 @@
+#include "dreamsense/export/overlay.hpp"
+
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/export/output_file.hpp"
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+namespace dreamsense::exporters {
+namespace {
+
+namespace fs = std::filesystem;
+
+// DREAM's SelectCameraID.
+int dream_camera_id(const SensorId& camera) {
+  if (camera == "camera_middle") return 0;
+  if (camera == "camera_left") return 1;
+  if (camera == "camera_right") return 2;
+  return -1;
+}
+
+// The newest entry of `key` if it was written in this tick and holds a value.
+template <typename T>
+const T* this_tick(const BlackboardView& view, Key<T> key, Timestamp tick,
+                   std::shared_ptr<const T>& keep) {
+  const auto e = view.get(key);
+  if (!e || e->stamp != tick || !e->present()) return nullptr;
+  keep = e->value;
+  return keep.get();
+}
+
+const cv::Mat* color_image(const MultiFrame& tick, const SensorId& camera) {
+  const FramePtr f = tick.frame(camera);
+  if (f == nullptr) return nullptr;
+  const ColorImage* c = f->as<ColorImage>();
+  if (c == nullptr || c->image.empty()) return nullptr;
+  return &c->image;
+}
+
+// Image pixels -> canvas pixels.
+struct Mapping {
+  double scale = 1;
+  cv::Point2d offset;
+  cv::Point operator()(const cv::Point2d& p) const {
+    return {static_cast<int>(std::lround(p.x * scale + offset.x)),
+            static_cast<int>(std::lround(p.y * scale + offset.y))};
+  }
+};
+
+// Factor from coordinates measured on an image of `measured` size to the shown image's pixels.
+double rescale(const cv::Size& measured, const cv::Size& shown) {
+  return measured.width > 0 ? static_cast<double>(shown.width) / measured.width : 1.0;
+}
+
+struct Style {
+  double font = 0.5;
+  int thin = 1, thick = 2;
+};
+
+void label(cv::Mat& img, const std::string& text, cv::Point org, const cv::Scalar& fg,
+           const cv::Scalar& bg, const Style& st) {
+  int baseline = 0;
+  const cv::Size sz = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, st.font, st.thin, &baseline);
+  const int pad = 3;
+  org.x = std::clamp(org.x, pad, std::max(pad, img.cols - sz.width - pad));
+  org.y = std::clamp(org.y, sz.height + pad, std::max(sz.height + pad, img.rows - baseline - pad));
+  cv::rectangle(img, {org.x - pad, org.y - sz.height - pad},
+                {org.x + sz.width + pad, org.y + baseline + pad}, bg, cv::FILLED);
+  cv::putText(img, text, org, cv::FONT_HERSHEY_SIMPLEX, st.font, fg, st.thin, cv::LINE_AA);
+}
+
+std::optional<cv::Point2d> project(const CameraModel* model, const cv::Size& image,
+                                   const cv::Vec3d& world) {
+  if (model == nullptr) return std::nullopt;
+  const auto px = model->project(world);
+  if (!px) return std::nullopt;
+  return *px * rescale(model->image_size, image);
+}
+
+void draw_segment(cv::Mat& canvas, const Mapping& map, const CameraModel* model,
+                  const cv::Size& image, const cv::Vec3d& a, const cv::Vec3d& b,
+                  const cv::Scalar& colour, int thickness) {
+  const auto pa = project(model, image, a), pb = project(model, image, b);
+  if (!pa || !pb) return;
+  // Guard against huge coordinates from points near the camera plane.
+  const cv::Point ca = map(*pa), cb = map(*pb);
+  if (std::abs(ca.x) > 100000 || std::abs(ca.y) > 100000 || std::abs(cb.x) > 100000 ||
+      std::abs(cb.y) > 100000)
+    return;
+  cv::line(canvas, ca, cb, colour, thickness, cv::LINE_AA);
+}
+
+}  // namespace
+
+Status OverlayOptions::check() const {
+  std::string bad;
+  if (camera.empty()) bad += " camera must be \"selected\" or a stream id;";
+  if (width_px < 16 || width_px > 7680) bad += " width_px must be in [16, 7680];";
+  if (!(fps > 0) || fps > 1000) bad += " fps must be in (0, 1000];";
+  if (fourcc.size() != 4) bad += " fourcc must have 4 characters;";
+  if (!(head_axis_length_m > 0)) bad += " head_axis_length_m must be > 0;";
+  if (!(gaze_length_m > 0)) bad += " gaze_length_m must be > 0;";
+  for (const auto& [id, c] : cameras)
+    if (auto s = c.check(); !s) bad += fmt::format(" camera '{}': {};", id, s.error().message);
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "OverlayOptions:{}", bad);
+  return ok_status();
+}
+
+cv::Mat draw_overlay(const cv::Mat& image, const SensorId& camera, const MultiFrame& tick,
+                     const BlackboardView& view, const OverlayOptions& options, cv::Size out_size) {
+  cv::Mat canvas(out_size, CV_8UC3, cv::Scalar::all(0));
+  if (out_size.empty()) return canvas;
+  Style st;
+  st.font = std::max(0.35, 0.5 * out_size.width / 960.0);
+  st.thick = std::max(2, static_cast<int>(std::lround(2.0 * out_size.width / 960.0)));
+  st.thin = std::max(1, st.thick / 2);
+
+  // The picture, scaled to fit and centred.
+  Mapping map;
+  cv::Size shown = image.size();
+  if (!image.empty()) {
+    map.scale = std::min(static_cast<double>(out_size.width) / image.cols,
+                         static_cast<double>(out_size.height) / image.rows);
+    const cv::Size sz(std::max(1, static_cast<int>(std::lround(image.cols * map.scale))),
+                      std::max(1, static_cast<int>(std::lround(image.rows * map.scale))));
+    const cv::Rect roi((out_size.width - sz.width) / 2, (out_size.height - sz.height) / 2,
+                       std::min(sz.width, out_size.width), std::min(sz.height, out_size.height));
+    map.offset = {static_cast<double>(roi.x), static_cast<double>(roi.y)};
+    cv::Mat bgr;
+    if (image.type() == CV_8UC3)
+      bgr = image;
+    else if (image.type() == CV_8UC1)
+      cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+    else if (image.type() == CV_8UC4)
+      cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
+    if (!bgr.empty()) {
+      cv::Mat dst = canvas(roi);
+      // Bilinear: 5x cheaper than INTER_AREA at 0.75x, good enough for a review video.
+      cv::resize(bgr, dst, roi.size(), 0, 0, cv::INTER_LINEAR);
+    } else {
+      label(canvas, "unsupported image type", {10, out_size.height / 2}, {255, 255, 255}, {0, 0, 0},
+            st);
+    }
+  }
+  const Timestamp t = tick.stamp;
+  const auto model_it = options.cameras.find(camera);
+  const CameraModel* model = model_it == options.cameras.end() ? nullptr : &model_it->second;
+
+  std::shared_ptr<const SelectedCamera> sel_keep;
+  const SelectedCamera* sel = this_tick(view, keys::kSelectedCamera, t, sel_keep);
+
+  // Face boxes with scores.
+  std::shared_ptr<const FaceDetections> det_keep;
+  if (const FaceDetections* det = this_tick(view, keys::kFaceDetections, t, det_keep)) {
+    const auto cam = det->cameras.find(camera);
+    if (cam != det->cameras.end()) {
+      const double k = rescale(cam->second.image_size, shown);
+      for (size_t i = 0; i < cam->second.faces.size(); ++i) {
+        const DetectedFace& f = cam->second.faces[i];
+        const bool selected = sel != nullptr && sel->camera == camera && sel->face_index == i;
+        const cv::Point tl = map(cv::Point2d(f.box_px.x, f.box_px.y) * k);
+        const cv::Point br = map(cv::Point2d(f.box_px.br().x, f.box_px.br().y) * k);
+        const cv::Scalar& c =
+            selected ? overlay_colors::kSelectedFaceBox : overlay_colors::kFaceBox;
+        cv::rectangle(canvas, tl, br, c, selected ? st.thick + 1 : st.thick);
+        label(canvas, fmt::format("{:.2f}", f.score), {tl.x, tl.y - 6}, {0, 0, 0}, c, st);
+      }
+    }
+  }
+
+  // Landmarks of this camera.
+  std::shared_ptr<const FaceLandmarks> lm_keep;
+  if (const FaceLandmarks* lm = this_tick(view, keys::kFaceLandmarks, t, lm_keep);
+      lm != nullptr && lm->camera == camera) {
+    const double k = rescale(lm->image_size, shown);
+    for (const cv::Point2d& p : lm->points_px)
+      if (std::isfinite(p.x) && std::isfinite(p.y))
+        cv::circle(canvas, map(p * k), std::max(1, st.thin), overlay_colors::kLandmark, cv::FILLED,
+                   cv::LINE_AA);
+  }
+
+  // Head axes (world, through this camera's model).
+  std::shared_ptr<const HeadPose> head_keep;
+  if (const HeadPose* head = this_tick(view, keys::kHeadPose, t, head_keep)) {
+    const cv::Vec3d o = head->position_world_m;
+    const double L = options.head_axis_length_m;
+    const cv::Scalar axis_colour[3] = {{0, 0, 255}, {0, 255, 0}, {255, 0, 0}};
+    for (int a = 0; a < 3; ++a) {
+      cv::Vec3d e(0, 0, 0);
+      e[a] = L;
+      draw_segment(canvas, map, model, shown, o, o + head->world_from_head * e, axis_colour[a],
+                   st.thick);
+    }
+  }
+
+  // Eye centres of this camera.
+  std::shared_ptr<const EyeCenters> eyes_keep;
+  if (const EyeCenters* eyes = this_tick(view, keys::kEyeCenters, t, eyes_keep);
+      eyes != nullptr && eyes->camera == camera) {
+    for (const EyeCenter* e : {&eyes->right, &eyes->left})
+      if (e->found)
+        cv::circle(canvas, map(e->center_px), std::max(3, st.thick + 1), overlay_colors::kEyeCenter,
+                   st.thin, cv::LINE_AA);
+  }
+
+  // Gaze rays.
+  std::shared_ptr<const EyeGaze> gaze_keep;
+  if (const EyeGaze* gaze = this_tick(view, keys::kEyeGaze, t, gaze_keep)) {
+    for (const GazeRay* r : {&gaze->right, &gaze->left, &gaze->both}) {
+      if (!r->valid) continue;
+      draw_segment(canvas, map, model, shown, r->origin_world_m,
+                   r->origin_world_m + r->direction_world * options.gaze_length_m,
+                   overlay_colors::kGaze, r == &gaze->both ? st.thick : st.thin);
+    }
+  }
+
+  // Header: shown camera, selection, time.
+  const int line = static_cast<int>(std::lround(28 * st.font / 0.5));
+  label(canvas, fmt::format("{} (DREAM {})", camera, dream_camera_id(camera)), {8, line},
+        {255, 255, 255}, {40, 40, 40}, st);
+  const std::string sel_text = sel == nullptr ? std::string("selected: none")
+                                              : fmt::format("selected: {} (DREAM {})", sel->camera,
+                                                            dream_camera_id(sel->camera));
+  label(canvas, sel_text, {8, 2 * line},
+        sel != nullptr && sel->camera == camera ? cv::Scalar(0, 0, 0) : cv::Scalar(255, 255, 255),
+        sel != nullptr && sel->camera == camera ? overlay_colors::kSelectedFaceBox
+                                                : cv::Scalar(40, 40, 40),
+        st);
+  label(canvas, fmt::format("t {:.2f} s  #{}", t.is_set() ? t.seconds() : 0.0, tick.tick),
+        {out_size.width, line}, {255, 255, 255}, {40, 40, 40}, st);
+
+  // Mutual gaze indicator.
+  std::shared_ptr<const MutualGaze> mg_keep;
+  const MutualGaze* mg = this_tick(view, keys::kMutualGaze, t, mg_keep);
+  if (mg != nullptr && mg->mutual)
+    label(canvas, fmt::format("MUTUAL {:.1f} s", mg->held_s), {8, out_size.height - line / 2},
+          {255, 255, 255}, overlay_colors::kMutual, st);
+  else
+    label(canvas, mg != nullptr ? "no mutual gaze" : "no gaze", {8, out_size.height - line / 2},
+          {230, 230, 230}, overlay_colors::kNoMutual, st);
+  return canvas;
+}
+
+struct OverlayWriter::Impl {
+  OverlayOptions options;
+  fs::path final_path, partial_path;
+  bool open = false;
+  cv::VideoWriter writer;
+  cv::Size size;
+  cv::Mat last;
+  int64_t frames = 0;
+  int64_t pending = 0;  // ticks before the first picture
+  std::optional<SensorId> shown;
+
+  void write(const cv::Mat& picture) {
+    writer.write(picture);
+    ++frames;
+  }
+};
+
+OverlayWriter::OverlayWriter() : impl_(std::make_unique<Impl>()) {}
+OverlayWriter::~OverlayWriter() { abandon(); }
+
+Status OverlayWriter::open(const fs::path& path, const OverlayOptions& options) {
+  abandon();
+  if (auto s = options.check(); !s) return s;
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  if (auto s = ensure_writable_dir(dir); !s) return s;
+  Impl& m = *impl_;
+  m.options = options;
+  m.size = {};
+  m.last.release();
+  m.frames = 0;
+  m.pending = 0;
+  m.shown.reset();
+  m.final_path = path;
+  m.partial_path = dir / (path.stem().string() + ".partial" + path.extension().string());
+  std::error_code ec;
+  fs::remove(path, ec);  // never leave an older complete file behind
+  fs::remove(m.partial_path, ec);
+  m.open = true;
+  return ok_status();
+}
+
+Status OverlayWriter::add(const MultiFrame& tick, const BlackboardView& view) {
+  Impl& m = *impl_;
+  if (!m.open) return make_error(ErrorCode::kFailedPrecondition, "overlay: add() before open()");
+
+  // Which camera to show.
+  SensorId camera;
+  if (m.options.camera != "selected") {
+    camera = m.options.camera;
+  } else {
+    const auto sel = view.get(keys::kSelectedCamera);
+    if (sel && sel->stamp == tick.stamp && sel->present()) {
+      camera = sel->value->camera;
+    } else if (m.shown) {
+      camera = *m.shown;
+    } else if (color_image(tick, "camera_middle") != nullptr) {
+      camera = "camera_middle";
+    } else {
+      for (const auto& [id, f] : tick.frames)
+        if (color_image(tick, id) != nullptr) {
+          camera = id;
+          break;
+        }
+    }
+  }
+  const cv::Mat* image = camera.empty() ? nullptr : color_image(tick, camera);
+  if (image == nullptr) {  // repeat the last picture (or wait for the first)
+    if (m.last.empty())
+      ++m.pending;
+    else
+      m.write(m.last);
+    return ok_status();
+  }
+
+  if (!m.writer.isOpened()) {
+    const int h = 2 * std::max(1, static_cast<int>(std::lround(m.options.width_px * image->rows /
+                                                               (2.0 * image->cols))));
+    m.size = cv::Size(m.options.width_px - m.options.width_px % 2, h);
+    const std::string& f = m.options.fourcc;
+    if (!m.writer.open(m.partial_path.string(), cv::CAP_FFMPEG,
+                       cv::VideoWriter::fourcc(f[0], f[1], f[2], f[3]), m.options.fps, m.size,
+                       true)) {
+      std::error_code ec;
+      fs::remove(m.partial_path, ec);
+      return make_error(ErrorCode::kUnsupported,
+                        "{}: cannot encode '{}' video with OpenCV's FFmpeg backend",
+                        m.final_path.string(), f);
+    }
+  }
+  m.shown = camera;
+  m.last = draw_overlay(*image, camera, tick, view, m.options, m.size);
+  for (; m.pending > 0; --m.pending) m.write(m.last);
+  m.write(m.last);
+  return ok_status();
+}
+
+Status OverlayWriter::commit() {
+  Impl& m = *impl_;
+  if (!m.open) return make_error(ErrorCode::kFailedPrecondition, "overlay: not open");
+  if (!m.writer.isOpened()) {
+    const fs::path p = m.final_path;
+    abandon();
+    return make_error(ErrorCode::kNotFound, "{}: no frame of the shown camera in any tick",
+                      p.string());
+  }
+  m.writer.release();
+  std::error_code ec;
+  const auto bytes = fs::file_size(m.partial_path, ec);
+  if (ec || bytes == 0) {
+    const fs::path p = m.final_path;
+    abandon();
+    return make_error(ErrorCode::kIoError, "{}: the encoder wrote nothing", p.string());
+  }
+  fs::rename(m.partial_path, m.final_path, ec);
+  if (ec) {
+    const fs::path p = m.final_path;
+    abandon();
+    return make_error(ErrorCode::kIoError, "{}: cannot rename: {}", p.string(), ec.message());
+  }
+  m.open = false;
+  return ok_status();
+}
+
+void OverlayWriter::abandon() {
+  Impl& m = *impl_;
+  if (m.writer.isOpened()) m.writer.release();
+  if (m.open) {
+    std::error_code ec;
+    fs::remove(m.partial_path, ec);
+  }
+  m.open = false;
+}
+
+bool OverlayWriter::is_open() const { return impl_->open; }
+int64_t OverlayWriter::frames_written() const { return impl_->frames; }
+cv::Size OverlayWriter::frame_size() const { return impl_->size; }
+const fs::path& OverlayWriter::path() const { return impl_->final_path; }
+
+}  // namespace dreamsense::exporters

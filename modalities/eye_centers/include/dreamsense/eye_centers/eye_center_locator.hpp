@@ -1,0 +1,150 @@
+#pragma once
+// Eye-centre (iris/pupil centre) localisation in one eye region: the improved integro-
+// differential operator of DREAM D4.2 and two baselines (Daugman's original operator, Timm &
+// Barth's means of gradients). Method, papers and measured numbers:
+// modalities/eye_centers/README.md.
+//
+// Every locator takes a grey (CV_8UC1) or BGR (CV_8UC3) image and the six contour landmarks of
+// one eye (EyeRegion order), and returns an EyeLocation in image pixels. A closed, too small or
+// featureless eye is found = false with a rejection reason (absence, not an error); an empty image
+// or an unsupported pixel type is an error. All functions are const and thread-safe.
+
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/eye_centers/eye_region.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <optional>
+#include <span>
+#include <string_view>
+
+namespace dreamsense::eye_centers {
+
+enum class EyeCenterMethod {
+  kImprovedIntegroDifferential,  // D4.2 eq. (2): horizontal cones, precomputed ring tables
+  kDaugman,                      // Daugman's integro-differential operator, full circles
+  kTimmBarth,                    // Timm & Barth 2011, means of gradients
+};
+// "improved_integro_differential", "daugman", "timm_barth".
+std::string_view to_string(EyeCenterMethod method);
+// Accepts the names above and "improved" for the first.
+std::optional<EyeCenterMethod> eye_center_method_from_string(std::string_view name);
+
+// Why a locator found no centre.
+enum class EyeRejection {
+  kNone,        // found
+  kTooSmall,    // eye narrower than EyeRegionOptions::min_eye_width_px
+  kClosed,      // lids closer than min_opening_px / min_opening_ratio
+  kNoContrast,  // patch standard deviation below min_contrast (blank, saturated, occluded)
+  kNoEdge,      // the method's peak response is below its threshold
+};
+std::string_view to_string(EyeRejection rejection);
+
+struct EyeLocation {
+  bool found = false;
+  cv::Point2d center_px;  // image pixels, sub-pixel (valid when found)
+  double radius_px = 0;   // iris radius at the peak (integro-differential methods), else 0
+  double confidence = 0;  // [0, 1], see each method's options
+  double score = 0;       // the raw peak: limbus step in grey levels, or T&B's objective
+  EyeRejection rejection = EyeRejection::kNone;
+  EyeCenter to_eye_center() const { return {found, center_px, found ? confidence : 0.0}; }
+};
+
+// D4.2 eq. (2). For a candidate centre (x0, y0) the normalised contour sums (ring means) L_k at
+// radii k*dr are taken over two opposing cones of +-cone_half_angle_deg around the eye's
+// horizontal (eyelids ignored); D_n = |sum_k (G(n-k) - G(n-k-1)) L_k| is their derivative-of-
+// Gaussian over radius (convolution and differentiation interchanged: one 1-D filter of the ring
+// means); the centre and radius maximise D_n. Speed: the ring kernels are precomputed once per
+// call as integer pixel offsets with bilinear ring weights, so a candidate costs one weighted sum
+// over the cone pixels (about pi * r_max^2 / 2 taps) plus the short 1-D filter; no trigonometry
+// and no interpolation per candidate.
+struct ImprovedIntegroDifferentialOptions {
+  double radius_step_px = 0.5;  // dr, in patch pixels
+  double sigma_px = 1.0;        // Gaussian over radius, in patch pixels
+  double cone_half_angle_deg = 45;
+  double arc_step_px = 0.5;  // dtheta = arc_step_px / radius (free: samples merge into the tables)
+  // Eq. (2) takes |D_n|. When true (default), only dark-inside edges count (an iris is darker
+  // than the sclera), which ignores bright-inside rings such as a glint or a skin gap.
+  bool dark_inside_only = true;
+  // found = false when the best limbus step is below min_step grey levels; confidence =
+  // clamp(step / full_confidence_step, 0, 1).
+  double min_step = 6;
+  double full_confidence_step = 60;
+  Status check() const;
+};
+
+// Daugman's operator, J. Daugman, "High confidence visual recognition of persons by a test of
+// statistical independence", IEEE TPAMI 15(11), 1993: max over (r, x0, y0) of
+// |G_sigma(r) * d/dr of the full-circle contour mean| by brute force: for each candidate and
+// radius, bilinear samples around the whole circle (about one per pixel of arc), then the
+// derivative and the Gaussian over radius. The baseline eq. (2) improves on.
+struct DaugmanOptions {
+  double radius_step_px = 0.5;
+  double sigma_px = 1.0;
+  double arc_step_px = 0.5;       // samples along each circle (at least 8 per circle)
+  bool dark_inside_only = false;  // the original takes |.|
+  double min_step = 6;
+  double full_confidence_step = 60;
+  Status check() const;
+};
+
+// F. Timm, E. Barth, "Accurate eye centre localisation by means of gradients", VISAPP 2011:
+// c* = argmax_c w_c / N * sum_i max(0, d_i . g_i)^2, d_i the unit displacement from c to pixel i,
+// g_i the unit gradient at i; only gradients with magnitude above mean + gradient_threshold_sd *
+// s.d. of the patch's magnitudes count; w_c = 255 - (Gaussian-smoothed grey level at c), the
+// "dark centre" prior.
+struct TimmBarthOptions {
+  // 1.0 is about what the reference implementation's dynamic threshold (50 * s.d. / sqrt(pixels)
+  // + mean) gives on its 50-pixel-wide eye patches.
+  double gradient_threshold_sd = 1.0;
+  double weight_blur_sigma_px = 1.0;  // smoothing for w_c, patch pixels
+  bool use_weight = true;
+  // confidence = clamp(objective / full_confidence_objective, 0, 1) with the unweighted mean
+  // squared cosine at the peak (1 = every strong gradient points radially away from c).
+  double full_confidence_objective = 0.4;
+  double min_objective = 0.02;  // found = false below this
+  Status check() const;
+};
+
+Result<EyeLocation> locate_improved_integro_differential(
+    const cv::Mat& image, std::span<const cv::Point2d> eye_contour_px,
+    const EyeRegionOptions& region = {}, const ImprovedIntegroDifferentialOptions& options = {});
+Result<EyeLocation> locate_daugman(const cv::Mat& image,
+                                   std::span<const cv::Point2d> eye_contour_px,
+                                   const EyeRegionOptions& region = {},
+                                   const DaugmanOptions& options = {});
+Result<EyeLocation> locate_timm_barth(const cv::Mat& image,
+                                      std::span<const cv::Point2d> eye_contour_px,
+                                      const EyeRegionOptions& region = {},
+                                      const TimmBarthOptions& options = {});
+
+struct EyeCenterLocatorOptions {
+  EyeCenterMethod method = EyeCenterMethod::kImprovedIntegroDifferential;
+  EyeRegionOptions region;
+  ImprovedIntegroDifferentialOptions improved;
+  DaugmanOptions daugman;
+  TimmBarthOptions timm_barth;
+  Status check() const;
+};
+
+// One configured method, for both eyes of a face.
+class EyeCenterLocator {
+ public:
+  static Result<EyeCenterLocator> create(const EyeCenterLocatorOptions& options = {});
+
+  // One eye; `eye_contour_px` = six points in EyeRegion order (requires exactly six).
+  Result<EyeLocation> locate(const cv::Mat& image,
+                             std::span<const cv::Point2d> eye_contour_px) const;
+  // Both eyes of 68-point landmarks fitted on `image` (requires kFaceLandmarkCount points):
+  // right = subject's right eye (36-41), left = 42-47; camera, stamp, sequence and method filled.
+  Result<EyeCenters> locate_both(const cv::Mat& image, const FaceLandmarks& landmarks) const;
+
+  const EyeCenterLocatorOptions& options() const { return options_; }
+
+ private:
+  explicit EyeCenterLocator(EyeCenterLocatorOptions o) : options_(std::move(o)) {}
+  EyeCenterLocatorOptions options_;
+};
+
+}  // namespace dreamsense::eye_centers

@@ -1,0 +1,76 @@
+#include "dreamsense/eye_centers/eye_center_analyzer.hpp"
+
+#include <set>
+
+namespace dreamsense::eye_centers {
+namespace {
+
+class EyeCenterAnalyzer : public Analyzer {
+ public:
+  EyeCenterAnalyzer(EyeCenterAnalyzerOptions o, EyeCenterLocator l)
+      : options_(std::move(o)), locator_(std::move(l)) {}
+
+  std::string_view name() const override { return "eye_centers"; }
+  AnalyzerContract contract() const override {
+    return {{}, options_.cameras, {keys::kFaceLandmarks.name}, {keys::kEyeCenters.name}};
+  }
+
+  Status process(const MultiFrame& in, const BlackboardView& prior,
+                 BlackboardWriter& out) override {
+    const auto lm = prior.get(keys::kFaceLandmarks);
+    if (!lm || lm->stamp != in.stamp) return ok_status();  // landmarks did not run this tick
+    if (!lm->present()) {
+      out.set_absent(keys::kEyeCenters, in.stamp);
+      return ok_status();
+    }
+    const FaceLandmarks& l = *lm->value;
+    if (l.points_px.size() != static_cast<size_t>(kFaceLandmarkCount))
+      return make_error(ErrorCode::kInvalidArgument, "eye_centers: {} landmarks, need {}",
+                        l.points_px.size(), kFaceLandmarkCount);
+    const FramePtr f = in.frame(l.camera);
+    if (!f) {
+      out.set_absent(keys::kEyeCenters, in.stamp);
+      return ok_status();
+    }
+    const ColorImage* img = f->as<ColorImage>();
+    if (img == nullptr)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "eye_centers: stream '{}' is not a colour stream", l.camera);
+    if (img->image.size() != l.image_size)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "eye_centers: frame of '{}' is {}x{}, landmarks were fitted on {}x{}",
+                        l.camera, img->image.cols, img->image.rows, l.image_size.width,
+                        l.image_size.height);
+    auto eyes = locator_.locate_both(img->image, l);
+    if (!eyes) return tl::unexpected(eyes.error());
+    const double eye_conf = 0.5 * (eyes->right.confidence + eyes->left.confidence);
+    out.set(keys::kEyeCenters, std::move(*eyes), in.stamp,
+            static_cast<float>(lm->confidence * eye_conf));
+    return ok_status();
+  }
+
+ private:
+  EyeCenterAnalyzerOptions options_;
+  EyeCenterLocator locator_;
+};
+
+}  // namespace
+
+Status EyeCenterAnalyzerOptions::check() const {
+  std::set<SensorId> seen;
+  for (const SensorId& c : cameras)
+    if (c.empty() || !seen.insert(c).second)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "EyeCenterAnalyzerOptions: empty or repeated camera id '{}'", c);
+  return locator.check();
+}
+
+Result<std::unique_ptr<Analyzer>> make_eye_center_analyzer(
+    const EyeCenterAnalyzerOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  auto l = EyeCenterLocator::create(options.locator);
+  if (!l) return tl::unexpected(l.error());
+  return std::unique_ptr<Analyzer>(new EyeCenterAnalyzer(options, std::move(*l)));
+}
+
+}  // namespace dreamsense::eye_centers

@@ -1,0 +1,464 @@
+// eye_centers: region geometry, options, the three locators on rendered eyes (accuracy,
+// sub-pixel, eyelid occlusion, rejections) and the analyser's blackboard behaviour.
+
+#include "dreamsense/eye_centers/eye_center_analyzer.hpp"
+#include "dreamsense/eye_centers/eye_center_locator.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace dreamsense::eye_centers {
+namespace {
+
+// One rendered eye: skin, an almond opening with lash line, sclera, iris, pupil (4x4 supersampled).
+struct EyeSpec {
+  cv::Point2d mid{60, 40};  // midpoint of the corners
+  double width = 30;
+  double roll_deg = 0;
+  cv::Point2d iris_offset{0, 0};      // from the almond's centre, in the eye frame, x width
+  double iris_radius = 0.21;          // x width
+  double upper = 0.20, lower = 0.12;  // lid heights at the middle, x width
+  double skin = 150, sclera = 210, iris = 70, pupil = 20, lash = 45;
+};
+
+struct RenderedEye {
+  std::array<cv::Point2d, 6> contour;
+  cv::Point2d centre;
+  double radius = 0;
+};
+
+RenderedEye render_eye(cv::Mat& img, const EyeSpec& s) {
+  const double a = s.roll_deg * std::numbers::pi / 180;
+  const cv::Point2d u(std::cos(a), std::sin(a)), v(-u.y, u.x);
+  auto to_img = [&](double x, double y) { return s.mid + u * x + v * y; };  // eye frame -> image
+  const double hw = s.width / 2;
+  auto prof = [&](double x) { return std::pow(std::max(0.0, 1 - (x / hw) * (x / hw)), 0.7); };
+  RenderedEye out;
+  out.contour = {to_img(-hw, 0),
+                 to_img(-hw / 3, -s.upper * s.width * prof(-hw / 3)),
+                 to_img(hw / 3, -s.upper * s.width * prof(hw / 3)),
+                 to_img(hw, 0),
+                 to_img(hw / 3, s.lower * s.width * prof(hw / 3)),
+                 to_img(-hw / 3, s.lower * s.width * prof(-hw / 3))};
+  const cv::Point2d ic(s.iris_offset.x * s.width, s.iris_offset.y * s.width);
+  out.centre = to_img(ic.x, ic.y);
+  out.radius = s.iris_radius * s.width;
+  const double r = out.radius, rp = 0.4 * r, lash_w = std::max(1.0, 0.05 * s.width);
+  const int x0 = std::max(0, static_cast<int>(s.mid.x - s.width));
+  const int x1 = std::min(img.cols - 1, static_cast<int>(s.mid.x + s.width));
+  const int y0 = std::max(0, static_cast<int>(s.mid.y - s.width));
+  const int y1 = std::min(img.rows - 1, static_cast<int>(s.mid.y + s.width));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      double sum = 0;
+      for (int sy = 0; sy < 4; ++sy)
+        for (int sx = 0; sx < 4; ++sx) {
+          const cv::Point2d q(x - 0.5 + (sx + 0.5) / 4 - s.mid.x,
+                              y - 0.5 + (sy + 0.5) / 4 - s.mid.y);
+          const double ex = q.dot(u), ey = q.dot(v);
+          const double up = -s.upper * s.width * prof(ex), lo = s.lower * s.width * prof(ex);
+          double val = s.skin;
+          if (std::abs(ex) < hw && ey > up && ey < lo) {
+            const double d = std::hypot(ex - ic.x, ey - ic.y);
+            val = d < rp ? s.pupil : d < r ? s.iris : s.sclera;
+          } else if (std::abs(ex) < hw && ey <= up && ey > up - lash_w) {
+            val = s.lash;
+          }
+          sum += val;
+        }
+      img.at<uchar>(y, x) = cv::saturate_cast<uchar>(sum / 16);
+    }
+  return out;
+}
+
+cv::Mat blank(cv::Size size = {120, 80}, int grey = 150) { return cv::Mat(size, CV_8UC1, grey); }
+
+Result<EyeLocation> run(EyeCenterMethod m, const cv::Mat& img, std::span<const cv::Point2d> c) {
+  EyeCenterLocatorOptions o;
+  o.method = m;
+  auto l = EyeCenterLocator::create(o);
+  EXPECT_TRUE(l);
+  return l->locate(img, c);
+}
+
+TEST(EyeRegion, GeometryFromContour) {
+  const std::array<cv::Point2d, 6> c = {
+      cv::Point2d(10, 20), {16, 16}, {24, 16}, {30, 20}, {24, 24}, {16, 24}};
+  const EyeRegion r = eye_region_from_contour(c);
+  EXPECT_DOUBLE_EQ(r.width_px, 20);
+  EXPECT_DOUBLE_EQ(r.opening_px, 8);
+  EXPECT_DOUBLE_EQ(r.angle_rad, 0);
+  EXPECT_DOUBLE_EQ(r.opening_ratio(), 0.4);
+  EXPECT_EQ(r.center_px, cv::Point2d(20, 20));
+  EXPECT_THROW(eye_region_from_contour(std::span(c).first(5)), CheckFailure);
+}
+
+TEST(EyeCenterOptions, DefaultsValidAndBadValuesRejected) {
+  EXPECT_TRUE(EyeCenterLocatorOptions{}.check());
+  EXPECT_TRUE(EyeCenterAnalyzerOptions{}.check());
+  EyeRegionOptions r;
+  r.max_iris_radius = 0.1;  // below min
+  EXPECT_FALSE(r.check());
+  ImprovedIntegroDifferentialOptions i;
+  i.cone_half_angle_deg = 100;
+  EXPECT_FALSE(i.check());
+  DaugmanOptions d;
+  d.sigma_px = 0;
+  EXPECT_FALSE(d.check());
+  TimmBarthOptions t;
+  t.full_confidence_objective = 0;
+  EXPECT_FALSE(t.check());
+  EyeCenterAnalyzerOptions a;
+  a.cameras = {"camera_left", "camera_left"};
+  EXPECT_FALSE(a.check());
+  EXPECT_FALSE(make_eye_center_analyzer(a));
+}
+
+TEST(EyeCenterMethods, NamesRoundTrip) {
+  for (EyeCenterMethod m : {EyeCenterMethod::kImprovedIntegroDifferential,
+                            EyeCenterMethod::kDaugman, EyeCenterMethod::kTimmBarth})
+    EXPECT_EQ(eye_center_method_from_string(to_string(m)), m);
+  EXPECT_EQ(eye_center_method_from_string("improved"),
+            EyeCenterMethod::kImprovedIntegroDifferential);
+  EXPECT_FALSE(eye_center_method_from_string("hough"));
+  EXPECT_EQ(to_string(EyeRejection::kClosed), "closed");
+}
+
+class EyeCenterMethodTest : public ::testing::TestWithParam<EyeCenterMethod> {};
+
+// Widths 16-60 px, rolls up to 12 degrees, gaze offsets up to 0.15 width: within 1 px (and
+// within 0.06 width). `lids_open`: the lids clear the iris (what Daugman's full circles assume);
+// otherwise they cut its top and bottom, as in most open eyes.
+void expect_finds_rendered_iris_centres(EyeCenterMethod method, bool lids_open) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> off_x(-0.15, 0.15), off_y(-0.04, 0.04), roll(-12, 12),
+      sub(-0.5, 0.5);
+  const double widths[] = {16, 22, 30, 40, 60};
+  double sum = 0;
+  int n = 0;
+  for (double w : widths)
+    for (int k = 0; k < 6; ++k) {
+      EyeSpec s;
+      s.width = w;
+      s.mid = {100 + sub(rng), 70 + sub(rng)};
+      s.roll_deg = roll(rng);
+      s.iris_offset = {off_x(rng), off_y(rng)};
+      if (lids_open) s.upper = s.lower = 0.3;
+      cv::Mat img = blank({200, 140});
+      const RenderedEye e = render_eye(img, s);
+      auto loc = run(method, img, e.contour);
+      ASSERT_TRUE(loc) << loc.error().to_string();
+      ASSERT_TRUE(loc->found) << "width " << w << " rejection " << to_string(loc->rejection);
+      const double err = cv::norm(loc->center_px - e.centre);
+      EXPECT_LT(err, std::max(1.0, 0.06 * w)) << "width " << w << " case " << k;
+      EXPECT_GT(loc->confidence, 0.0);
+      EXPECT_LE(loc->confidence, 1.0);
+      sum += err / w;
+      ++n;
+    }
+  EXPECT_LT(sum / n, 0.025) << to_string(method);
+}
+
+TEST_P(EyeCenterMethodTest, FindsFullyVisibleIrisCentres) {
+  expect_finds_rendered_iris_centres(GetParam(), true);
+}
+
+// Daugman's full circles are pulled by the lids here (README); the other two are not.
+TEST(EyeCenterMethods, FindIrisCentresUnderTheLids) {
+  expect_finds_rendered_iris_centres(EyeCenterMethod::kImprovedIntegroDifferential, false);
+  expect_finds_rendered_iris_centres(EyeCenterMethod::kTimmBarth, false);
+}
+
+TEST_P(EyeCenterMethodTest, RejectsClosedTinyBlankAndOutsideEyes) {
+  {  // closed: lids 0.04 width apart
+    EyeSpec s;
+    s.upper = 0.02, s.lower = 0.02;
+    cv::Mat img = blank({200, 140});
+    const RenderedEye e = render_eye(img, s);
+    auto loc = run(GetParam(), img, e.contour);
+    ASSERT_TRUE(loc);
+    EXPECT_FALSE(loc->found);
+    EXPECT_EQ(loc->rejection, EyeRejection::kClosed);
+    EXPECT_EQ(loc->to_eye_center().confidence, 0.0);
+  }
+  {  // too small: 6 px wide
+    EyeSpec s;
+    s.width = 6;
+    cv::Mat img = blank({200, 140});
+    const RenderedEye e = render_eye(img, s);
+    auto loc = run(GetParam(), img, e.contour);
+    ASSERT_TRUE(loc);
+    EXPECT_FALSE(loc->found);
+    EXPECT_EQ(loc->rejection, EyeRejection::kTooSmall);
+  }
+  EyeSpec s;
+  cv::Mat scratch = blank({200, 140});
+  const RenderedEye e = render_eye(scratch, s);
+  {  // blank image, open-eye contour
+    auto loc = run(GetParam(), blank({200, 140}), e.contour);
+    ASSERT_TRUE(loc);
+    EXPECT_FALSE(loc->found);
+    EXPECT_EQ(loc->rejection, EyeRejection::kNoContrast);
+  }
+  {  // the contour entirely outside the image
+    std::array<cv::Point2d, 6> far = e.contour;
+    for (auto& p : far) p += cv::Point2d(1000, 1000);
+    auto loc = run(GetParam(), scratch, far);
+    ASSERT_TRUE(loc);
+    EXPECT_FALSE(loc->found);
+  }
+  {  // errors: empty image, unsupported type
+    EXPECT_FALSE(run(GetParam(), cv::Mat(), e.contour));
+    EXPECT_FALSE(run(GetParam(), cv::Mat(140, 200, CV_16UC1, cv::Scalar(1000)), e.contour));
+  }
+}
+
+TEST_P(EyeCenterMethodTest, ColourAndGreyGiveTheSameCentre) {
+  EyeSpec s;
+  s.iris_offset = {0.08, 0.01};
+  cv::Mat grey = blank({200, 140});
+  const RenderedEye e = render_eye(grey, s);
+  cv::Mat bgr;
+  cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+  auto a = run(GetParam(), grey, e.contour), b = run(GetParam(), bgr, e.contour);
+  ASSERT_TRUE(a && b);
+  ASSERT_TRUE(a->found && b->found);
+  EXPECT_LT(cv::norm(a->center_px - b->center_px), 1e-6);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMethods, EyeCenterMethodTest,
+                         ::testing::Values(EyeCenterMethod::kImprovedIntegroDifferential,
+                                           EyeCenterMethod::kDaugman, EyeCenterMethod::kTimmBarth),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
+
+// Sub-pixel: centres at fractional positions are recovered to a fraction of a pixel.
+TEST(ImprovedIntegroDifferential, SubPixelAndRadius) {
+  double worst = 0;
+  for (double fx : {0.0, 0.25, 0.5, 0.75})
+    for (double fy : {0.0, 0.3, 0.6}) {
+      EyeSpec s;
+      s.width = 32;
+      s.mid = {100 + fx, 70 + fy};
+      s.iris_offset = {0.05, 0.0};
+      cv::Mat img = blank({200, 140});
+      const RenderedEye e = render_eye(img, s);
+      auto loc = locate_improved_integro_differential(img, e.contour);
+      ASSERT_TRUE(loc && loc->found);
+      worst = std::max(worst, cv::norm(loc->center_px - e.centre));
+      EXPECT_NEAR(loc->radius_px, e.radius, 1.0);
+    }
+  EXPECT_LT(worst, 0.6);
+}
+
+// The cones ignore the eyelids: with the lids cutting deep into the iris (opening 0.25 width,
+// iris diameter 0.46 width), the improved operator stays accurate.
+TEST(ImprovedIntegroDifferential, IgnoresEyelidsCuttingTheIris) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> off(-0.12, 0.12);
+  double improved = 0, daugman = 0;
+  for (int k = 0; k < 12; ++k) {
+    EyeSpec s;
+    s.width = 30;
+    s.upper = 0.13, s.lower = 0.12, s.iris_radius = 0.23;
+    s.iris_offset = {off(rng), 0.0};
+    cv::Mat img = blank({200, 140});
+    const RenderedEye e = render_eye(img, s);
+    auto a = locate_improved_integro_differential(img, e.contour);
+    auto b = locate_daugman(img, e.contour);
+    ASSERT_TRUE(a && a->found && b && b->found);
+    improved += cv::norm(a->center_px - e.centre);
+    daugman += cv::norm(b->center_px - e.centre);
+  }
+  EXPECT_LT(improved / 12, 1.0);
+  EXPECT_LE(improved, daugman + 1e-9);
+}
+
+// The literal eq. (2) (|D_n|, both polarities) also works on a clean eye.
+TEST(ImprovedIntegroDifferential, AbsolutePolarityOption) {
+  EyeSpec s;
+  s.iris_offset = {-0.1, 0.02};
+  cv::Mat img = blank({200, 140});
+  const RenderedEye e = render_eye(img, s);
+  ImprovedIntegroDifferentialOptions o;
+  o.dark_inside_only = false;
+  auto loc = locate_improved_integro_differential(img, e.contour, {}, o);
+  ASSERT_TRUE(loc && loc->found);
+  EXPECT_LT(cv::norm(loc->center_px - e.centre), 1.0);
+}
+
+// ---- Analyser ----
+
+struct Scene {
+  cv::Mat image;
+  FaceLandmarks landmarks;
+  cv::Point2d right, left;
+};
+
+Scene make_scene(bool with_eyes = true) {
+  Scene sc;
+  sc.image = cv::Mat(240, 320, CV_8UC1, cv::Scalar(150));
+  EyeSpec r, l;
+  r.mid = {130, 110}, l.mid = {190, 110};
+  r.iris_offset = l.iris_offset = {0.07, 0.0};
+  cv::Mat scratch = sc.image.clone();
+  cv::Mat& target = with_eyes ? sc.image : scratch;
+  const RenderedEye er = render_eye(target, r), el = render_eye(target, l);
+  sc.right = er.centre, sc.left = el.centre;
+  sc.landmarks.camera = "camera_middle";
+  sc.landmarks.frame_stamp = Timestamp::from_ns(40'000'000);
+  sc.landmarks.frame_sequence = 1;
+  sc.landmarks.image_size = sc.image.size();
+  sc.landmarks.box_px = cv::Rect2d(100, 60, 120, 120);
+  sc.landmarks.points_px.assign(kFaceLandmarkCount, cv::Point2d(160, 160));
+  for (int i = 0; i < 6; ++i) {
+    sc.landmarks.points_px[36 + i] = er.contour[i];
+    sc.landmarks.points_px[42 + i] = el.contour[i];
+  }
+  return sc;
+}
+
+MultiFrame frame_with(const Scene& sc, Timestamp t, bool bgr = true) {
+  MultiFrame mf;
+  mf.stamp = t;
+  cv::Mat img = sc.image;
+  if (bgr) cv::cvtColor(sc.image, img, cv::COLOR_GRAY2BGR);
+  mf.frames["camera_middle"] = make_frame("camera_middle", t, 1, ColorImage{img});
+  return mf;
+}
+
+// Runs the analyser after committing `landmarks` (nullopt: nothing; null value: absent entry).
+struct AnalyserRun {
+  Status status;
+  std::optional<Entry<EyeCenters>> entry;
+  size_t writes = 0;
+};
+AnalyserRun run_analyser(Analyzer& a, const MultiFrame& mf,
+                         std::optional<const FaceLandmarks*> landmarks, Timestamp landmarks_stamp) {
+  Blackboard bb;
+  if (landmarks) {
+    BlackboardWriter l("face_landmarks");
+    if (*landmarks != nullptr)
+      l.set(keys::kFaceLandmarks, **landmarks, landmarks_stamp, 0.8f);
+    else
+      l.set_absent(keys::kFaceLandmarks, landmarks_stamp);
+    bb.commit(l, landmarks_stamp);
+  }
+  BlackboardWriter w("eye_centers");
+  AnalyserRun r;
+  r.status = a.process(mf, bb.snapshot(), w);
+  r.writes = w.size();
+  bb.commit(w, mf.stamp);
+  r.entry = bb.snapshot().get(keys::kEyeCenters);
+  return r;
+}
+
+TEST(EyeCenterAnalyzer, ContractAndBlackboardBehaviour) {
+  auto a = make_eye_center_analyzer();
+  ASSERT_TRUE(a) << a.error().to_string();
+  const AnalyzerContract c = (*a)->contract();
+  EXPECT_EQ(c.reads, std::vector<std::string>{keys::kFaceLandmarks.name});
+  EXPECT_EQ(c.writes, std::vector<std::string>{keys::kEyeCenters.name});
+  EXPECT_TRUE(c.required_inputs.empty());
+  EXPECT_EQ((*a)->name(), "eye_centers");
+
+  const Timestamp t = Timestamp::from_ns(40'000'000);
+  const Scene sc = make_scene();
+  {  // no landmarks entry at all: no write
+    const AnalyserRun r = run_analyser(**a, frame_with(sc, t), std::nullopt, t);
+    ASSERT_TRUE(r.status);
+    EXPECT_EQ(r.writes, 0u);
+    EXPECT_FALSE(r.entry);
+  }
+  {  // landmarks from an earlier tick: no write
+    const AnalyserRun r =
+        run_analyser(**a, frame_with(sc, t), &sc.landmarks, t - Duration::from_ms(40));
+    ASSERT_TRUE(r.status);
+    EXPECT_EQ(r.writes, 0u);
+  }
+  {  // absent landmarks: absent eye centres
+    const AnalyserRun r = run_analyser(**a, frame_with(sc, t), nullptr, t);
+    ASSERT_TRUE(r.status);
+    ASSERT_TRUE(r.entry);
+    EXPECT_FALSE(r.entry->present());
+  }
+  {  // landmarks but no frame of that camera: absent
+    MultiFrame mf;
+    mf.stamp = t;
+    const AnalyserRun r = run_analyser(**a, mf, &sc.landmarks, t);
+    ASSERT_TRUE(r.status);
+    ASSERT_TRUE(r.entry);
+    EXPECT_FALSE(r.entry->present());
+  }
+  {  // both eyes found near the truth, colour and grey frames
+    for (bool bgr : {true, false}) {
+      const AnalyserRun r = run_analyser(**a, frame_with(sc, t, bgr), &sc.landmarks, t);
+      ASSERT_TRUE(r.status) << r.status.error().to_string();
+      ASSERT_TRUE(r.entry && r.entry->present());
+      const EyeCenters& e = *r.entry->value;
+      EXPECT_EQ(e.camera, "camera_middle");
+      EXPECT_EQ(e.frame_stamp, sc.landmarks.frame_stamp);
+      EXPECT_EQ(e.frame_sequence, 1u);
+      EXPECT_EQ(e.method, "improved_integro_differential");
+      ASSERT_TRUE(e.right.found && e.left.found);
+      EXPECT_LT(cv::norm(e.right.center_px - sc.right), 1.0);
+      EXPECT_LT(cv::norm(e.left.center_px - sc.left), 1.0);
+      EXPECT_GT(r.entry->confidence, 0.f);
+      EXPECT_LE(r.entry->confidence, 0.8f);
+      EXPECT_EQ(r.entry->source, "eye_centers");
+    }
+  }
+  {  // blank frame (no eyes painted): present, both found = false, confidence 0
+    const Scene empty = make_scene(false);
+    const AnalyserRun r = run_analyser(**a, frame_with(empty, t), &empty.landmarks, t);
+    ASSERT_TRUE(r.status);
+    ASSERT_TRUE(r.entry && r.entry->present());
+    EXPECT_FALSE(r.entry->value->right.found);
+    EXPECT_FALSE(r.entry->value->left.found);
+    EXPECT_EQ(r.entry->confidence, 0.f);
+  }
+  {  // closed eyes (lid points collapsed on the corner line): found = false
+    Scene closed = make_scene();
+    for (int base : {36, 42}) {
+      auto& p = closed.landmarks.points_px;
+      const cv::Point2d a0 = p[base], a3 = p[base + 3];
+      p[base + 1] = p[base + 5] = a0 + (a3 - a0) * (1.0 / 3);
+      p[base + 2] = p[base + 4] = a0 + (a3 - a0) * (2.0 / 3);
+    }
+    const AnalyserRun r = run_analyser(**a, frame_with(closed, t), &closed.landmarks, t);
+    ASSERT_TRUE(r.status);
+    ASSERT_TRUE(r.entry && r.entry->present());
+    EXPECT_FALSE(r.entry->value->right.found);
+    EXPECT_FALSE(r.entry->value->left.found);
+  }
+  {  // errors: wrong number of landmarks, frame size differs from the landmarks' image size
+    Scene bad = make_scene();
+    bad.landmarks.points_px.resize(10);
+    EXPECT_FALSE(run_analyser(**a, frame_with(bad, t), &bad.landmarks, t).status);
+    Scene resized = make_scene();
+    resized.landmarks.image_size = {640, 480};
+    EXPECT_FALSE(run_analyser(**a, frame_with(resized, t), &resized.landmarks, t).status);
+  }
+}
+
+TEST(EyeCenterAnalyzer, EachMethodIsSelectable) {
+  const Timestamp t = Timestamp::from_ns(0);
+  const Scene sc = make_scene();
+  for (EyeCenterMethod m : {EyeCenterMethod::kDaugman, EyeCenterMethod::kTimmBarth}) {
+    EyeCenterAnalyzerOptions o;
+    o.locator.method = m;
+    auto a = make_eye_center_analyzer(o);
+    ASSERT_TRUE(a);
+    const AnalyserRun r = run_analyser(**a, frame_with(sc, t), &sc.landmarks, t);
+    ASSERT_TRUE(r.status && r.entry && r.entry->present());
+    EXPECT_EQ(r.entry->value->method, to_string(m));
+    // 30 px eyes whose lids cut the iris: Daugman's full circles are off by up to ~0.08 width.
+    EXPECT_LT(cv::norm(r.entry->value->right.center_px - sc.right), 3.0);
+  }
+}
+
+}  // namespace
+}  // namespace dreamsense::eye_centers

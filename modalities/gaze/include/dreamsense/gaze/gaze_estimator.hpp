@@ -1,0 +1,54 @@
+#pragma once
+// World gaze rays from eye centres, landmarks and head pose: eq. (4) per eye (eye_angles.hpp),
+// composed with the head rotation (world_from_head, which already contains the camera's
+// extrinsics), both eyes fused by averaging their directions (the DREAM Paladyn paper).
+
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/gaze/eye_angles.hpp"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace dreamsense::gaze {
+
+struct GazeEstimatorOptions {
+  OffsetPlane plane = OffsetPlane::kHeadPlane;
+  // Fitted on demo seeds that are not evaluated (README.md: `dreamsense train gaze`).
+  EyeAngleModel right_eye;
+  EyeAngleModel left_eye;
+  // Half the distance between the eyeball centres (a child's interpupillary distance is about
+  // 50-55 mm, an adult's 63 mm); the per-eye ray origins are at +-this along head x.
+  double half_ipd_m = 0.029;
+  Status check() const;
+};
+
+// Gaze of the selected face. `pupils`: from the eye-centre locator; eyes with found = false get
+// invalid rays; `both` is valid when at least one eye is. nullopt when no eye is usable.
+std::optional<EyeGaze> estimate_gaze(const FaceLandmarks& landmarks, const EyeCenters& pupils,
+                                     const HeadPose& head, const CameraModel& camera,
+                                     const GazeEstimatorOptions& options);
+
+// The normalised offsets of both eyes (right, left) as used by estimate_gaze; for fitting.
+struct EyeOffsets {
+  std::optional<cv::Vec2d> right, left;
+};
+EyeOffsets eye_offsets(const FaceLandmarks& landmarks, const EyeCenters& pupils,
+                       const HeadPose& head, const CameraModel& camera, OffsetPlane plane);
+
+// Gaze model file (YAML, written by `dreamsense train gaze`): format "dreamsense-gaze-model",
+// version 1, the plane the offsets were measured in, the head-model rotation offset of the
+// subject, one EyeAngleModel per eye, and a free-text provenance (what it was fitted on).
+struct GazeModelFile {
+  OffsetPlane plane = OffsetPlane::kHeadPlane;
+  // Subject calibration of the head pose (HeadPoseAnalyzerOptions::model_from_head).
+  cv::Matx33d model_from_head = cv::Matx33d::eye();
+  EyeAngleModel right_eye, left_eye;
+  std::string provenance;
+  int samples = 0;
+};
+Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& model);
+Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path);
+
+}  // namespace dreamsense::gaze

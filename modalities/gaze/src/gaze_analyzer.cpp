@@ -1,0 +1,87 @@
+#include "dreamsense/gaze/gaze_analyzer.hpp"
+
+namespace dreamsense::gaze {
+namespace {
+
+class GazeAnalyzer : public Analyzer {
+ public:
+  explicit GazeAnalyzer(GazeAnalyzerOptions o) : options_(std::move(o)), mutual_(options_.mutual) {}
+
+  std::string_view name() const override { return "gaze"; }
+  AnalyzerContract contract() const override {
+    return {{},
+            {},
+            {keys::kFaceLandmarks.name, keys::kEyeCenters.name, keys::kHeadPose.name},
+            {keys::kEyeGaze.name, keys::kMutualGaze.name}};
+  }
+
+  Status process(const MultiFrame& in, const BlackboardView& prior,
+                 BlackboardWriter& out) override {
+    const auto lm = prior.get(keys::kFaceLandmarks);
+    if (!lm || lm->stamp != in.stamp) return ok_status();
+    const auto eyes = prior.get(keys::kEyeCenters);
+    const auto head = prior.get(keys::kHeadPose);
+    const bool usable = lm->present() && eyes && eyes->stamp == in.stamp && eyes->present() &&
+                        head && head->stamp == in.stamp && head->present() &&
+                        eyes->value->frame_stamp == lm->value->frame_stamp &&
+                        head->value->camera == lm->value->camera;
+    if (!usable) return absent(in.stamp, out);
+    const auto cam = options_.cameras.find(lm->value->camera);
+    if (cam == options_.cameras.end())
+      return make_error(ErrorCode::kNotFound, "gaze: no camera model for '{}'", lm->value->camera);
+    auto g = estimate_gaze(*lm->value, *eyes->value, *head->value, cam->second, options_.estimator);
+    if (!g) return absent(in.stamp, out);
+
+    double miss = 0;
+    bool raw = false;
+    if (options_.mutual.mode == MutualGazeMode::k3d) {
+      raw = gaze_hits_robot_3d(g->both, options_.mutual, miss);
+    } else {
+      const SensorId ref =
+          options_.reference_camera.empty() ? lm->value->camera : options_.reference_camera;
+      const auto rc = options_.cameras.find(ref);
+      if (rc == options_.cameras.end())
+        return make_error(ErrorCode::kNotFound, "gaze: no camera model for reference '{}'", ref);
+      raw = gaze_hits_camera_rect(g->both, rc->second, options_.mutual, miss);
+    }
+    const float confidence = std::min(head->confidence, eyes->confidence);
+    out.set(keys::kMutualGaze, mutual_.update(in.stamp, raw, miss), in.stamp, confidence);
+    out.set(keys::kEyeGaze, std::move(*g), in.stamp, confidence);
+    return ok_status();
+  }
+
+  void reset() override { mutual_.reset(); }
+
+ private:
+  Status absent(Timestamp stamp, BlackboardWriter& out) {
+    mutual_.reset();
+    out.set_absent(keys::kEyeGaze, stamp);
+    out.set_absent(keys::kMutualGaze, stamp);
+    return ok_status();
+  }
+
+  GazeAnalyzerOptions options_;
+  MutualGazeTracker mutual_;
+};
+
+}  // namespace
+
+Status GazeAnalyzerOptions::check() const {
+  if (cameras.empty())
+    return make_error(ErrorCode::kInvalidArgument, "GazeAnalyzerOptions: no camera models");
+  for (const auto& [id, c] : cameras)
+    if (auto s = c.check(); !s) return s;
+  if (!reference_camera.empty() && !cameras.count(reference_camera))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "GazeAnalyzerOptions: reference camera '{}' has no camera model",
+                      reference_camera);
+  if (auto s = estimator.check(); !s) return s;
+  return mutual.check();
+}
+
+Result<std::unique_ptr<Analyzer>> make_gaze_analyzer(const GazeAnalyzerOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  return std::unique_ptr<Analyzer>(new GazeAnalyzer(options));
+}
+
+}  // namespace dreamsense::gaze

@@ -1,0 +1,169 @@
+#include "dreamsense/gaze/gaze_estimator.hpp"
+
+#include <opencv2/core/persistence.hpp>
+
+#include <fstream>
+
+namespace dreamsense::gaze {
+namespace {
+
+// dlib-68 eye corners: the subject's right eye 36 (outer) / 39 (inner), left eye 42 / 45.
+constexpr int kRightCorners[2] = {36, 39};
+constexpr int kLeftCorners[2] = {42, 45};
+
+std::optional<cv::Vec2d> offset_of(const FaceLandmarks& lm, const int corners[2],
+                                   const EyeCenter& pupil, const HeadPose& head,
+                                   const CameraModel& camera, OffsetPlane plane) {
+  if (!pupil.found || lm.points_px.size() < static_cast<size_t>(kFaceLandmarkCount))
+    return std::nullopt;
+  const EyeObservation eye{lm.points_px[static_cast<size_t>(corners[0])],
+                           lm.points_px[static_cast<size_t>(corners[1])], pupil.center_px};
+  if (plane == OffsetPlane::kImage) return pupil_offset_image(eye);
+  return pupil_offset_head_plane(eye, camera, head.camera_from_head, head.position_camera_m);
+}
+
+GazeRay ray_of(const std::optional<cv::Vec2d>& offset, const EyeAngleModel& model,
+               const HeadPose& head, double eye_x_head_m) {
+  GazeRay r;
+  if (!offset) return r;
+  const EyeAngles a = eye_angles(*offset, model);
+  r.valid = true;
+  r.features = *offset;
+  r.theta_deg = a.theta_deg;
+  r.phi_deg = a.phi_deg;
+  r.direction_world = head.world_from_head * eye_direction_head(a);
+  r.origin_world_m = head.position_world_m + head.world_from_head * cv::Vec3d(eye_x_head_m, 0, 0);
+  return r;
+}
+
+}  // namespace
+
+Status GazeEstimatorOptions::check() const {
+  if (auto s = right_eye.check(); !s) return s;
+  if (auto s = left_eye.check(); !s) return s;
+  if (!(half_ipd_m > 0 && half_ipd_m < 0.1))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "GazeEstimatorOptions: half_ipd_m must be in (0, 0.1) m (got {})",
+                      half_ipd_m);
+  return ok_status();
+}
+
+EyeOffsets eye_offsets(const FaceLandmarks& landmarks, const EyeCenters& pupils,
+                       const HeadPose& head, const CameraModel& camera, OffsetPlane plane) {
+  return {offset_of(landmarks, kRightCorners, pupils.right, head, camera, plane),
+          offset_of(landmarks, kLeftCorners, pupils.left, head, camera, plane)};
+}
+
+std::optional<EyeGaze> estimate_gaze(const FaceLandmarks& landmarks, const EyeCenters& pupils,
+                                     const HeadPose& head, const CameraModel& camera,
+                                     const GazeEstimatorOptions& options) {
+  const EyeOffsets o = eye_offsets(landmarks, pupils, head, camera, options.plane);
+  EyeGaze g;
+  g.camera = landmarks.camera;
+  g.frame_stamp = landmarks.frame_stamp;
+  g.method = options.plane == OffsetPlane::kImage ? "d42_eq4_image" : "d42_eq4_head_plane";
+  g.right = ray_of(o.right, options.right_eye, head, -options.half_ipd_m);
+  g.left = ray_of(o.left, options.left_eye, head, options.half_ipd_m);
+  if (!g.right.valid && !g.left.valid) return std::nullopt;
+  cv::Vec3d sum(0, 0, 0);
+  cv::Vec2d features(0, 0);
+  int n = 0;
+  for (const GazeRay* r : {&g.right, &g.left}) {
+    if (!r->valid) continue;
+    sum += r->direction_world;
+    features += r->features;
+    ++n;
+  }
+  g.both.valid = true;
+  g.both.origin_world_m = head.position_world_m;
+  g.both.direction_world = sum / cv::norm(sum);
+  g.both.features = features * (1.0 / n);
+  const EyeAngles a = angles_of_head_direction(head.world_from_head.t() * g.both.direction_world);
+  g.both.theta_deg = a.theta_deg;
+  g.both.phi_deg = a.phi_deg;
+  return g;
+}
+
+namespace {
+constexpr const char* kGazeModelFormat = "dreamsense-gaze-model";
+void write_eye(cv::FileStorage& fs, const char* name, const EyeAngleModel& m) {
+  fs << name << "{"
+     << "gamma" << m.gamma << "epsilon" << m.epsilon << "rest_x" << m.rest_x << "rest_y" << m.rest_y
+     << "}";
+}
+bool read_eye(const cv::FileNode& n, EyeAngleModel& m) {
+  if (n.empty() || n["gamma"].empty() || n["epsilon"].empty()) return false;
+  m.gamma = static_cast<double>(n["gamma"]);
+  m.epsilon = static_cast<double>(n["epsilon"]);
+  m.rest_x = n["rest_x"].empty() ? 0.0 : static_cast<double>(n["rest_x"]);
+  m.rest_y = n["rest_y"].empty() ? 0.0 : static_cast<double>(n["rest_y"]);
+  return true;
+}
+}  // namespace
+
+Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& model) {
+  const std::filesystem::path partial = path.string() + ".partial";
+  try {
+    cv::FileStorage fs(partial.string(), cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+    if (!fs.isOpened())
+      return make_error(ErrorCode::kIoError, "{}: cannot write the gaze model", path.string());
+    fs << "format" << kGazeModelFormat << "version" << 1;
+    fs << "plane" << (model.plane == OffsetPlane::kImage ? "image" : "head_plane");
+    fs << "model_from_head" << cv::Mat(model.model_from_head);
+    write_eye(fs, "right_eye", model.right_eye);
+    write_eye(fs, "left_eye", model.left_eye);
+    fs << "samples" << model.samples << "provenance" << model.provenance;
+    fs.release();
+  } catch (const cv::Exception& e) {
+    return make_error(ErrorCode::kIoError, "{}: {}", path.string(), e.what());
+  }
+  std::error_code ec;
+  std::filesystem::rename(partial, path, ec);
+  if (ec) return make_error(ErrorCode::kIoError, "{}: {}", path.string(), ec.message());
+  return ok_status();
+}
+
+Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
+  if (!std::ifstream(path))
+    return make_error(ErrorCode::kNotFound, "{}: gaze model not found", path.string());
+  GazeModelFile m;
+  try {
+    cv::FileStorage fs(path.string(), cv::FileStorage::READ);
+    if (!fs.isOpened() || static_cast<std::string>(fs["format"]) != kGazeModelFormat)
+      return make_error(ErrorCode::kCorruptData, "{}: not a dreamsense gaze model (format: {})",
+                        path.string(), kGazeModelFormat);
+    if (static_cast<int>(fs["version"]) != 1)
+      return make_error(ErrorCode::kUnsupported, "{}: gaze model version {} (this build reads 1)",
+                        path.string(), static_cast<int>(fs["version"]));
+    const std::string plane = fs["plane"];
+    if (plane != "image" && plane != "head_plane")
+      return make_error(ErrorCode::kCorruptData, "{}: unknown plane '{}'", path.string(), plane);
+    m.plane = plane == "image" ? OffsetPlane::kImage : OffsetPlane::kHeadPlane;
+    if (!read_eye(fs["right_eye"], m.right_eye) || !read_eye(fs["left_eye"], m.left_eye))
+      return make_error(ErrorCode::kCorruptData, "{}: right_eye/left_eye need gamma and epsilon",
+                        path.string());
+    if (!fs["model_from_head"].empty()) {
+      cv::Mat R;
+      fs["model_from_head"] >> R;
+      if (R.rows != 3 || R.cols != 3 || R.type() != CV_64F)
+        return make_error(ErrorCode::kCorruptData, "{}: model_from_head must be a 3x3 matrix",
+                          path.string());
+      m.model_from_head = cv::Matx33d(R);
+      if (cv::norm(cv::Mat(m.model_from_head * m.model_from_head.t() - cv::Matx33d::eye())) >
+              1e-6 ||
+          cv::determinant(m.model_from_head) < 0)
+        return make_error(ErrorCode::kCorruptData, "{}: model_from_head is not a rotation",
+                          path.string());
+    }
+    m.samples = fs["samples"].empty() ? 0 : static_cast<int>(fs["samples"]);
+    m.provenance = fs["provenance"].empty() ? "" : static_cast<std::string>(fs["provenance"]);
+  } catch (const cv::Exception& e) {
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.what());
+  }
+  for (const EyeAngleModel* e : {&m.right_eye, &m.left_eye})
+    if (auto s = e->check(); !s)
+      return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), s.error().message);
+  return m;
+}
+
+}  // namespace dreamsense::gaze

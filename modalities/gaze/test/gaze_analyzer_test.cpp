@@ -1,0 +1,119 @@
+#include "dreamsense/gaze/gaze_analyzer.hpp"
+
+#include "dreamsense/core/blackboard.hpp"
+
+#include <gtest/gtest.h>
+
+namespace dreamsense::gaze {
+namespace {
+
+CameraModel camera() {
+  CameraModel c;
+  c.image_size = {1280, 960};
+  c.K = cv::Matx33d(1000, 0, 640, 0, 1000, 480, 0, 0, 1);
+  return c;
+}
+
+struct Inputs {
+  FaceLandmarks lm;
+  EyeCenters eyes;
+  HeadPose head;
+};
+
+// A frontal head 0.8 m in front of the camera, pupils centred between the corners.
+Inputs frontal(Timestamp t) {
+  Inputs in;
+  in.lm.camera = "cam";
+  in.lm.frame_stamp = t;
+  in.lm.points_px.assign(kFaceLandmarkCount, {0, 0});
+  in.lm.points_px[36] = {570, 480};
+  in.lm.points_px[39] = {610, 480};
+  in.lm.points_px[42] = {670, 480};
+  in.lm.points_px[45] = {710, 480};
+  in.eyes.camera = "cam";
+  in.eyes.frame_stamp = t;
+  in.eyes.right = {true, {590, 480}, 0.9};
+  in.eyes.left = {true, {690, 480}, 0.9};
+  in.head.camera = "cam";
+  in.head.frame_stamp = t;
+  in.head.position_world_m = in.head.position_camera_m = {0, 0, 0.8};
+  in.head.gaze_origin_world_m = in.head.position_world_m;
+  return in;
+}
+
+void commit_inputs(Blackboard& bb, const Inputs& in, Timestamp t) {
+  BlackboardWriter w("upstream");
+  w.set(keys::kFaceLandmarks, in.lm, t, 0.9f);
+  w.set(keys::kEyeCenters, in.eyes, t, 0.9f);
+  w.set(keys::kHeadPose, in.head, t, 0.8f);
+  bb.commit(w, t);
+}
+
+TEST(GazeAnalyzer, WritesGazeAndMutualGazeOrAbsence) {
+  GazeAnalyzerOptions o;
+  EXPECT_FALSE(o.check()) << "no cameras";
+  o.cameras["cam"] = camera();
+  o.estimator.plane = OffsetPlane::kHeadPlane;
+  o.mutual.robot_head_m = {0, 0, 0};  // the robot sits at the camera
+  o.mutual.onset_s = 0;
+  auto a = make_gaze_analyzer(o);
+  ASSERT_TRUE(a) << a.error().message;
+
+  Blackboard bb;
+  const Timestamp t0 = Timestamp::from_seconds(1);
+  MultiFrame mf;
+  mf.stamp = t0;
+  {  // nothing upstream in this tick: nothing written
+    BlackboardWriter w("gaze");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    EXPECT_TRUE(w.empty());
+  }
+  commit_inputs(bb, frontal(t0), t0);
+  {
+    BlackboardWriter w("gaze");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t0);
+    const auto g = bb.snapshot().get(keys::kEyeGaze);
+    ASSERT_TRUE(g && g->present());
+    EXPECT_NEAR(g->value->both.direction_world[2], -1.0, 1e-6);  // towards the camera
+    const auto m = bb.snapshot().get(keys::kMutualGaze);
+    ASSERT_TRUE(m && m->present());
+    EXPECT_TRUE(m->value->mutual);
+    EXPECT_EQ(m->value->mode, "3d");
+  }
+  // Negative case: the head turned 60 deg away (eyes centred): no mutual gaze.
+  const Timestamp t1 = t0 + Duration::from_ms(40);
+  mf.stamp = t1;
+  Inputs away = frontal(t1);
+  away.head.world_from_head = away.head.camera_from_head = rotation_from_ypr_deg(60, 0, 0);
+  commit_inputs(bb, away, t1);
+  {
+    BlackboardWriter w("gaze");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t1);
+    const auto m = bb.snapshot().get(keys::kMutualGaze);
+    ASSERT_TRUE(m && m->present());
+    EXPECT_FALSE(m->value->raw);
+    EXPECT_GT(m->value->miss_distance_m, 0.3);
+  }
+  // No face (absent landmarks): both outputs absent, never a made-up gaze.
+  const Timestamp t2 = t1 + Duration::from_ms(40);
+  mf.stamp = t2;
+  {
+    BlackboardWriter l("face_landmarks");
+    l.set_absent(keys::kFaceLandmarks, t2);
+    bb.commit(l, t2);
+    BlackboardWriter w("gaze");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t2);
+    const auto g = bb.snapshot().get(keys::kEyeGaze);
+    ASSERT_TRUE(g);
+    EXPECT_FALSE(g->present());
+    const auto m = bb.snapshot().get(keys::kMutualGaze);
+    ASSERT_TRUE(m);
+    EXPECT_FALSE(m->present());
+  }
+}
+
+}  // namespace
+}  // namespace dreamsense::gaze

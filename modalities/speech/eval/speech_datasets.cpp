@@ -1,0 +1,165 @@
+#include "speech_datasets.hpp"
+
+#include <sndfile.h>
+
+#include <algorithm>
+#include <map>
+#include <regex>
+#include <set>
+
+namespace dreamsense::speech {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct WavHeader {
+  int rate = 0, channels = 0;
+  int64_t frames = 0;
+};
+
+Result<WavHeader> wav_header(const fs::path& path, SNDFILE** keep_open = nullptr) {
+  SF_INFO info{};
+  SNDFILE* sf = sf_open(path.string().c_str(), SFM_READ, &info);
+  if (!sf)
+    return make_error(ErrorCode::kCorruptData, "cannot read audio {}: {}", path.string(),
+                      sf_strerror(nullptr));
+  if (keep_open)
+    *keep_open = sf;
+  else
+    sf_close(sf);
+  return WavHeader{info.samplerate, info.channels, static_cast<int64_t>(info.frames)};
+}
+
+Status check_header(const fs::path& path, const WavHeader& h, int expected_rate_hz,
+                    const std::string& layout) {
+  if (h.channels != 1)
+    return make_error(ErrorCode::kUnsupported, "{}: {} has {} channels; the {} layout needs mono",
+                      path.string(), path.filename().string(), h.channels, layout);
+  if (expected_rate_hz > 0 && h.rate != expected_rate_hz)
+    return make_error(ErrorCode::kUnsupported, "{}: sample rate {} Hz; the {} layout needs {} Hz",
+                      path.string(), h.rate, layout, expected_rate_hz);
+  return ok_status();
+}
+
+std::vector<fs::path> wav_files(const fs::path& dir) {
+  std::vector<fs::path> out;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext == ".wav" && e.is_regular_file()) out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+Result<Audio> read_mono_wav(const fs::path& path, int expected_rate_hz, const std::string& layout) {
+  SNDFILE* sf = nullptr;
+  auto h = wav_header(path, &sf);
+  if (!h) return tl::unexpected(h.error());
+  if (auto st = check_header(path, *h, expected_rate_hz, layout); !st) {
+    sf_close(sf);
+    return tl::unexpected(st.error());
+  }
+  Audio a;
+  a.rate_hz = h->rate;
+  a.samples.resize(static_cast<size_t>(h->frames));
+  const sf_count_t got = sf_read_short(sf, a.samples.data(), h->frames);
+  sf_close(sf);
+  a.samples.resize(static_cast<size_t>(std::max<sf_count_t>(0, got)));
+  return a;
+}
+
+Result<std::vector<AudioItem>> load_fsdd(const fs::path& dir, const FsddSelection& sel) {
+  if (!fs::is_directory(dir))
+    return make_error(ErrorCode::kNotFound, "fsdd: {} is not a folder", dir.string());
+  const fs::path rec = fs::is_directory(dir / "recordings") ? dir / "recordings" : dir;
+  static const std::regex name_re(R"(^([0-9])_([A-Za-z0-9-]+)_([0-9]+)\.wav$)",
+                                  std::regex::icase);
+  std::vector<AudioItem> items;
+  std::set<std::string> speakers_seen;
+  for (const auto& p : wav_files(rec)) {
+    std::smatch m;
+    const std::string name = p.filename().string();
+    if (!std::regex_match(name, m, name_re))
+      return make_error(ErrorCode::kCorruptData,
+                        "fsdd: {} does not follow the FSDD name pattern DIGIT_SPEAKER_INDEX.wav",
+                        p.string());
+    AudioItem it{p, m[1].str(), m[2].str(), std::stoi(m[3].str())};
+    speakers_seen.insert(it.speaker);
+    if (!sel.speakers.empty() &&
+        std::find(sel.speakers.begin(), sel.speakers.end(), it.speaker) == sel.speakers.end())
+      continue;
+    if (it.index < sel.first_index || it.index > sel.last_index) continue;
+    auto h = wav_header(p);
+    if (!h) return tl::unexpected(h.error());
+    if (auto st = check_header(p, *h, 8000, "fsdd"); !st) return tl::unexpected(st.error());
+    items.push_back(std::move(it));
+  }
+  if (speakers_seen.empty())
+    return make_error(ErrorCode::kNotFound,
+                      "fsdd: no DIGIT_SPEAKER_INDEX.wav files in {} (nor in its recordings/)",
+                      dir.string());
+  for (const auto& s : sel.speakers)
+    if (!speakers_seen.count(s)) {
+      std::string have;
+      for (const auto& x : speakers_seen) have += (have.empty() ? "" : ", ") + x;
+      return make_error(ErrorCode::kNotFound, "fsdd: speaker {} not in {} (has {})", s,
+                        rec.string(), have);
+    }
+  if (items.empty())
+    return make_error(ErrorCode::kNotFound, "fsdd: the selection leaves no items in {}",
+                      rec.string());
+  std::sort(items.begin(), items.end(), [](const AudioItem& a, const AudioItem& b) {
+    return std::tie(a.speaker, a.label, a.index) < std::tie(b.speaker, b.label, b.index);
+  });
+  return items;
+}
+
+Result<std::vector<AudioItem>> load_speech_commands(const fs::path& dir) {
+  if (!fs::is_directory(dir))
+    return make_error(ErrorCode::kNotFound, "speech-commands: {} is not a folder", dir.string());
+  std::vector<std::string> required(std::begin(kCommandWords), std::end(kCommandWords));
+  required.push_back(kUnknownLabel);
+  required.push_back(kSilenceLabel);
+  std::string missing;
+  for (const auto& r : required)
+    if (!fs::is_directory(dir / r)) missing += (missing.empty() ? "" : ", ") + r;
+  if (!missing.empty())
+    return make_error(ErrorCode::kNotFound,
+                      "speech-commands: {} lacks the class folder(s) {} (needs yes, no, up, "
+                      "down, left, right, on, off, stop, go, _unknown_, _silence_)",
+                      dir.string(), missing);
+  std::vector<fs::path> folders;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.is_directory()) folders.push_back(e.path());
+  std::sort(folders.begin(), folders.end());
+  std::vector<AudioItem> items;
+  for (const auto& f : folders) {
+    const std::string name = f.filename().string();
+    std::string label;
+    if (std::find(required.begin(), required.end(), name) != required.end())
+      label = name;
+    else if (!name.empty() && name[0] != '_' && name[0] != '.')
+      label = kUnknownLabel;  // another word (training-set layout)
+    else
+      continue;
+    for (const auto& p : wav_files(f)) {
+      auto h = wav_header(p);
+      if (!h) return tl::unexpected(h.error());
+      if (auto st = check_header(p, *h, 16000, "speech-commands"); !st)
+        return tl::unexpected(st.error());
+      items.push_back({p, label, "", -1});
+    }
+  }
+  if (items.empty())
+    return make_error(ErrorCode::kNotFound, "speech-commands: no .wav files in the class folders of {}",
+                      dir.string());
+  std::stable_sort(items.begin(), items.end(),
+                   [](const AudioItem& a, const AudioItem& b) { return a.label < b.label; });
+  return items;
+}
+
+}  // namespace dreamsense::speech

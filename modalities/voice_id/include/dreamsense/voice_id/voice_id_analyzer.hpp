@@ -1,0 +1,49 @@
+#pragma once
+// Voice identification analyser (F21 identifyVoice): cuts the audio stream into utterances with
+// the energy gate (utterance_gate.hpp) and writes keys::kSpeakerIdentity once per utterance.
+// Two methods, chosen explicitly (never as a silent fallback):
+//  - kGmmUbm: the GMM-UBM speaker models of a trained VoiceModel (voice_model.hpp); an
+//    utterance whose best log-likelihood ratio is below the model's threshold is "unknown".
+//  - kDirectionRule: DREAM's identifyVoice rule on keys::kSoundDirection (original-dream.md
+//    2.2 #21): |azimuth| > angle_deg with confidence > min_confidence -> therapist (seated at
+//    the side); |azimuth| < angle_deg, azimuth != 0, confidence > min_confidence -> child (in
+//    front); anything else decides nothing. Each direction written during the utterance votes;
+//    the majority wins, no vote (or a tie) gives "unknown". Needs the sound direction analyser
+//    to run before this one on the same stream.
+// Silence writes nothing; so does (gmm_ubm) an utterance without a single speech-like frame.
+// The entry is written at the tick the utterance ends (hangover_s after its last loud frame);
+// start/end are the loud part's stamps.
+
+#include "dreamsense/core/analyzer.hpp"
+#include "dreamsense/voice_id/utterance_gate.hpp"
+#include "dreamsense/voice_id/voice_model.hpp"
+
+#include <filesystem>
+#include <memory>
+
+namespace dreamsense::voice_id {
+
+enum class VoiceIdMethod { kGmmUbm, kDirectionRule };
+const char* to_string(VoiceIdMethod m);  // "gmm_ubm", "direction_rule"
+Result<VoiceIdMethod> parse_voice_id_method(const std::string& s);
+
+struct DirectionRuleOptions {
+  double angle_deg = 20;        // DREAM: child within +-20 deg of the array's broadside
+  double min_confidence = 0.5;  // DREAM: confidence > 0.5
+  Status check() const;
+};
+
+struct VoiceIdAnalyzerOptions {
+  SensorId audio_sensor = "mic_array";
+  VoiceIdMethod method = VoiceIdMethod::kGmmUbm;
+  // kGmmUbm: the model, in memory or as a file written by `dreamsense train voices`.
+  std::shared_ptr<const VoiceModel> model;
+  std::filesystem::path model_file;
+  DirectionRuleOptions direction;
+  UtteranceGateOptions gate;
+  Status check() const;
+};
+
+Result<std::unique_ptr<Analyzer>> make_voice_id_analyzer(const VoiceIdAnalyzerOptions& options);
+
+}  // namespace dreamsense::voice_id

@@ -1,0 +1,178 @@
+#include "dreamsense/voice_id/voice_id_analyzer.hpp"
+
+#include "dreamsense/core/perception.hpp"
+
+#include <cmath>
+#include <deque>
+#include <optional>
+
+namespace dreamsense::voice_id {
+
+const char* to_string(VoiceIdMethod m) {
+  return m == VoiceIdMethod::kGmmUbm ? "gmm_ubm" : "direction_rule";
+}
+
+Result<VoiceIdMethod> parse_voice_id_method(const std::string& s) {
+  if (s == "gmm_ubm") return VoiceIdMethod::kGmmUbm;
+  if (s == "direction_rule") return VoiceIdMethod::kDirectionRule;
+  return make_error(ErrorCode::kInvalidArgument,
+                    "voice id method '{}' is unknown (gmm_ubm or direction_rule)", s);
+}
+
+Status DirectionRuleOptions::check() const {
+  if (!(angle_deg > 0 && angle_deg < 90 && min_confidence >= 0 && min_confidence < 1))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "DirectionRuleOptions: angle_deg must be in (0, 90), min_confidence in "
+                      "[0, 1)");
+  return ok_status();
+}
+
+Status VoiceIdAnalyzerOptions::check() const {
+  if (audio_sensor.empty())
+    return make_error(ErrorCode::kInvalidArgument, "VoiceIdAnalyzerOptions: audio_sensor is empty");
+  if (method == VoiceIdMethod::kGmmUbm && !model && model_file.empty())
+    return make_error(ErrorCode::kInvalidArgument,
+                      "VoiceIdAnalyzerOptions: method gmm_ubm needs a voice model (model or "
+                      "model_file)");
+  if (auto s = direction.check(); !s) return s;
+  return gate.check();
+}
+
+namespace {
+
+struct Heard {
+  Timestamp stamp;
+  double azimuth_deg;
+  double confidence;
+};
+
+class VoiceIdAnalyzer : public Analyzer {
+ public:
+  VoiceIdAnalyzer(VoiceIdAnalyzerOptions o, std::shared_ptr<const VoiceModel> model)
+      : options_(std::move(o)), model_(std::move(model)) {}
+  std::string_view name() const override { return "voice_id"; }
+  AnalyzerContract contract() const override {
+    AnalyzerContract c{{options_.audio_sensor}, {}, {}, {keys::kSpeakerIdentity.name}};
+    if (options_.method == VoiceIdMethod::kDirectionRule)
+      c.reads.push_back(keys::kSoundDirection.name);
+    return c;
+  }
+
+  Status process(const MultiFrame& in, const BlackboardView& prior,
+                 BlackboardWriter& out) override {
+    if (options_.method == VoiceIdMethod::kDirectionRule) remember_direction(prior);
+    for (const FramePtr& f : in.chunks_of(options_.audio_sensor)) {
+      const AudioChunk* c = f->as<AudioChunk>();
+      if (c == nullptr || c->channels <= 0)
+        return make_error(ErrorCode::kInvalidArgument, "voice_id: '{}' is not an audio stream",
+                          options_.audio_sensor);
+      if (!gate_) {
+        if (model_ && c->sample_rate / 2.0 < model_->features.high_hz)
+          return make_error(ErrorCode::kUnsupported,
+                            "voice_id: '{}' is sampled at {} Hz, the voice model needs >= {} Hz",
+                            options_.audio_sensor, c->sample_rate,
+                            static_cast<int>(std::ceil(2 * model_->features.high_hz)));
+        gate_.emplace(options_.gate, c->sample_rate);
+      } else if (c->sample_rate != gate_->sample_rate()) {
+        return make_error(ErrorCode::kInvalidArgument,
+                          "voice_id: '{}' changed sample rate from {} to {} Hz",
+                          options_.audio_sensor, gate_->sample_rate(), c->sample_rate);
+      }
+      // Mono = channel 0 (averaging the array's microphones would comb-filter the speech).
+      std::vector<float> mono(static_cast<size_t>(c->frames()));
+      for (size_t i = 0; i < mono.size(); ++i)
+        mono[i] = c->samples[i * static_cast<size_t>(c->channels)];
+      for (Utterance& u : gate_->push(mono, f->stamp))
+        if (auto s = decide(u, in.stamp, out); !s) return s;
+    }
+    return ok_status();
+  }
+
+  void reset() override {
+    if (gate_) gate_->reset();
+    heard_.clear();
+  }
+
+ private:
+  void remember_direction(const BlackboardView& prior) {
+    const auto e = prior.get(keys::kSoundDirection);
+    if (!e || !e->present()) return;
+    if (!heard_.empty() && heard_.back().stamp >= e->stamp) return;  // already seen
+    heard_.push_back({e->stamp, e->value->azimuth_deg, e->confidence});
+    const Duration keep = Duration::from_seconds(options_.gate.max_utterance_s + 5.0);
+    while (!heard_.empty() && e->stamp - heard_.front().stamp > keep) heard_.pop_front();
+  }
+
+  Status decide(const Utterance& u, Timestamp tick, BlackboardWriter& out) {
+    SpeakerIdentity id;
+    id.start = u.start;
+    id.end = u.end;
+    id.sensor = options_.audio_sensor;
+    id.method = to_string(options_.method);
+    if (options_.method == VoiceIdMethod::kGmmUbm) {
+      // The loud part only (+-50 ms): the padding and the hangover are the room's noise.
+      const size_t margin = static_cast<size_t>(0.05 * gate_->sample_rate());
+      const size_t b = u.loud_begin > margin ? u.loud_begin - margin : 0;
+      const size_t e = std::min(u.samples.size(), u.loud_end + margin);
+      auto r = identify(*model_, std::span<const float>(u.samples).subspan(b, e - b),
+                        gate_->sample_rate());
+      if (!r) return tl::unexpected(r.error());
+      if (r->frames == 0) return ok_status();  // nothing speech-like in it
+      id.speaker_id = r->speaker_id;
+      id.name = r->name;
+      id.score = r->score;
+    } else {
+      direction_rule(u, id);
+    }
+    const float confidence = static_cast<float>(id.score);
+    out.set(keys::kSpeakerIdentity, std::move(id), tick, confidence);
+    return ok_status();
+  }
+
+  // DREAM's rule on every direction heard during the utterance (none heard: unknown).
+  void direction_rule(const Utterance& u, SpeakerIdentity& id) const {
+    int votes[2] = {0, 0}, heard = 0;  // 0 therapist, 1 child
+    const auto& d = options_.direction;
+    for (const auto& h : heard_) {
+      if (h.stamp < u.start || h.stamp > u.end) continue;
+      ++heard;
+      if (!(h.confidence > d.min_confidence)) continue;
+      const double a = std::abs(h.azimuth_deg);
+      if (a > d.angle_deg)
+        ++votes[0];
+      else if (h.azimuth_deg != 0)
+        ++votes[1];
+    }
+    if (votes[0] == votes[1]) {  // no decisive direction, or a tie
+      id.speaker_id = id.name = kUnknownSpeaker;
+      id.score = 0;
+      return;
+    }
+    const int win = votes[1] > votes[0] ? 1 : 0;
+    id.speaker_id = id.name = win == 1 ? "child" : "therapist";
+    id.score = static_cast<double>(votes[win]) / heard;
+  }
+
+  VoiceIdAnalyzerOptions options_;
+  std::shared_ptr<const VoiceModel> model_;
+  std::optional<UtteranceGate> gate_;
+  std::deque<Heard> heard_;  // directions of the last seconds (direction rule)
+};
+
+}  // namespace
+
+Result<std::unique_ptr<Analyzer>> make_voice_id_analyzer(const VoiceIdAnalyzerOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  std::shared_ptr<const VoiceModel> model = options.model;
+  if (options.method == VoiceIdMethod::kGmmUbm && !model) {
+    auto m = VoiceModel::load(options.model_file);
+    if (!m) return tl::unexpected(m.error());
+    model = std::make_shared<const VoiceModel>(std::move(*m));
+  }
+  if (model)
+    if (auto s = model->check(); !s) return tl::unexpected(s.error());
+  if (options.method == VoiceIdMethod::kDirectionRule) model.reset();
+  return std::unique_ptr<Analyzer>(new VoiceIdAnalyzer(options, std::move(model)));
+}
+
+}  // namespace dreamsense::voice_id

@@ -1,0 +1,223 @@
+// The voice id analyser through a MultiFrame harness: audio chunks (and, for the direction rule,
+// sound directions on the blackboard) in, one SpeakerIdentity per utterance out.
+
+#include "dreamsense/voice_id/voice_id_analyzer.hpp"
+
+#include "dreamsense/core/perception.hpp"
+#include "dreamsense/voice_id/audio_files.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <random>
+
+#include "synthetic_voice.hpp"
+
+namespace dreamsense::voice_id {
+namespace {
+
+using testing::synth_utterance;
+using testing::SyntheticSpeaker;
+
+const SyntheticSpeaker kChild{260, 1.25}, kTherapist{120, 1.0};
+constexpr int kRate = 16000;
+
+std::shared_ptr<const VoiceModel> model() {
+  static const auto m = [] {
+    std::vector<LabelledAudio> enrol;
+    for (uint32_t i = 0; i < 4; ++i) {
+      enrol.push_back({"child", synth_utterance(kChild, 1.5, kRate, 10 + i), kRate, "c"});
+      enrol.push_back({"therapist", synth_utterance(kTherapist, 1.5, kRate, 20 + i), kRate, "t"});
+    }
+    VoiceTrainOptions o;
+    o.ubm.components = 16;
+    o.ubm.min_frames_per_component = 20;
+    o.threshold = -100;  // closed set: the synthetic voices are too regular for the open set
+    auto r = train_voice_model(enrol, {}, o);
+    EXPECT_TRUE(r) << r.error().message;
+    return std::make_shared<const VoiceModel>(r ? *r : VoiceModel{});
+  }();
+  return m;
+}
+
+// Azimuth (deg) and confidence of the sound direction at a time, or none (silence).
+using DirectionAt = std::function<std::optional<std::pair<double, double>>(double seconds)>;
+
+// Feeds `mono` as 2-channel 40 ms chunks, one per 25 Hz tick, with faint noise; a fake sound
+// direction analyser runs first when `direction` is given. Returns every identity written.
+std::vector<SpeakerIdentity> run(Analyzer& a, const std::vector<float>& mono,
+                                 const DirectionAt& direction = {}) {
+  std::mt19937 rng(1);
+  std::normal_distribution<float> noise(0.f, 3e-4f);
+  Blackboard bb;
+  std::vector<SpeakerIdentity> out;
+  const int64_t chunk = 640;
+  for (int64_t k = 0; k * chunk < static_cast<int64_t>(mono.size()); ++k) {
+    AudioChunk c;
+    c.sample_rate = kRate;
+    c.channels = 2;
+    for (int64_t i = k * chunk; i < std::min<int64_t>((k + 1) * chunk, mono.size()); ++i) {
+      c.samples.push_back(mono[static_cast<size_t>(i)] + noise(rng));
+      c.samples.push_back(mono[static_cast<size_t>(i)] + noise(rng));
+    }
+    MultiFrame mf;
+    mf.stamp = Timestamp::from_ns(k * 40'000'000LL);
+    mf.chunks["mic"].push_back(make_frame("mic", mf.stamp, static_cast<uint64_t>(k), c));
+    if (direction) {
+      BlackboardWriter w("sound_direction");
+      if (auto d = direction(mf.stamp.seconds())) {
+        SoundDirection s;
+        s.azimuth_deg = d->first;
+        w.set(keys::kSoundDirection, s, mf.stamp, static_cast<float>(d->second));
+      } else {
+        w.set_absent(keys::kSoundDirection, mf.stamp);
+      }
+      bb.commit(w, mf.stamp);
+    }
+    BlackboardWriter w("voice_id");
+    EXPECT_TRUE(a.process(mf, bb.snapshot(), w));
+    bb.commit(w, mf.stamp);
+    auto e = bb.snapshot().get(keys::kSpeakerIdentity);
+    if (e && e->present() && e->stamp == mf.stamp) out.push_back(*e->value);
+  }
+  return out;
+}
+
+void append(std::vector<float>& s, const std::vector<float>& x) {
+  s.insert(s.end(), x.begin(), x.end());
+}
+std::vector<float> quiet(double seconds) {
+  return std::vector<float>(size_t(seconds * kRate), 0.f);
+}
+
+TEST(VoiceIdAnalyzer, GmmUbmNamesEachUtterance) {
+  VoiceIdAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.model = model();
+  auto a = make_voice_id_analyzer(o);
+  ASSERT_TRUE(a) << a.error().message;
+  std::vector<float> s = quiet(0.5);
+  append(s, synth_utterance(kChild, 1.2, kRate, 501, 0, 0));  // 0.5 - 1.7 s
+  append(s, quiet(1.0));
+  append(s, synth_utterance(kTherapist, 1.2, kRate, 502, 0, 0));  // 2.7 - 3.9 s
+  append(s, quiet(1.0));
+  append(s, synth_utterance(kChild, 0.8, kRate, 503, 0, 0));  // 4.9 - 5.7 s
+  append(s, quiet(1.0));
+  const auto ids = run(**a, s);
+  ASSERT_EQ(ids.size(), 3u);
+  EXPECT_EQ(ids[0].speaker_id, "child");
+  EXPECT_EQ(ids[1].speaker_id, "therapist");
+  EXPECT_EQ(ids[2].speaker_id, "child");
+  EXPECT_EQ(ids[0].method, "gmm_ubm");
+  EXPECT_EQ(ids[0].sensor, "mic");
+  EXPECT_EQ(ids[0].name, "child");
+  EXPECT_GT(ids[0].score, 0.5);
+  EXPECT_NEAR(ids[1].start.seconds(), 2.7, 0.1);
+  EXPECT_NEAR(ids[1].end.seconds(), 3.9, 0.1);
+}
+
+// Real speech (pocketsphinx-testdata): the cards talker enrolled as the child, the LibriVox
+// reader as the therapist; a recording of a third talker in the stream is "unknown".
+TEST(VoiceIdAnalyzer, RealStrangerIsUnknown) {
+  namespace fs = std::filesystem;
+  const fs::path d = "/usr/share/pocketsphinx/test/data";
+  const std::string lv = "librivox/sense_and_sensibility_01_austen_64kb-0";
+  if (!fs::exists(d / "goforward.raw") || !fs::exists(d / (lv + "930.wav")))
+    GTEST_SKIP() << "needs pocketsphinx-testdata";
+  std::vector<LabelledAudio> enrol;
+  for (const char* f : {"cards/001.wav", "cards/002.wav", "cards/003.wav"})
+    enrol.push_back(*read_audio_file(d / f, "child"));
+  for (const char* f : {"870.wav", "880.wav", "890.wav"})
+    enrol.push_back(*read_audio_file(d / (lv + f), "therapist"));
+  auto m = train_voice_model(enrol, {}, VoiceTrainOptions{});
+  ASSERT_TRUE(m) << m.error().message;
+  VoiceIdAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.model = std::make_shared<const VoiceModel>(*m);
+  auto a = make_voice_id_analyzer(o);
+  ASSERT_TRUE(a);
+  std::vector<float> s = quiet(0.5);
+  for (const std::string& f :
+       {std::string("cards/005.wav"), lv + "930.wav", std::string("goforward.raw")}) {
+    append(s, read_audio_file(d / f)->samples);
+    append(s, quiet(1.0));
+  }
+  const auto ids = run(**a, s);
+  ASSERT_EQ(ids.size(), 3u);
+  EXPECT_EQ(ids[0].speaker_id, "child");
+  EXPECT_EQ(ids[1].speaker_id, "therapist");
+  EXPECT_EQ(ids[2].speaker_id, "unknown");
+}
+
+TEST(VoiceIdAnalyzer, SilenceWritesNothing) {
+  VoiceIdAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.model = model();
+  auto a = make_voice_id_analyzer(o);
+  ASSERT_TRUE(a);
+  EXPECT_TRUE(run(**a, quiet(4.0)).empty());
+}
+
+TEST(VoiceIdAnalyzer, DirectionRuleFollowsDream) {
+  VoiceIdAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.method = VoiceIdMethod::kDirectionRule;  // no model needed
+  auto a = make_voice_id_analyzer(o);
+  ASSERT_TRUE(a) << a.error().message;
+  EXPECT_EQ((*a)->contract().reads, std::vector<std::string>{keys::kSoundDirection.name});
+  std::vector<float> s = quiet(0.5);
+  append(s, synth_utterance(kTherapist, 1.0, kRate, 1, 0, 0));  // 0.5 - 1.5 s, from the side
+  append(s, quiet(1.0));
+  append(s, synth_utterance(kTherapist, 1.0, kRate, 2, 0, 0));  // 2.5 - 3.5 s, from the front
+  append(s, quiet(1.0));
+  append(s, synth_utterance(kTherapist, 1.0, kRate, 3, 0, 0));  // 4.5 - 5.5 s, low confidence
+  append(s, quiet(1.0));
+  const auto ids = run(**a, s, [](double t) -> std::optional<std::pair<double, double>> {
+    if (t >= 0.5 && t < 1.5) return std::pair{-42.0, 0.9};
+    if (t >= 2.5 && t < 3.5) return std::pair{6.0, 0.8};
+    if (t >= 4.5 && t < 5.5) return std::pair{6.0, 0.3};
+    return std::nullopt;
+  });
+  ASSERT_EQ(ids.size(), 3u);
+  EXPECT_EQ(ids[0].speaker_id, "therapist");
+  EXPECT_EQ(ids[1].speaker_id, "child");
+  EXPECT_EQ(ids[2].speaker_id, "unknown") << "confidence 0.3 <= 0.5 decides nothing";
+  EXPECT_EQ(ids[0].method, "direction_rule");
+  EXPECT_GT(ids[0].score, 0.8);
+}
+
+TEST(VoiceIdAnalyzer, GmmUbmNeedsAModelAndSaysWhichFileIsMissing) {
+  VoiceIdAnalyzerOptions o;
+  auto a = make_voice_id_analyzer(o);
+  ASSERT_FALSE(a);
+  EXPECT_NE(a.error().message.find("needs a voice model"), std::string::npos);
+  o.model_file = "/nonexistent/voices.yaml";
+  auto b = make_voice_id_analyzer(o);
+  ASSERT_FALSE(b);
+  EXPECT_NE(b.error().message.find("/nonexistent/voices.yaml"), std::string::npos);
+  EXPECT_FALSE(parse_voice_id_method("loudest"));
+  EXPECT_EQ(*parse_voice_id_method("direction_rule"), VoiceIdMethod::kDirectionRule);
+}
+
+TEST(VoiceIdAnalyzer, AudioBelowTheModelsBandIsAnError) {
+  VoiceIdAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.model = model();
+  auto a = make_voice_id_analyzer(o);
+  ASSERT_TRUE(a);
+  AudioChunk c;
+  c.sample_rate = 6000;
+  c.samples.assign(600, 0.f);
+  MultiFrame mf;
+  mf.stamp = Timestamp::from_ns(0);
+  mf.chunks["mic"].push_back(make_frame("mic", mf.stamp, 0, c));
+  BlackboardWriter w("voice_id");
+  auto s = (*a)->process(mf, BlackboardView{}, w);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("6000 Hz"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace dreamsense::voice_id
