@@ -74,7 +74,8 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
       ->default_val(r.dictionary.string());
   cmd->add_option("--garbage-weight", flags->garbage_weight,
                   "Phone-loop weight of the rejection branch, (0, 1]; higher rejects more "
-                  "(default per layout: 1)");
+                  "(default per layout: pocketsphinx 1, speech-commands " +
+                      fmt::format("{}", speech::kCommandsGarbageWeight) + ")");
   cmd->add_option("--min-confidence", flags->min_confidence,
                   "Confidence threshold on accepted words, [0, 1] (default per layout: "
                   "pocketsphinx 0, speech-commands " +

@@ -8,14 +8,14 @@
 //   BM_DecodeDigitTidigits  a 1 s clip under the digit grammar, TIDIGITS model at 8 kHz (fsdd)
 //   BM_Resample8to16        3 s of audio, soxr | sinc
 //   BM_DetectSpeech         the silence check on 1 s
+#include "dreamsense/speech/recognizer.hpp"
+#include "dreamsense/speech/voice_activity.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
 #include <fstream>
 #include <memory>
-
-#include "dreamsense/speech/recognizer.hpp"
-#include "dreamsense/speech/voice_activity.hpp"
 
 namespace {
 

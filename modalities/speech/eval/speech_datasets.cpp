@@ -76,8 +76,7 @@ Result<std::vector<AudioItem>> load_fsdd(const fs::path& dir, const FsddSelectio
   if (!fs::is_directory(dir))
     return make_error(ErrorCode::kNotFound, "fsdd: {} is not a folder", dir.string());
   const fs::path rec = fs::is_directory(dir / "recordings") ? dir / "recordings" : dir;
-  static const std::regex name_re(R"(^([0-9])_([A-Za-z0-9-]+)_([0-9]+)\.wav$)",
-                                  std::regex::icase);
+  static const std::regex name_re(R"(^([0-9])_([A-Za-z0-9-]+)_([0-9]+)\.wav$)", std::regex::icase);
   std::vector<AudioItem> items;
   std::set<std::string> speakers_seen;
   for (const auto& p : wav_files(rec)) {
@@ -155,8 +154,8 @@ Result<std::vector<AudioItem>> load_speech_commands(const fs::path& dir) {
     }
   }
   if (items.empty())
-    return make_error(ErrorCode::kNotFound, "speech-commands: no .wav files in the class folders of {}",
-                      dir.string());
+    return make_error(ErrorCode::kNotFound,
+                      "speech-commands: no .wav files in the class folders of {}", dir.string());
   std::stable_sort(items.begin(), items.end(),
                    [](const AudioItem& a, const AudioItem& b) { return a.label < b.label; });
   return items;

@@ -44,7 +44,7 @@ Result<std::vector<AudioItem>> load_fsdd(const std::filesystem::path& dir,
 // _unknown_, _silence_ of 16 kHz mono WAVs (all twelve must exist). Other word folders (the
 // training-set layout: bed, bird, ...) are counted as _unknown_; folders starting with '_'
 // other than the two above (e.g. _background_noise_) are ignored. Sorted by class, file name.
-inline constexpr const char* kCommandWords[] = {"yes",  "no", "up",   "down", "left",
+inline constexpr const char* kCommandWords[] = {"yes",   "no", "up",  "down", "left",
                                                 "right", "on", "off", "stop", "go"};
 inline constexpr const char* kUnknownLabel = "_unknown_";
 inline constexpr const char* kSilenceLabel = "_silence_";

@@ -66,9 +66,7 @@ TEST(FsddLoader, ListsRecordingsSortedAndSelects) {
   const fs::path rec = t.path() / "recordings";
   for (const char* name : {"3_theo_1.wav", "0_theo_0.wav", "9_lucas_12.wav", "3_theo_0.wav"})
     write_wav(rec / name, 8000);
-  {
-    std::ofstream(rec / "README.md") << "not audio";
-  }
+  { std::ofstream(rec / "README.md") << "not audio"; }
   auto all = load_fsdd(t.path());
   ASSERT_TRUE(all) << all.error().to_string();
   ASSERT_EQ(all->size(), 4u);
@@ -155,7 +153,7 @@ TEST(FsddLoader, BadInputGivesClearMessages) {
 TEST(SpeechCommandsLoader, TwelveClassesAndOtherWordsAreUnknown) {
   TempDir t;
   make_commands_layout(t.path(), 2);
-  write_wav(t.path() / "marvin" / "a.wav", 16000);   // training-set layout: another word
+  write_wav(t.path() / "marvin" / "a.wav", 16000);              // training-set layout: another word
   write_wav(t.path() / "_background_noise_" / "n.wav", 16000);  // ignored
   auto items = load_speech_commands(t.path());
   ASSERT_TRUE(items) << items.error().to_string();

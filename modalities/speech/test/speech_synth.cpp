@@ -17,6 +17,8 @@
 // Exit 0 with a message and nothing written when espeak-ng is not installed (exit code 77
 // with --require).
 
+#include "dreamsense/speech/recognizer.hpp"
+
 #include <sndfile.h>
 
 #include <algorithm>
@@ -29,8 +31,6 @@
 #include <unistd.h>
 #include <vector>
 
-#include "dreamsense/speech/recognizer.hpp"
-
 namespace {
 
 namespace fs = std::filesystem;
@@ -38,7 +38,7 @@ using dreamsense::speech::resample;
 
 const std::vector<std::string> kCommands = {"yes",   "no", "up",  "down", "left",
                                             "right", "on", "off", "stop", "go"};
-const std::vector<std::string> kUnknown = {"bed",   "bird",  "cat",    "dog",  "happy",
+const std::vector<std::string> kUnknown = {"bed",   "bird",   "cat",    "dog",  "happy",
                                            "house", "marvin", "sheila", "tree", "wow"};
 const std::vector<std::string> kDigits = {"zero", "one", "two",   "three", "four",
                                           "five", "six", "seven", "eight", "nine"};
@@ -203,8 +203,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!have_espeak()) {
-    std::fprintf(stderr, "speech_synth: espeak-ng is not installed (Debian package espeak-ng); "
-                         "nothing written\n");
+    std::fprintf(stderr,
+                 "speech_synth: espeak-ng is not installed (Debian package espeak-ng); "
+                 "nothing written\n");
     return require ? 77 : 0;
   }
   std::mt19937 g(seed);
@@ -298,8 +299,8 @@ int main(int argc, char** argv) {
       const double rms = type == Noise::kNearSilence ? db_to_amp(-85) : db_to_amp(uni(-75, -25));
       for (auto& v : x) v *= rms;
       written += write_wav(
-          out / "_silence_" / (std::string(names[static_cast<int>(type)]) + "_" +
-                               std::to_string(i) + ".wav"),
+          out / "_silence_" /
+              (std::string(names[static_cast<int>(type)]) + "_" + std::to_string(i) + ".wav"),
           x, rate);
     }
   }

@@ -2,6 +2,8 @@
 // TIDIGITS model (another phone set for the garbage loop, an 8 kHz front end).
 #include "dreamsense/speech/voice_activity.hpp"
 
+#include "dreamsense/speech/recognizer.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,7 +11,6 @@
 #include <fstream>
 #include <random>
 
-#include "dreamsense/speech/recognizer.hpp"
 #include "speech_eval.hpp"
 
 namespace dreamsense::speech {

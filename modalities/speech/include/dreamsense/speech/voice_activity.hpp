@@ -22,8 +22,8 @@ namespace dreamsense::speech {
 struct SpeechPresenceOptions {
   double frame_s = 0.04;
   double hop_s = 0.01;
-  double min_level_dbfs = -60.0;    // quieter frames never count
-  double active_db = 9.0;           // above the clip's 10th-percentile frame level
+  double min_level_dbfs = -60.0;   // quieter frames never count
+  double active_db = 9.0;          // above the clip's 10th-percentile frame level
   double voicing_threshold = 0.4;  // YIN d' dip (0 = perfectly periodic, ~1 = noise)
   double f0_min_hz = 50.0, f0_max_hz = 400.0;
   double min_voiced_s = 0.03;
