@@ -7,25 +7,13 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <fstream>
 #include <map>
 #include <optional>
 
+#include "records.hpp"
+
 namespace dreamsense::eval {
-namespace {
 using nlohmann::json;
-
-cv::Vec3d vec3(const json& a) {
-  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
-}
-
-cv::Matx33d est_rotation(const json& head_gaze_value) {
-  return rotation_from_ypr_deg(head_gaze_value["yaw_deg"].get<double>(),
-                               head_gaze_value["pitch_deg"].get<double>(),
-                               head_gaze_value["roll_deg"].get<double>());
-}
-
-}  // namespace
 
 Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inputs) {
   std::vector<gaze::EyeAngleSample> right, left;
@@ -52,25 +40,14 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
     for (const auto& t : *truth)
       if (t.value("type", "") == "face" && t.contains("eye_gaze_dir")) {
         truth_gaze[t.value("stamp_ns", int64_t{0})] = vec3(t["eye_gaze_dir"]);
-        truth_head[t.value("stamp_ns", int64_t{0})] = rotation_from_ypr_deg(
-            t["yaw_deg"].get<double>(), t["pitch_deg"].get<double>(), t["roll_deg"].get<double>());
+        truth_head[t.value("stamp_ns", int64_t{0})] = ypr_rotation(t);
       }
 
     const auto path = in.analysis_dir / "primitives.jsonl";
-    std::ifstream f(path);
-    if (!f) return make_error(ErrorCode::kNotFound, "{}: missing", path.string());
+    auto records = read_jsonl(path);
+    if (!records) return tl::unexpected(records.error());
     std::map<int64_t, json> head, eye;
-    std::string line;
-    int n = 0;
-    while (std::getline(f, line)) {
-      ++n;
-      if (line.empty()) continue;
-      json r;
-      try {
-        r = json::parse(line);
-      } catch (const json::exception& e) {
-        return make_error(ErrorCode::kCorruptData, "{}: line {}: {}", path.string(), n, e.what());
-      }
+    for (const auto& r : *records) {
       if (r.value("status", "") != "ok") continue;
       const std::string p = r.value("primitive", "");
       if (p == "getHeadGaze") head[r.value("stamp_ns", int64_t{0})] = r["value"];
@@ -81,7 +58,7 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
     for (const auto& [stamp, h] : head) {
       const auto t = truth_head.find(stamp);
       if (t == truth_head.end()) continue;
-      offset_sum += est_rotation(h).t() * t->second;
+      offset_sum += ypr_rotation(h).t() * t->second;
       ++offset_count;
     }
     runs.push_back({std::move(head), std::move(eye), std::move(truth_gaze)});
@@ -110,7 +87,7 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
         return make_error(ErrorCode::kInvalidArgument,
                           "train gaze: analyses use different methods ({} and {})", *method, m);
       method = m;
-      const cv::Matx33d R = est_rotation(h->second) * offset;
+      const cv::Matx33d R = ypr_rotation(h->second) * offset;
       const gaze::EyeAngles truth_angles = gaze::angles_of_head_direction(R.t() * t->second);
       for (auto [name, samples] : {std::pair{"right", &right}, std::pair{"left", &left}}) {
         const json& ray = e[name];

@@ -8,8 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
+
+#include "records.hpp"
 
 namespace dreamsense::eval {
 namespace fs = std::filesystem;
@@ -50,26 +51,6 @@ const std::map<std::string, std::string> kMetricPrimitive = {
     {"mutual_gaze_precision", "checkMutualGaze"},
     {"mutual_gaze_recall", "checkMutualGaze"},
 };
-
-Result<std::vector<json>> read_jsonl(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in)
-    return make_error(ErrorCode::kNotFound, "{}: missing (run `dreamsense analyze` first)",
-                      path.string());
-  std::vector<json> out;
-  std::string line;
-  int n = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    if (line.empty()) continue;
-    try {
-      out.push_back(json::parse(line));
-    } catch (const json::exception& e) {
-      return make_error(ErrorCode::kCorruptData, "{}: line {}: {}", path.string(), n, e.what());
-    }
-  }
-  return out;
-}
 
 // Face detection and camera selection against the truth `face` records of the same tick.
 //  - A detection in camera c matches when that camera's truth face is visible and the
@@ -165,9 +146,6 @@ void evaluate_faces(const std::vector<json>& truth, const std::vector<json>& rec
   if (auto m = median(position_errors)) metrics["face_position_median_m"] = *m;
 }
 
-cv::Vec3d vec3(const json& a) {
-  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
-}
 double angle_deg(const cv::Vec3d& a, const cv::Vec3d& b) {
   const double c = a.dot(b) / (cv::norm(a) * cv::norm(b));
   return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI;
@@ -220,11 +198,7 @@ void evaluate_head_and_gaze(const std::vector<json>& truth, const std::vector<js
     if (status != "ok") continue;
     const json& v = r["value"];
     if (p == "getHeadGaze") {
-      const cv::Matx33d est = rotation_from_ypr_deg(
-          v["yaw_deg"].get<double>(), v["pitch_deg"].get<double>(), v["roll_deg"].get<double>());
-      const cv::Matx33d tru = rotation_from_ypr_deg(
-          tf["yaw_deg"].get<double>(), tf["pitch_deg"].get<double>(), tf["roll_deg"].get<double>());
-      const cv::Matx33d d = est.t() * tru;
+      const cv::Matx33d d = ypr_rotation(v).t() * ypr_rotation(tf);
       const double c = (d(0, 0) + d(1, 1) + d(2, 2) - 1) / 2;
       pose_err.push_back(std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI);
       if (tf.contains("head_gaze_dir"))

@@ -15,14 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// DREAM's SelectCameraID.
-int dream_camera_id(const SensorId& camera) {
-  if (camera == "camera_middle") return 0;
-  if (camera == "camera_left") return 1;
-  if (camera == "camera_right") return 2;
-  return -1;
-}
-
 // The newest entry of `key` if it was written in this tick and holds a value.
 template <typename T>
 const T* this_tick(const BlackboardView& view, Key<T> key, Timestamp tick,

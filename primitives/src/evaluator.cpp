@@ -12,13 +12,6 @@ json vec_json(const cv::Vec3d& v) { return json::array({v[0], v[1], v[2]}); }
 void append_mm(std::vector<double>& out, const cv::Vec3d& v) {
   for (int i = 0; i < 3; ++i) out.push_back(v[i] * 1000.0);
 }
-// DREAM's camera ids (SelectCameraID): 0 camera_middle, 1 camera_left, 2 camera_right; -1 other.
-double dream_camera_id(const SensorId& camera) {
-  if (camera == "camera_middle") return 0;
-  if (camera == "camera_left") return 1;
-  if (camera == "camera_right") return 2;
-  return -1;
-}
 json ray_json(const GazeRay& r) {
   if (!r.valid) return nullptr;
   return {{"origin", vec_json(r.origin_world_m)},
@@ -64,6 +57,8 @@ PrimitiveRecord Evaluator::base(PrimitiveId id, Timestamp stamp) const {
 
 void Evaluator::enable_faces(std::map<SensorId, CameraModel> cameras) {
   face_cameras_ = std::move(cameras);
+  face_sensors_.clear();
+  for (const auto& [id, m] : face_cameras_) face_sensors_.push_back(id);
 }
 
 template <typename T>
@@ -156,11 +151,9 @@ void Evaluator::evaluate_voice(const MultiFrame& tick, const BlackboardView& vie
 void Evaluator::evaluate_faces(const MultiFrame& tick, const BlackboardView& view,
                                std::vector<PrimitiveRecord>& out) {
   PrimitiveRecord& r = out[static_cast<int>(PrimitiveId::kGetFaces) - 1];
-  std::vector<SensorId> sensors;
-  for (const auto& [id, m] : face_cameras_) sensors.push_back(id);
   const auto entry = view.get(keys::kFaceDetections);
   if (entry) r.data_stamp = entry->stamp;
-  r.status = observation_status(entry, sensors, tick.stamp);
+  r.status = observation_status(entry, face_sensors_, tick.stamp);
   if (r.status != PrimitiveStatus::kOk) return;
   const auto selected = view.get(keys::kSelectedCamera);
   const SelectedCamera* sel = selected && selected->present() && selected->stamp == entry->stamp
@@ -204,10 +197,8 @@ void Evaluator::evaluate_faces(const MultiFrame& tick, const BlackboardView& vie
 // F10 getHead, F11 getHeadGaze, F12 getHeadGaze (plane) from the head pose (keys::kHeadPose).
 void Evaluator::evaluate_head(const MultiFrame& tick, const BlackboardView& view,
                               std::vector<PrimitiveRecord>& out) {
-  std::vector<SensorId> sensors;
-  for (const auto& [id, m] : face_cameras_) sensors.push_back(id);
   const auto entry = view.get(keys::kHeadPose);
-  const PrimitiveStatus status = observation_status(entry, sensors, tick.stamp);
+  const PrimitiveStatus status = observation_status(entry, face_sensors_, tick.stamp);
   PrimitiveRecord& head = out[static_cast<int>(PrimitiveId::kGetHead) - 1];
   PrimitiveRecord& gaze = out[static_cast<int>(PrimitiveId::kGetHeadGaze) - 1];
   PrimitiveRecord& plane = out[static_cast<int>(PrimitiveId::kGetHeadGazePlane) - 1];
@@ -255,11 +246,9 @@ void Evaluator::evaluate_head(const MultiFrame& tick, const BlackboardView& view
 void Evaluator::evaluate_track_face(const MultiFrame& tick, const BlackboardView& view,
                                     std::vector<PrimitiveRecord>& out) {
   PrimitiveRecord& r = out[static_cast<int>(PrimitiveId::kTrackFace) - 1];
-  std::vector<SensorId> sensors;
-  for (const auto& [id, m] : face_cameras_) sensors.push_back(id);
   const auto entry = view.get(keys::kFaceTracks);
   if (entry) r.data_stamp = entry->stamp;
-  r.status = observation_status(entry, sensors, tick.stamp);
+  r.status = observation_status(entry, face_sensors_, tick.stamp);
   if (r.status != PrimitiveStatus::kOk) return;
   const FaceTracks& tracks = *entry->value;
   if (tracks.tracks.empty()) {
@@ -285,14 +274,12 @@ void Evaluator::evaluate_track_face(const MultiFrame& tick, const BlackboardView
 // keys::kMutualGaze) and the eye centres (keys::kEyeCenters).
 void Evaluator::evaluate_gaze(const MultiFrame& tick, const BlackboardView& view,
                               std::vector<PrimitiveRecord>& out) {
-  std::vector<SensorId> sensors;
-  for (const auto& [id, m] : face_cameras_) sensors.push_back(id);
   PrimitiveRecord& mutual = out[static_cast<int>(PrimitiveId::kCheckMutualGaze) - 1];
   PrimitiveRecord& eye_gaze = out[static_cast<int>(PrimitiveId::kGetEyeGaze) - 1];
   PrimitiveRecord& eyes = out[static_cast<int>(PrimitiveId::kGetEyes) - 1];
 
   const auto m = view.get(keys::kMutualGaze);
-  mutual.status = observation_status(m, sensors, tick.stamp);
+  mutual.status = observation_status(m, face_sensors_, tick.stamp);
   if (m) mutual.data_stamp = m->stamp;
   if (mutual.status == PrimitiveStatus::kOk) {
     const MutualGaze& g = *m->value;
@@ -306,7 +293,7 @@ void Evaluator::evaluate_gaze(const MultiFrame& tick, const BlackboardView& view
   }
 
   const auto g = view.get(keys::kEyeGaze);
-  eye_gaze.status = observation_status(g, sensors, tick.stamp);
+  eye_gaze.status = observation_status(g, face_sensors_, tick.stamp);
   if (g) eye_gaze.data_stamp = g->stamp;
   if (eye_gaze.status == PrimitiveStatus::kOk) {
     const EyeGaze& e = *g->value;
@@ -322,13 +309,14 @@ void Evaluator::evaluate_gaze(const MultiFrame& tick, const BlackboardView& view
                       {"right", ray_json(e.right)},
                       {"left", ray_json(e.left)}};
     eye_gaze.legacy = std::vector<double>{e.both.direction_world[0], e.both.direction_world[1],
-                                          e.both.direction_world[2], dream_camera_id(e.camera)};
+                                          e.both.direction_world[2],
+                                          static_cast<double>(dream_camera_id(e.camera))};
   }
 
   // getEyes: 2-D centres from the eye-centre locator; 3-D positions from the gaze rays' origins
   // (head pose + half the interpupillary distance), so only with a gaze.
   const auto c = view.get(keys::kEyeCenters);
-  eyes.status = observation_status(c, sensors, tick.stamp);
+  eyes.status = observation_status(c, face_sensors_, tick.stamp);
   if (c) eyes.data_stamp = c->stamp;
   if (eyes.status != PrimitiveStatus::kOk) return;
   const EyeCenters& ec = *c->value;

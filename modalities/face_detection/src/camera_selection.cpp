@@ -99,11 +99,7 @@ std::optional<SelectedCamera> CameraSelector::update(const FaceDetections& detec
 }
 
 int dream_camera_id(const std::optional<SensorId>& camera) {
-  if (!camera) return -1;
-  if (*camera == "camera_middle") return 0;
-  if (*camera == "camera_left") return 1;
-  if (*camera == "camera_right") return 2;
-  return -1;
+  return camera ? dreamsense::dream_camera_id(*camera) : -1;
 }
 
 }  // namespace dreamsense::face_detection

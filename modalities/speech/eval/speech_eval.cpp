@@ -223,6 +223,26 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// timing of a protocol: real-time factor over all clips and the median time per clip.
+json timing_json(double decode_s, double audio_s, const std::vector<double>& ms) {
+  return {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0},
+          {"audio_seconds", audio_s},
+          {"ms_per_clip_median", median(ms)}};
+}
+
+// per_class.<label>.recall (null without items) from (correct, total) counts.
+json per_class_json(const std::vector<std::string>& labels,
+                    const std::map<std::string, std::pair<size_t, size_t>>& counts) {
+  json pc = json::object();
+  for (const auto& l : labels) {
+    const auto it = counts.find(l);
+    const auto c = it == counts.end() ? std::pair<size_t, size_t>{0, 0} : it->second;
+    pc[l] = {{"recall", c.second ? json(ratio(c.first, c.second)) : json(nullptr)},
+             {"items", c.second}};
+  }
+  return pc;
+}
+
 json confusion_json(const std::vector<std::string>& labels,
                     const std::map<std::string, std::map<std::string, size_t>>& conf) {
   json c = json::object();
@@ -378,16 +398,8 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
                   {"no_result_rate", ratio(no_result, items->size())},
                   {"per_speaker", spk},
                   {"confusion", confusion_json(labels, conf)}};
-  j["timing"] = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0},
-                 {"audio_seconds", audio_s},
-                 {"ms_per_clip_median", median(ms)}};
-  json pc = json::object();
-  for (const auto& l : labels) {
-    const auto c = per_digit[l];
-    pc[l] = {{"recall", c.second ? json(ratio(c.first, c.second)) : json(nullptr)},
-             {"items", c.second}};
-  }
-  j["per_class"] = pc;
+  j["timing"] = timing_json(decode_s, audio_s, ms);
+  j["per_class"] = per_class_json(labels, per_digit);
   if (o.list_items) j["items"] = records;
   return j;
 }
@@ -490,16 +502,8 @@ Result<json> run_speech_commands(const SpeechEvalOptions& o,
       {"unknown_false_accept_rate", ratio(fa_by[kUnknownLabel].first, fa_by[kUnknownLabel].second)},
       {"silence_false_accept_rate", ratio(fa_by[kSilenceLabel].first, fa_by[kSilenceLabel].second)},
       {"confusion", confusion_json(labels, conf)}};
-  j["timing"] = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0},
-                 {"audio_seconds", audio_s},
-                 {"ms_per_clip_median", median(ms)}};
-  json pc = json::object();
-  for (const auto& l : labels) {
-    const auto c = per_label[l];
-    pc[l] = {{"recall", c.second ? json(ratio(c.first, c.second)) : json(nullptr)},
-             {"items", c.second}};
-  }
-  j["per_class"] = pc;
+  j["timing"] = timing_json(decode_s, audio_s, ms);
+  j["per_class"] = per_class_json(labels, per_label);
   if (o.list_items) j["items"] = records;
   return j;
 }

@@ -82,6 +82,15 @@ struct SelectedCamera {
   float quality = 0.f;    // the selection criterion of that face, [0, 1]
 };
 
+// DREAM's camera ids (SelectCameraID): 0 camera_middle, 1 camera_left, 2 camera_right, -1 any
+// other stream.
+inline int dream_camera_id(const SensorId& camera) {
+  if (camera == "camera_middle") return 0;
+  if (camera == "camera_left") return 1;
+  if (camera == "camera_right") return 2;
+  return -1;
+}
+
 namespace keys {
 // Written every tick with a camera frame; absent entry when no camera has a face.
 inline constexpr Key<FaceDetections> kFaceDetections{"face.detections"};

@@ -84,6 +84,7 @@ class Evaluator {
   SensorId body_sensor_;
   SensorId audio_sensor_;
   std::map<SensorId, CameraModel> face_cameras_;
+  std::vector<SensorId> face_sensors_;  // the ids of face_cameras_ (their primitives' sensors)
   SensorId speech_sensor_;
   SensorId voice_sensor_;
   bool gaze_enabled_ = false;
