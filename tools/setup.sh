@@ -14,6 +14,8 @@ packages=(
   libcli11-dev libyaml-cpp-dev libexpected-dev libgtest-dev libgmock-dev libbenchmark-dev
   # audio front end: resampling (audio/), live ALSA capture (sources/)
   libsoxr-dev libasound2-dev
+  # MJPEG session frames decoded straight to BGR (sources/)
+  libjpeg62-turbo-dev
   # models and media (the demo session is built from these; nothing is downloaded)
   opencv-data opencv-doc libdlib-data pocketsphinx-en-us pocketsphinx-testdata python3-skimage
   # tests: JSON-schema validation of the DREAM export; synthetic spoken words (speech tests)

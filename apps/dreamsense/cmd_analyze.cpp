@@ -16,7 +16,7 @@ struct AnalyzeFlags {
   std::string policy = "settled";
   std::string grammar;
   bool overlay = false;
-  std::string gaze_model;
+  SubjectFlags subject;
   std::string mutual_mode = "3d";
   std::vector<double> robot_head;
   std::string voice_method = "gmm_ubm", voice_model;
@@ -50,6 +50,29 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
                        [&](const auto& progress) { return runner::analyze_session(o, progress); });
 }
 
+void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
+  cmd.add_option("--subject", flags.subject,
+                 "The child's calibration folder (face_model.yaml, gaze.yaml), or 'none'; "
+                 "default: data/subjects/<the session's metadata subject>, if it exists")
+      ->check(CLI::ExistingDirectory | CLI::IsMember({"none"}));
+  cmd.add_option("--face-model", flags.face_model,
+                 "3-D face model from `dreamsense train face` (overrides the subject's)")
+      ->check(CLI::ExistingFile);
+  cmd.add_option("--gaze-model", flags.gaze_model,
+                 "Gaze constants from `dreamsense train gaze` (overrides the subject's; "
+                 "default: built in)")
+      ->check(CLI::ExistingFile);
+}
+
+void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o) {
+  if (flags.subject == "none")
+    o.subject_from_session = false;
+  else
+    o.subject_dir = flags.subject;
+  o.face_model = flags.face_model;
+  o.gaze_model = flags.gaze_model;
+}
+
 void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<AnalyzeFlags>();
   CLI::App* cmd = app.add_subcommand(
@@ -66,9 +89,7 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_flag("--overlay", flags->overlay,
                 "Also write overlay.mp4: the selected camera with face boxes, landmarks, head "
                 "axes, eye centres, gaze rays and mutual gaze");
-  cmd->add_option("--gaze-model", flags->gaze_model,
-                  "Gaze constants from `dreamsense train gaze` (default: built in)")
-      ->check(CLI::ExistingFile);
+  add_subject_flags(*cmd, flags->subject);
   cmd->add_option("--mutual-gaze", flags->mutual_mode,
                   "Mutual-gaze test: 3d (ray within 0.2 m of the robot head) or camera-plane "
                   "(DREAM's rectangle on the selected camera's plane)")
@@ -90,7 +111,7 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     o.session_dir = flags->session;
     o.out_dir = flags->out;
     o.overlay = flags->overlay;
-    o.gaze_model = flags->gaze_model;
+    apply_subject_flags(flags->subject, o);
     if (flags->mutual_mode == "camera-plane")
       o.mutual_gaze.mode = gaze::MutualGazeMode::kCameraPlane;
     if (flags->robot_head.size() == 3) {

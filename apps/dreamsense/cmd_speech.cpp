@@ -48,6 +48,11 @@ void print_summary(const nlohmann::json& r) {
   if (m.contains("per_speaker"))
     for (const auto& [spk, v] : m["per_speaker"].items())
       std::fprintf(stderr, ", %s %.3f", spk.c_str(), v["accuracy"].get<double>());
+  if (m.contains("per_utterance")) {
+    std::fprintf(stderr, "; per utterance %.3f", m["per_utterance"]["accuracy"].get<double>());
+    for (const auto& [spk, v] : m["per_utterance"]["per_speaker"].items())
+      std::fprintf(stderr, ", %s %.3f", spk.c_str(), v["accuracy"].get<double>());
+  }
   std::fprintf(stderr, ", rtf %.3f\n", r["timing"]["rtf"].get<double>());
 }
 }  // namespace
@@ -95,6 +100,24 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--warp", flags->warp,
                   "fsdd: frequency warp of the filter bank (default tidigits " +
                       fmt::format("{}", speech::kFsddTidigitsWarp) + ", en-us 1)");
+  cmd->add_flag("--digit-oh", flags->options.fsdd_oh,
+                "fsdd: also accept \"oh\" for 0 (FSDD's speakers say \"zero\")");
+  cmd->add_flag("--speaker-adapt", flags->options.fsdd_speaker_adapt,
+                "fsdd: unsupervised batch speaker adaptation, a vote among the nearest clips of "
+                "the same speaker in the evaluated set (transductive, so off by default; both "
+                "results are then reported, metrics.per_utterance = before the vote)");
+  cmd->add_option("--vote-neighbours", flags->options.fsdd_vote.neighbours,
+                  "fsdd: clips of the same speaker in the vote")
+      ->default_val(flags->options.fsdd_vote.neighbours);
+  cmd->add_option("--vote-ratio", flags->options.fsdd_vote.max_distance_ratio,
+                  "fsdd: only neighbours within this factor of the nearest one's DTW distance")
+      ->default_val(flags->options.fsdd_vote.max_distance_ratio);
+  cmd->add_option("--vote-weight", flags->options.fsdd_vote.weight,
+                  "fsdd: weight of the neighbours' evidence (the clip's own: 1)")
+      ->default_val(flags->options.fsdd_vote.weight);
+  cmd->add_option("--vote-temperature", flags->options.fsdd_vote.temperature,
+                  "fsdd: softmax temperature of the per-frame word scores")
+      ->default_val(flags->options.fsdd_vote.temperature);
   cmd->add_option("--resampler", flags->resampler,
                   "Rate conversion to the model's rate: soxr (libsoxr VHQ) or sinc (ours)")
       ->default_val(flags->resampler);

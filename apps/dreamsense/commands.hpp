@@ -49,7 +49,17 @@ void add_eval_eyes(CLI::App& eval, const GlobalFlags& g, int& exit_code);    // 
 void add_train_voices(CLI::App& train, const GlobalFlags& g, int& exit_code);
 void add_eval_voices(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 
-// cmd_gaze.cpp: `train gaze` (subject calibration: head-model offset and D4.2 eq. 4 constants).
+// The child's calibration for analyses (cmd_analyze.cpp): --subject DIR|none, --face-model,
+// --gaze-model.
+struct SubjectFlags {
+  std::string subject, face_model, gaze_model;
+};
+void add_subject_flags(CLI::App& cmd, SubjectFlags& flags);
+void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o);
+
+// cmd_gaze.cpp: `train face` (the child's 3-D face model) and `train gaze` (subject calibration:
+// head-model offset and D4.2 eq. 4 constants).
 void add_train_gaze(CLI::App& train, const GlobalFlags& g, int& exit_code);
+void add_train_face(CLI::App& train, const GlobalFlags& g, int& exit_code);
 
 }  // namespace dreamsense::app

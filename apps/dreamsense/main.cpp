@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
       app.add_subcommand("train", "Train a model from a dataset (writes a versioned model file)");
   train->require_subcommand(1);
   app::add_train_voices(*train, g, exit_code);
+  app::add_train_face(*train, g, exit_code);
   app::add_train_gaze(*train, g, exit_code);
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug

@@ -328,6 +328,47 @@ TEST_F(Cli, TrainAndEvalVoicesOnTheDemoEnrolment) {
   EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
 }
 
+// The child's calibration: `train face` on the demo (truth head poses) writes a face model that
+// `analyze --subject` uses; a subject folder without calibration files is a clear error; a
+// session naming an unknown subject falls back to the generic model.
+TEST_F(Cli, TrainFaceAndSubjectFolders) {
+  const fs::path subject = root() / "subject";
+  fs::create_directories(subject);
+  RunResult r = run("train face --session " + demo().string() + " --out " +
+                    (subject / "face_model.yaml").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string model = slurp(subject / "face_model.yaml");
+  EXPECT_NE(model.find("dreamsense-face-model"), std::string::npos);
+  EXPECT_NE(model.find("demo-seed-3"), std::string::npos) << "provenance names the session";
+
+  const fs::path out = root() / "with-subject";
+  r = run("-v analyze " + demo().string() + " --out " + out.string() + " --subject " +
+          subject.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find((subject / "face_model.yaml").string()), std::string::npos) << r.err;
+  int ok_heads = 0;
+  for (const auto& rec : read_jsonl(out / "primitives.jsonl"))
+    if (rec["primitive"] == "getHeadGaze" && rec["status"] == "ok") ++ok_heads;
+  EXPECT_GT(ok_heads, 50);
+
+  const fs::path empty = root() / "empty-subject";
+  fs::create_directories(empty);
+  r = run("analyze " + demo().string() + " --out " + (root() / "x").string() + " --subject " +
+          empty.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("face_model.yaml"), std::string::npos) << r.err;
+
+  const fs::path unknown = copy_of_demo("unknown-subject");
+  std::string manifest = slurp(unknown / "session.yaml");
+  const auto at = manifest.find("subject: demo_child");
+  ASSERT_NE(at, std::string::npos) << "the demo names its subject";
+  manifest.replace(at, std::string("subject: demo_child").size(), "subject: nobody_known");
+  std::ofstream(unknown / "session.yaml") << manifest;
+  r = run("-v analyze " + unknown.string() + " --out " + (root() / "y").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("no calibration for subject 'nobody_known'"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, HelpAndUsageErrors) {
   EXPECT_EQ(run("analyze --help").exit_code, 0);
   EXPECT_NE(run("analyze").exit_code, 0) << "missing SESSION";

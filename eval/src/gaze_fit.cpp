@@ -9,6 +9,7 @@
 
 #include <map>
 #include <optional>
+#include <tuple>
 
 #include "records.hpp"
 
@@ -20,9 +21,12 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
   std::optional<std::string> method;
   std::string provenance;
   struct Run {
-    std::map<int64_t, json> head, eye;
+    std::map<int64_t, json> head, eye, pupils;
     std::map<int64_t, cv::Vec3d> truth_gaze;
+    std::map<int64_t, std::pair<cv::Vec3d, cv::Vec3d>> truth_eye_dirs;  // right, left (world)
+    std::map<std::string, CameraModel> cameras;
   };
+  std::vector<gaze::EyeballSample> right_ball, left_ball;
   std::vector<Run> runs;
   std::vector<std::string> names;
   cv::Matx33d offset_sum = cv::Matx33d::zeros();
@@ -37,21 +41,35 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
     if (!truth) return tl::unexpected(truth.error());
     std::map<int64_t, cv::Vec3d> truth_gaze;
     std::map<int64_t, cv::Matx33d> truth_head;
+    std::map<int64_t, std::pair<cv::Vec3d, cv::Vec3d>> truth_eye_dirs;
     for (const auto& t : *truth)
       if (t.value("type", "") == "face" && t.contains("eye_gaze_dir")) {
-        truth_gaze[t.value("stamp_ns", int64_t{0})] = vec3(t["eye_gaze_dir"]);
-        truth_head[t.value("stamp_ns", int64_t{0})] = ypr_rotation(t);
+        const int64_t stamp = t.value("stamp_ns", int64_t{0});
+        truth_gaze[stamp] = vec3(t["eye_gaze_dir"]);
+        truth_head[stamp] = ypr_rotation(t);
+        // Per-eye directions (each eye converges on the target); closed eyes are no sample.
+        if (t.contains("eye_gaze_dirs") && t.value("eyes_open", true))
+          truth_eye_dirs[stamp] = {vec3(t["eye_gaze_dirs"]["right"]),
+                                   vec3(t["eye_gaze_dirs"]["left"])};
       }
+    std::map<std::string, CameraModel> cameras;
+    for (const auto& st : manifest->streams) {
+      if (st.kind != SensorKind::kColor || st.calibration.empty()) continue;
+      auto cam = read_camera_model(in.session_dir / st.calibration);
+      if (!cam) return tl::unexpected(cam.error());
+      cameras[st.id] = *cam;
+    }
 
     const auto path = in.analysis_dir / "primitives.jsonl";
     auto records = read_jsonl(path);
     if (!records) return tl::unexpected(records.error());
-    std::map<int64_t, json> head, eye;
+    std::map<int64_t, json> head, eye, pupils;
     for (const auto& r : *records) {
       if (r.value("status", "") != "ok") continue;
       const std::string p = r.value("primitive", "");
       if (p == "getHeadGaze") head[r.value("stamp_ns", int64_t{0})] = r["value"];
       if (p == "getEyeGaze") eye[r.value("stamp_ns", int64_t{0})] = r["value"];
+      if (p == "getEyes") pupils[r.value("stamp_ns", int64_t{0})] = r["value"];
     }
     // The head-model offset of this subject: the rotation R minimising sum |R_est R - R_true|
     // (the orthogonal projection of sum R_est^T R_true).
@@ -61,7 +79,8 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
       offset_sum += ypr_rotation(h).t() * t->second;
       ++offset_count;
     }
-    runs.push_back({std::move(head), std::move(eye), std::move(truth_gaze)});
+    runs.push_back({std::move(head), std::move(eye), std::move(pupils), std::move(truth_gaze),
+                    std::move(truth_eye_dirs), std::move(cameras)});
     names.push_back(manifest->name);
   }
   if (offset_count == 0)
@@ -76,7 +95,27 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
     offset = cv::Matx33d(cv::Mat(u2 * vt));
   }
   for (size_t k = 0; k < runs.size(); ++k) {
-    auto& [head, eye, truth_gaze] = runs[k];
+    auto& [head, eye, pupils, truth_gaze, truth_eye_dirs, cameras] = runs[k];
+    // Eyeball samples: the pupil ray in the (offset-corrected) estimated head frame, and the
+    // true per-eye direction in that frame.
+    for (const auto& [stamp, p] : pupils) {
+      const auto h = head.find(stamp);
+      const auto t = truth_eye_dirs.find(stamp);
+      const auto cam = cameras.find(p.value("camera", ""));
+      if (h == head.end() || t == truth_eye_dirs.end() || cam == cameras.end()) continue;
+      const cv::Matx33d world_from_head = ypr_rotation(h->second) * offset;
+      const cv::Matx33d camera_from_head = cam->second.R * world_from_head;
+      const cv::Vec3d position_camera = cam->second.R * vec3(h->second["origin"]) + cam->second.t;
+      for (auto [name, truth_dir, samples] :
+           {std::tuple{"right_px", t->second.first, &right_ball},
+            std::tuple{"left_px", t->second.second, &left_ball}}) {
+        if (!p.contains(name) || p[name].is_null()) continue;
+        const cv::Point2d px(p[name][0].get<double>(), p[name][1].get<double>());
+        samples->push_back(
+            {gaze::pixel_ray_head(px, cam->second, camera_from_head, position_camera),
+             world_from_head.t() * truth_dir});
+      }
+    }
     const size_t before = right.size() + left.size();
     for (const auto& [stamp, e] : eye) {
       const auto h = head.find(stamp);
@@ -111,6 +150,14 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
   auto l = gaze::fit_eye_angle_model(left);
   if (!l) return make_error(l.error().code, "left eye: {}", l.error().message);
   model.model_from_head = offset;
+  if (!right_ball.empty() || !left_ball.empty()) {
+    auto rb = gaze::fit_eyeball_model(right_ball);
+    if (!rb) return make_error(rb.error().code, "right eye: {}", rb.error().message);
+    auto lb = gaze::fit_eyeball_model(left_ball);
+    if (!lb) return make_error(lb.error().code, "left eye: {}", lb.error().message);
+    model.right_eyeball = *rb;
+    model.left_eyeball = *lb;
+  }
   model.right_eye = *r;
   model.left_eye = *l;
   model.samples = static_cast<int>(right.size() + left.size());

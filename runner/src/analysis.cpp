@@ -12,6 +12,7 @@
 #include "dreamsense/face_landmarks/face_landmarks_analyzer.hpp"
 #include "dreamsense/face_tracks/face_tracks_analyzer.hpp"
 #include "dreamsense/gaze/gaze_analyzer.hpp"
+#include "dreamsense/head_pose/face_shape_fit.hpp"
 #include "dreamsense/head_pose/head_pose_analyzer.hpp"
 #include "dreamsense/sound_direction/sound_direction_analyzer.hpp"
 #include "dreamsense/sources/session.hpp"
@@ -25,6 +26,8 @@
 
 namespace dreamsense::runner {
 namespace fs = std::filesystem;
+
+std::filesystem::path default_subjects_dir() { return DREAMSENSE_SUBJECTS_DIR; }
 
 Status AnalysisOptions::check() const {
   if (session_dir.empty())
@@ -132,6 +135,41 @@ Error in_session(Error e, const fs::path& session_dir) {
   if (!e.message.empty() && e.message.front() != '/')
     e.message = (session_dir / e.message).string();
   return e;
+}
+
+struct SubjectCalibration {
+  std::filesystem::path face_model, gaze_model;  // empty = none
+};
+
+// The calibration files in effect (AnalysisOptions: explicit files, else the subject folder's).
+Result<SubjectCalibration> subject_calibration(const AnalysisOptions& options,
+                                               const sources::SessionManifest& manifest) {
+  SubjectCalibration c;
+  std::filesystem::path dir = options.subject_dir;
+  if (dir.empty() && options.subject_from_session) {
+    if (auto it = manifest.metadata.find("subject"); it != manifest.metadata.end()) {
+      const std::filesystem::path candidate = options.subjects_dir / it->second;
+      if (std::filesystem::is_directory(candidate))
+        dir = candidate;
+      else
+        log::info("no calibration for subject '{}' in {}: generic face model", it->second,
+                  options.subjects_dir.string());
+    }
+  } else if (!dir.empty() && !std::filesystem::is_directory(dir)) {
+    return make_error(ErrorCode::kNotFound, "{}: subject calibration folder not found",
+                      dir.string());
+  }
+  if (!dir.empty()) {
+    if (std::filesystem::exists(dir / "face_model.yaml")) c.face_model = dir / "face_model.yaml";
+    if (std::filesystem::exists(dir / "gaze.yaml")) c.gaze_model = dir / "gaze.yaml";
+    if (c.face_model.empty() && c.gaze_model.empty())
+      return make_error(ErrorCode::kNotFound,
+                        "{}: a subject folder needs face_model.yaml and/or gaze.yaml",
+                        dir.string());
+  }
+  if (!options.face_model.empty()) c.face_model = options.face_model;
+  if (!options.gaze_model.empty()) c.gaze_model = options.gaze_model;
+  return c;
 }
 
 }  // namespace
@@ -264,13 +302,24 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     analyzers.push_back(std::move(*l));
     head_pose::HeadPoseAnalyzerOptions ho;
     ho.cameras = face_cameras;
+    auto calibration = subject_calibration(options, manifest);
+    if (!calibration) return tl::unexpected(calibration.error());
     std::optional<gaze::GazeModelFile> gaze_model;
-    if (!options.gaze_model.empty()) {
-      auto m = gaze::read_gaze_model(options.gaze_model);
+    if (!calibration->gaze_model.empty()) {
+      auto m = gaze::read_gaze_model(calibration->gaze_model);
       if (!m) return tl::unexpected(m.error());
       gaze_model = *m;
       ho.model_from_head = m->model_from_head;  // the subject's head-model offset
     }
+    if (!calibration->face_model.empty()) {
+      auto m = head_pose::read_face_model(calibration->face_model.string());
+      if (!m) return tl::unexpected(m.error());
+      ho.estimator.model = *m;
+    }
+    log::info("head pose: face model {}; gaze constants {}",
+              calibration->face_model.empty() ? "generic_51 (no subject calibration)"
+                                              : calibration->face_model.string(),
+              calibration->gaze_model.empty() ? "built-in" : calibration->gaze_model.string());
     auto h = head_pose::make_head_pose_analyzer(ho);
     if (!h) return tl::unexpected(h.error());
     analyzers.push_back(std::move(*h));
@@ -287,6 +336,11 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
       go.estimator.plane = gaze_model->plane;
       go.estimator.right_eye = gaze_model->right_eye;
       go.estimator.left_eye = gaze_model->left_eye;
+      if (gaze_model->right_eyeball && gaze_model->left_eyeball) {
+        go.estimator.method = gaze::GazeMethod::kEyeball;
+        go.estimator.right_eyeball = *gaze_model->right_eyeball;
+        go.estimator.left_eyeball = *gaze_model->left_eyeball;
+      }
     }
     if (options.robot_head_from_session) {
       if (auto it = manifest.metadata.find("robot_head_m"); it != manifest.metadata.end()) {

@@ -866,6 +866,11 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       // Where the robot's head is (world, m): a setup calibration, for mutual gaze.
       {"robot_head_m",
        fmt::format("{} {} {}", g.robot_head_m[0], g.robot_head_m[1], g.robot_head_m[2])}};
+  // Who the child is (a pseudonymous id, as a therapy session log would have it): analysis looks
+  // up the child's calibration (face model, gaze constants) under this name. Every seed shows the
+  // same rendered child; the planar face is another subject without a calibration.
+  if (options.face_model == DemoOptions::FaceModel::kMesh)
+    manifest.metadata["subject"] = kDemoSubject;
   const int channels = static_cast<int>(g.mic_x_m.size());
   for (const auto& p : plans) {
     sources::StreamEntry e;

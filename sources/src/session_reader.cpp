@@ -14,11 +14,14 @@
 #include <cerrno>
 #include <charconv>
 #include <condition_variable>
+#include <csetjmp>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <exception>
 #include <fcntl.h>
 #include <fstream>
+#include <jpeglib.h>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -40,6 +43,61 @@ constexpr int kMaxDecodeThreads = 16;
 constexpr int64_t kMaxFirstStampSpreadNs = 10'000'000'000LL;
 
 std::string errno_text(int err) { return std::strerror(err); }
+
+// JPEG decoding straight to OpenCV's layout with libjpeg(-turbo): colour frames are decoded into
+// BGR (JCS_EXT_BGR) and grey frames into one channel, directly into the cv::Mat rows. The pixels
+// are identical to cv::imdecode(IMREAD_UNCHANGED), which with OpenCV 4.6 decodes to RGB through
+// the same libjpeg and then swaps the channels in a scalar loop; that swap cost more than the
+// decoding itself (1280x960: 12.7 ms -> 7.6 ms per frame). Returns false (`out` unspecified) for
+// anything else (not YCbCr or grey, a libjpeg error): the caller then uses cv::imdecode, so
+// unusual or broken frames behave exactly as before.
+struct JpegErrorManager {
+  jpeg_error_mgr pub;
+  std::jmp_buf jump;
+};
+
+[[noreturn]] void jpeg_error_exit(j_common_ptr cinfo) {
+  std::longjmp(reinterpret_cast<JpegErrorManager*>(cinfo->err)->jump, 1);
+}
+
+// Only trivially destructible locals here: a libjpeg error long-jumps back into this frame.
+bool decode_jpeg_direct(const std::vector<uchar>& data, cv::Mat* out) {
+#ifndef JCS_EXTENSIONS  // plain libjpeg (not libjpeg-turbo) has no BGR output: cv::imdecode
+  (void)data;
+  (void)out;
+  return false;
+#else
+  if (data.size() < 4 || data[0] != 0xFF || data[1] != 0xD8) return false;
+  jpeg_decompress_struct cinfo;
+  JpegErrorManager err;
+  cinfo.err = jpeg_std_error(&err.pub);
+  err.pub.error_exit = jpeg_error_exit;
+  if (setjmp(err.jump) != 0) {
+    jpeg_destroy_decompress(&cinfo);
+    return false;
+  }
+  jpeg_create_decompress(&cinfo);
+  jpeg_mem_src(&cinfo, data.data(), static_cast<unsigned long>(data.size()));
+  if (jpeg_read_header(&cinfo, TRUE) != JPEG_HEADER_OK ||
+      !((cinfo.num_components == 3 && cinfo.jpeg_color_space == JCS_YCbCr) ||
+        (cinfo.num_components == 1 && cinfo.jpeg_color_space == JCS_GRAYSCALE))) {
+    jpeg_destroy_decompress(&cinfo);
+    return false;
+  }
+  const bool colour = cinfo.num_components == 3;
+  cinfo.out_color_space = colour ? JCS_EXT_BGR : JCS_GRAYSCALE;
+  jpeg_start_decompress(&cinfo);
+  out->create(static_cast<int>(cinfo.output_height), static_cast<int>(cinfo.output_width),
+              colour ? CV_8UC3 : CV_8UC1);
+  while (cinfo.output_scanline < cinfo.output_height) {
+    JSAMPROW row = out->ptr(static_cast<int>(cinfo.output_scanline));
+    jpeg_read_scanlines(&cinfo, &row, 1);
+  }
+  jpeg_finish_decompress(&cinfo);
+  jpeg_destroy_decompress(&cinfo);
+  return true;
+#endif
+}
 
 struct Context {
   std::filesystem::path dir;
@@ -310,10 +368,12 @@ class IndexedReader : public StreamReader {
     }
     if (entry_.encoding == "png16") return decode_png16(k, e, stamp, buffer);
     cv::Mat image;
-    try {
-      image = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception&) {
-      image.release();
+    if (!decode_jpeg_direct(buffer, &image)) {
+      try {
+        image = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+      } catch (const cv::Exception&) {
+        image.release();
+      }
     }
     if (image.empty())
       return make_error(ErrorCode::kCorruptData,

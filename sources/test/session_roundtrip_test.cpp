@@ -5,8 +5,10 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <cstdio>
 #include <map>
 #include <signal.h>
 #include <sys/wait.h>
@@ -267,6 +269,61 @@ TEST(SessionRoundTrip, GreyImagesAndAudioStartStamp) {
   EXPECT_NEAR(cv::mean(c->image)[0], 100.0, 1.0);
   EXPECT_EQ(rb.by_stream.at("mic")[0]->stamp.ns(), t0);
   EXPECT_EQ(rb.by_stream.at("mic")[1]->stamp.ns(), t0 + kFramePeriodNs);
+}
+
+TEST(SessionRoundTrip, MjpegFramesDecodeExactlyAsImdecode) {
+  // The reader decodes mjpeg with libjpeg-turbo straight into BGR / grey; the pixels must be those
+  // of cv::imdecode(IMREAD_UNCHANGED) on the same bytes (channel order, chroma upsampling).
+  TempDir tmp;
+  const auto dir = tmp.path() / "s";
+  SessionManifest m = make_manifest();
+  StreamEntry grey = m.streams[0];
+  grey.id = "grey";
+  m.streams = {m.streams[0], grey};
+  {
+    auto w = SessionWriter::create(dir, m);
+    ASSERT_TRUE(w) << w.error().message;
+    cv::RNG rng(5);
+    for (int k = 0; k < 4; ++k) {
+      cv::Mat colour(kHeight, kWidth, CV_8UC3), g(kHeight, kWidth, CV_8UC1);
+      rng.fill(colour, cv::RNG::UNIFORM, 0, 256);  // noise: every chroma sample differs
+      rng.fill(g, cv::RNG::UNIFORM, 0, 256);
+      colour(cv::Rect(0, 0, kWidth / 2, kHeight / 2)).setTo(cv::Scalar(255, 0, 0));  // pure blue
+      const Timestamp t = Timestamp::from_ns(k * kFramePeriodNs);
+      ASSERT_TRUE((*w)->write(*make_frame("cam", t, k, ColorImage{colour})));
+      ASSERT_TRUE((*w)->write(*make_frame("grey", t, k, ColorImage{g})));
+    }
+    ASSERT_TRUE((*w)->close());
+  }
+  auto reader = SessionReader::open(dir);
+  ASSERT_TRUE(reader) << reader.error().message;
+  const ReadBack rb = read_all(**reader);
+  for (const std::string id : {"cam", "grey"}) {
+    const std::string data = read_file(dir / (id + ".mjpg"));
+    std::istringstream idx(read_file(dir / (id + ".idx")));
+    std::string line;
+    std::getline(idx, line);  // header
+    size_t k = 0;
+    while (std::getline(idx, line)) {
+      unsigned long long seq = 0, stamp = 0, offset = 0, size = 0;
+      ASSERT_EQ(std::sscanf(line.c_str(), "%llu,%llu,%llu,%llu", &seq, &stamp, &offset, &size), 4);
+      const std::vector<uchar> bytes(data.begin() + static_cast<std::ptrdiff_t>(offset),
+                                     data.begin() + static_cast<std::ptrdiff_t>(offset + size));
+      const cv::Mat expected = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+      ASSERT_LT(k, rb.by_stream.at(id).size());
+      const cv::Mat& got = rb.by_stream.at(id)[k]->as<ColorImage>()->image;
+      ASSERT_EQ(got.type(), expected.type()) << id << " frame " << k;
+      ASSERT_EQ(got.size(), expected.size()) << id << " frame " << k;
+      EXPECT_EQ(cv::norm(got, expected, cv::NORM_INF), 0.0) << id << " frame " << k;
+      ++k;
+    }
+    EXPECT_EQ(k, 4u) << id;
+  }
+  // Blue stays blue: BGR order, as OpenCV.
+  const cv::Mat& first = rb.by_stream.at("cam")[0]->as<ColorImage>()->image;
+  const cv::Vec3b corner = first.at<cv::Vec3b>(4, 4);
+  EXPECT_GT(corner[0], 200);
+  EXPECT_LT(corner[2], 60);
 }
 
 // "video" (read-only): an OpenCV-readable container + a stamps file.

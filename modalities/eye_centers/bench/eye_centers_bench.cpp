@@ -65,9 +65,25 @@ const Inputs& inputs() {
   return in;
 }
 
+// The improved operator's previous default (limbus stage only, exhaustive candidate search, iris
+// radius prior from 0.12 x width, no closed-eye test), for before/after timing in one run.
+EyeCenterLocatorOptions previous_improved() {
+  EyeCenterLocatorOptions o;
+  o.region.min_iris_radius = 0.12;
+  o.improved.pupil.enabled = false;
+  o.improved.coarse_step = 1;
+  o.improved.min_step_of_range = 0;
+  return o;
+}
+
+constexpr int kPrevious = 100;  // BM_LocateEye argument: previous_improved()
+
 void BM_LocateEye(benchmark::State& state) {
   EyeCenterLocatorOptions o;
-  o.method = static_cast<EyeCenterMethod>(state.range(0));
+  if (state.range(0) == kPrevious)
+    o = previous_improved();
+  else
+    o.method = static_cast<EyeCenterMethod>(state.range(0));
   auto loc = EyeCenterLocator::create(o);
   if (!loc) return state.SkipWithError(loc.error().message.c_str());
   const auto& eyes = inputs().eyes;
@@ -81,10 +97,12 @@ void BM_LocateEye(benchmark::State& state) {
   }
   state.counters["found"] =
       static_cast<double>(found) / static_cast<double>(std::max<size_t>(1, i));
-  state.SetLabel(std::string(to_string(o.method)));
+  state.SetLabel(state.range(0) == kPrevious ? std::string("improved (previous default)")
+                                             : std::string(to_string(o.method)));
 }
 BENCHMARK(BM_LocateEye)
     ->Arg(static_cast<int>(EyeCenterMethod::kImprovedIntegroDifferential))
+    ->Arg(kPrevious)
     ->Arg(static_cast<int>(EyeCenterMethod::kDaugman))
     ->Arg(static_cast<int>(EyeCenterMethod::kTimmBarth))
     ->Unit(benchmark::kMillisecond);
@@ -100,11 +118,21 @@ void print_accuracy() {
   o.generate->count = 200;
   o.methods = {"all"};
   auto r = run_eye_eval(o);
+  // The previous default of the improved operator on the same (already written) set.
+  EyeEvalOptions prev = o;
+  prev.generate.reset();
+  prev.methods = {"improved"};
+  prev.locator = previous_improved();
+  auto rp = r ? run_eye_eval(prev) : r;
   std::filesystem::remove_all(o.dir);
-  if (!r) {
-    std::fprintf(stderr, "accuracy: %s\n", r.error().to_string().c_str());
+  if (!r || !rp) {
+    std::fprintf(stderr, "accuracy: %s\n", (r ? rp : r).error().to_string().c_str());
     return;
   }
+  (*r)["methods"].push_back("improved (previous default)");
+  (*r)["metrics"]["improved (previous default)"] =
+      (*rp)["metrics"]["improved_integro_differential"];
+  (*r)["timing"]["improved (previous default)"] = (*rp)["timing"]["improved_integro_differential"];
   std::printf(
       "\nAccuracy, BioID protocol on %d synthetic images (seed 1), e = max eye error / "
       "inter-ocular:\n%-31s %8s %8s %8s %9s %11s\n",

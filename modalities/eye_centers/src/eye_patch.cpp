@@ -139,6 +139,27 @@ Result<EyePatch> make_eye_patch(const cv::Mat& image, std::span<const cv::Point2
   if (sd[0] < o.min_contrast) {
     p.rejection = EyeRejection::kNoContrast;
     p.grey.release();
+    return p;
+  }
+  // Spread of the grey levels where the eye can be (candidate window grown by the iris radius).
+  const cv::Rect win = cv::Rect(p.candidates.x - static_cast<int>(p.r_min),
+                                p.candidates.y - static_cast<int>(p.r_min),
+                                p.candidates.width + 2 * static_cast<int>(p.r_min),
+                                p.candidates.height + 2 * static_cast<int>(p.r_min)) &
+                       cv::Rect(0, 0, p.grey.cols, p.grey.rows);
+  std::vector<float> g;
+  g.reserve(static_cast<size_t>(win.area()));
+  for (int y = win.y; y < win.y + win.height; ++y) {
+    const float* r = p.grey.ptr<float>(y);
+    g.insert(g.end(), r + win.x, r + win.x + win.width);
+  }
+  if (!g.empty()) {
+    const auto lo = static_cast<std::ptrdiff_t>(0.01 * (g.size() - 1));
+    const auto hi = static_cast<std::ptrdiff_t>(0.99 * (g.size() - 1));
+    std::nth_element(g.begin(), g.begin() + lo, g.end());
+    const float g_lo = g[static_cast<size_t>(lo)];
+    std::nth_element(g.begin(), g.begin() + hi, g.end());
+    p.range = g[static_cast<size_t>(hi)] - g_lo;
   }
   return p;
 }

@@ -18,6 +18,7 @@ struct EyePatch {
   double r_min = 0, r_max = 0;   // iris radius prior, patch pixels
   cv::Rect candidates;           // in patch pixels
   int pad = 0;
+  double range = 0;  // grey-level spread of the candidate window: 99th - 1st percentile
   EyeRejection rejection = EyeRejection::kNone;  // != kNone: grey is empty, nothing to search
 };
 

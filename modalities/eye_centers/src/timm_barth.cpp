@@ -111,6 +111,7 @@ Result<EyeLocation> locate_timm_barth(const cv::Mat& image, std::span<const cv::
   }
   loc.found = true;
   loc.center_px = detail::to_image(p, pk.refined);
+  loc.iris_center_px = loc.center_px;
   loc.confidence = std::clamp(loc.score / o.full_confidence_objective, 0.0, 1.0);
   return loc;
 }

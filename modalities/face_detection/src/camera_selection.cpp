@@ -9,9 +9,15 @@ float selection_quality(const DetectedFace& face) {
   return face.frontalness * std::min(1.f, face.score / kConfidentFaceScore);
 }
 
-float selection_quality_from_yaw(const DetectedFace& face, double yaw_deg) {
-  const double frontal = std::clamp(1.0 - std::abs(yaw_deg) / 90.0, 0.0, 1.0);
-  return static_cast<float>(frontal) * std::min(1.f, face.score / kConfidentFaceScore);
+float frontalness_from_yaw(double yaw_deg) {
+  return static_cast<float>(std::clamp(1.0 - std::abs(yaw_deg) / 90.0, 0.0, 1.0));
+}
+
+float selection_quality_from_yaw(const DetectedFace& /*face*/, double yaw_deg) {
+  // D4.2: the smallest yaw wins. The detection score is left out: it counts cascade windows,
+  // which depend on the search (ROI searches run coarser), and only the face holding the
+  // projected head gets a yaw, so it is the tracked face, not a stray detection.
+  return frontalness_from_yaw(yaw_deg);
 }
 
 Status CameraSelectorOptions::check() const {

@@ -7,6 +7,25 @@
 namespace dreamsense::face_detection {
 namespace {
 
+// The head as seen by one camera: the projected head position and the head yaw relative to the
+// camera (degrees, 0 = facing it), from the last head pose.
+struct CameraHeadView {
+  cv::Point2d head_px;
+  double yaw_deg = 0;
+};
+
+// The face a head view applies to: the first face (best score first) whose box, grown by 10 %,
+// holds the projected head position.
+std::optional<size_t> face_of_head(const std::vector<DetectedFace>& faces, cv::Point2d head_px) {
+  for (size_t i = 0; i < faces.size(); ++i) {
+    const cv::Rect2d& b = faces[i].box_px;
+    const cv::Rect2d grown(b.x - 0.1 * b.width, b.y - 0.1 * b.height, 1.2 * b.width,
+                           1.2 * b.height);
+    if (grown.contains(head_px)) return i;
+  }
+  return std::nullopt;
+}
+
 class FaceDetectionAnalyzer : public Analyzer {
  public:
   struct Camera {
@@ -40,6 +59,10 @@ class FaceDetectionAnalyzer : public Analyzer {
     }
     if (work.empty()) return ok_status();  // no camera frame near this tick: nothing observed
 
+    // The head yaw per camera is known before the search (it comes from the last head pose), so
+    // the face it will rate in camera selection skips the frontalness proxy: selection rates that
+    // face by the yaw, and its frontalness is set from the yaw.
+    const std::map<SensorId, CameraHeadView> heads = head_views(prior, in.stamp);
     std::vector<CameraFaces> results(work.size());
     auto run = [&](size_t w) {
       Camera& cam = cameras_[work[w].first];
@@ -53,7 +76,14 @@ class FaceDetectionAnalyzer : public Analyzer {
       r.frame_stamp = f.stamp;
       r.frame_sequence = f.sequence;
       r.image_size = image.size();
-      r.faces = cam.tracker.process(image).faces;
+      KnownFrontalness known;
+      if (const auto h = heads.find(cam.id); h != heads.end())
+        known = [&v = h->second](const std::vector<DetectedFace>& faces,
+                                 size_t i) -> std::optional<float> {
+          if (face_of_head(faces, v.head_px) != i) return std::nullopt;
+          return frontalness_from_yaw(v.yaw_deg);
+        };
+      r.faces = cam.tracker.process(image, known).faces;
       cam.last = r;
       results[w] = std::move(r);
     };
@@ -77,7 +107,7 @@ class FaceDetectionAnalyzer : public Analyzer {
       detections.cameras.emplace(cameras_[work[w].first].id, std::move(results[w]));
     }
     const std::optional<SelectedCamera> selected =
-        selector_.update(detections, yaw_hints(detections, prior, in.stamp));
+        selector_.update(detections, yaw_hints(detections, heads));
     if (detections.face_count() == 0) {
       out.set_absent(keys::kFaceDetections, in.stamp);
       out.set_absent(keys::kSelectedCamera, in.stamp);
@@ -91,34 +121,65 @@ class FaceDetectionAnalyzer : public Analyzer {
     return ok_status();
   }
 
-  // Head yaw relative to each camera from the last head pose, for the face (per camera) whose
-  // box holds the projected head position.
-  std::vector<HeadYawHint> yaw_hints(const FaceDetections& detections, const BlackboardView& prior,
-                                     Timestamp now) const {
-    std::vector<HeadYawHint> hints;
-    if (options_.camera_models.empty()) return hints;
+  // Projected head position and head yaw per calibrated camera, from the last head pose (none
+  // without camera models or a recent pose, or for a camera the head projects outside of).
+  // With predict_head_yaw, each camera's yaw is extrapolated from the last two poses to `now`
+  // (the pose is one frame old; during a turn that lag alone picks the wrong camera near a tie).
+  std::map<SensorId, CameraHeadView> head_views(const BlackboardView& prior, Timestamp now) {
+    std::map<SensorId, CameraHeadView> views;
+    if (options_.camera_models.empty()) return views;
     const auto pose = prior.get(keys::kHeadPose);
-    if (!pose || !pose->present() || now - pose->stamp > options_.head_pose_max_age) return hints;
+    if (!pose || !pose->present() || now - pose->stamp > options_.head_pose_max_age) {
+      last_pose_.reset();
+      previous_pose_.reset();
+      return views;
+    }
     const HeadPose& p = *pose->value;
-    for (const auto& [id, cam] : detections.cameras) {
-      const auto model = options_.camera_models.find(id);
-      if (model == options_.camera_models.end()) continue;
-      const auto px = model->second.project(p.position_world_m);
+    if (!last_pose_ || last_pose_->stamp != p.frame_stamp) {
+      previous_pose_ = last_pose_;
+      last_pose_ = PoseSample{p.frame_stamp, p.gaze_direction_world};
+    }
+    const double step_s =
+        previous_pose_ ? (last_pose_->stamp - previous_pose_->stamp).seconds() : 0.0;
+    const double ahead_s = (now - last_pose_->stamp).seconds();
+    const bool predict = options_.predict_head_yaw && step_s > 0 &&
+                         step_s <= options_.head_pose_max_age.seconds() && ahead_s > 0;
+    auto yaw_in = [](const CameraModel& m, const cv::Vec3d& gaze) {
+      const cv::Vec3d g = m.R * gaze;
+      return std::atan2(-g[0], -g[2]) * 180.0 / CV_PI;
+    };
+    for (const auto& [id, model] : options_.camera_models) {
+      const auto px = model.project(p.position_world_m);
       if (!px) continue;
-      for (const DetectedFace& f : cam.faces) {
-        const cv::Rect2d grown(f.box_px.x - 0.1 * f.box_px.width,
-                               f.box_px.y - 0.1 * f.box_px.height, 1.2 * f.box_px.width,
-                               1.2 * f.box_px.height);
-        if (!grown.contains(*px)) continue;
-        const cv::Vec3d g = model->second.R * p.gaze_direction_world;
-        hints.push_back({id, f.box_px, std::atan2(-g[0], -g[2]) * 180.0 / CV_PI});
-        break;
+      double yaw = yaw_in(model, p.gaze_direction_world);
+      if (predict) {
+        double change = yaw - yaw_in(model, previous_pose_->gaze);
+        change = std::remainder(change, 360.0);
+        yaw += std::clamp(change * ahead_s / step_s, -options_.max_yaw_prediction_deg,
+                          options_.max_yaw_prediction_deg);
       }
+      views[id] = {*px, yaw};
+    }
+    return views;
+  }
+
+  // Head yaw relative to each camera, for the face (per camera) whose box holds the projected
+  // head position.
+  static std::vector<HeadYawHint> yaw_hints(const FaceDetections& detections,
+                                            const std::map<SensorId, CameraHeadView>& heads) {
+    std::vector<HeadYawHint> hints;
+    for (const auto& [id, cam] : detections.cameras) {
+      const auto h = heads.find(id);
+      if (h == heads.end()) continue;
+      if (const auto i = face_of_head(cam.faces, h->second.head_px))
+        hints.push_back({id, cam.faces[*i].box_px, h->second.yaw_deg});
     }
     return hints;
   }
 
   void reset() override {
+    last_pose_.reset();
+    previous_pose_.reset();
     for (Camera& c : cameras_) {
       c.tracker.reset();
       c.last.reset();
@@ -130,6 +191,11 @@ class FaceDetectionAnalyzer : public Analyzer {
   FaceDetectionAnalyzerOptions options_;
   std::vector<Camera> cameras_;
   CameraSelector selector_;
+  struct PoseSample {
+    Timestamp stamp;
+    cv::Vec3d gaze;  // head-gaze direction, world
+  };
+  std::optional<PoseSample> last_pose_, previous_pose_;  // the last two head poses seen
 };
 
 }  // namespace
@@ -146,6 +212,9 @@ Status FaceDetectionAnalyzerOptions::check() const {
       return make_error(ErrorCode::kInvalidArgument,
                         "FaceDetectionAnalyzerOptions: camera '{}' listed twice", c);
   }
+  if (!(max_yaw_prediction_deg >= 0))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "FaceDetectionAnalyzerOptions: max_yaw_prediction_deg must be >= 0");
   if (auto s = detector.check(); !s) return s;
   if (auto s = tracker.check(); !s) return s;
   return selection.check();

@@ -49,7 +49,7 @@ void FaceTracker::reset() {
   frames_since_full_ = 0;
 }
 
-TrackedFrameFaces FaceTracker::process(const cv::Mat& image) {
+TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontalness& known) {
   TrackedFrameFaces out;
   const int64_t index = frame_index_++;
   if (image.size() != last_size_) tracked_.clear();  // a new geometry: old boxes mean nothing
@@ -85,9 +85,17 @@ TrackedFrameFaces FaceTracker::process(const cv::Mat& image) {
   // Frontalness: carried over from the same face in the previous frame while young enough.
   std::vector<Track> next;
   const bool estimate = detector_.options().estimate_frontalness;
-  for (DetectedFace& f : out.faces) {
+  for (size_t i = 0; i < out.faces.size(); ++i) {
+    DetectedFace& f = out.faces[i];
     Track t{f.box_px, f.frontalness, 0};
-    if (estimate && f.view == FaceView::kFrontal) {
+    const std::optional<float> given =
+        known && f.view == FaceView::kFrontal ? known(out.faces, i) : std::nullopt;
+    if (given) {
+      // No proxy this frame; the age makes the next frame without a known value re-estimate it.
+      f.frontalness = *given;
+      t.frontalness = *given;
+      t.frontalness_age = options_.frontalness_interval;
+    } else if (estimate && f.view == FaceView::kFrontal) {
       const Track* prev = nullptr;
       for (const Track& p : tracked_)
         if (box_iou(p.box, f.box_px) > options_.merge_iou &&

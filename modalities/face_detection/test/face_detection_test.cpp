@@ -193,6 +193,43 @@ TEST(FaceTracker, SearchesAroundTheFaceAndAgreesWithFullSearch) {
   EXPECT_TRUE(tracker.process(image_of(demo().ticks[0], "camera_middle")).full_search);
 }
 
+TEST(FaceTracker, KnownFrontalnessSkipsTheProxyOnlyForThatFace) {
+  // Two trackers on the same frames: one estimates the proxy for every face, the other is given
+  // the frontalness of the best face on odd frames. Detections must be identical; the given value
+  // must be used as is; a frame without a given value gets a fresh proxy estimate.
+  FaceTrackerOptions o;
+  o.frontalness_interval = 2;
+  FaceTracker proxy(make_detector(), o), given(make_detector(), o);
+  FaceDetector reference = make_detector();
+  int skipped = 0;
+  for (size_t i = 0; i < 12; ++i) {
+    const cv::Mat& image = image_of(demo().ticks[i], "camera_middle");
+    const bool known = i % 2 == 1;
+    KnownFrontalness k = [&](const std::vector<DetectedFace>& faces, size_t index) {
+      EXPECT_LT(index, faces.size());
+      return known && index == 0 ? std::optional<float>(0.25f) : std::nullopt;
+    };
+    const TrackedFrameFaces a = proxy.process(image);
+    const TrackedFrameFaces b = given.process(image, k);
+    ASSERT_EQ(a.full_search, b.full_search) << "frame " << i;
+    ASSERT_EQ(a.faces.size(), b.faces.size()) << "frame " << i;
+    ASSERT_FALSE(b.faces.empty()) << "frame " << i;
+    for (size_t f = 0; f < a.faces.size(); ++f) {
+      EXPECT_EQ(a.faces[f].box_px, b.faces[f].box_px) << "frame " << i;
+      EXPECT_EQ(a.faces[f].score, b.faces[f].score) << "frame " << i;
+    }
+    if (known) {
+      EXPECT_EQ(b.faces[0].frontalness, 0.25f) << "frame " << i;
+      ++skipped;
+    } else {
+      // After a known value the track holds no proxy estimate: this frame estimates afresh.
+      EXPECT_EQ(b.faces[0].frontalness, reference.frontalness(image, b.faces[0].box_px))
+          << "frame " << i;
+    }
+  }
+  EXPECT_EQ(skipped, 6);
+}
+
 DetectedFace face(float score, float frontalness) {
   return DetectedFace{cv::Rect2d(100, 100, 150, 150), score, FaceView::kFrontal, frontalness};
 }
@@ -311,6 +348,112 @@ TEST(FaceDetectionAnalyzer, ParallelAndSerialGiveTheSameResult) {
     EXPECT_EQ(b1.snapshot().get(keys::kSelectedCamera)->value->camera,
               b2.snapshot().get(keys::kSelectedCamera)->value->camera);
   }
+}
+
+TEST(FaceDetectionAnalyzer, HeadYawHintReplacesTheProxyWithoutChangingDetections) {
+  // camera_middle calibrated (pinhole at the world origin), a head pose that projects into its
+  // face, turned 20 deg: that face's frontalness comes from the yaw (no proxy), every box and
+  // score is as without the pose, and the other cameras keep the proxy.
+  CameraModel m;
+  m.image_size = cv::Size(1280, 960);
+  m.K = cv::Matx33d(1000, 0, 640, 0, 1000, 480, 0, 0, 1);
+  FaceDetectionAnalyzerOptions o;
+  o.camera_models["camera_middle"] = m;
+  auto hinted = make_face_detection_analyzer(o);
+  auto plain = make_face_detection_analyzer();
+  ASSERT_TRUE(hinted && plain);
+  const double yaw = 20;
+  Blackboard b1, b2;
+  int with_hint = 0;
+  for (size_t i = 0; i < 12; ++i) {
+    const MultiFrame& mf = demo().ticks[i];
+    BlackboardWriter w2("plain");
+    ASSERT_TRUE((*plain)->process(mf, b2.snapshot(), w2));
+    b2.commit(w2, mf.stamp);
+    const auto d2 = b2.snapshot().get(keys::kFaceDetections);
+    ASSERT_TRUE(d2 && d2->present());
+    const auto& middle = d2->value->cameras.at("camera_middle").faces;
+    ASSERT_FALSE(middle.empty());
+    // Head pose of the previous tick: in the middle of the best face of camera_middle.
+    const cv::Point2d c(middle[0].box_px.x + middle[0].box_px.width / 2,
+                        middle[0].box_px.y + middle[0].box_px.height / 2);
+    HeadPose pose;
+    pose.position_world_m = cv::Vec3d((c.x - 640) / 1000, (c.y - 480) / 1000, 1.0);
+    const double r = yaw * CV_PI / 180;
+    pose.gaze_direction_world = cv::Vec3d(-std::sin(r), 0, -std::cos(r));
+    BlackboardWriter wp("head_pose");
+    wp.set(keys::kHeadPose, pose, mf.stamp - Duration::from_ms(40), 1.f);
+    b1.commit(wp, mf.stamp - Duration::from_ms(40));
+    BlackboardWriter w1("hinted");
+    ASSERT_TRUE((*hinted)->process(mf, b1.snapshot(), w1));
+    b1.commit(w1, mf.stamp);
+    const auto d1 = b1.snapshot().get(keys::kFaceDetections);
+    ASSERT_TRUE(d1 && d1->present());
+    for (const auto& [id, cam] : d2->value->cameras) {
+      const auto& faces = d1->value->cameras.at(id).faces;
+      ASSERT_EQ(faces.size(), cam.faces.size()) << id << " tick " << i;
+      for (size_t k = 0; k < faces.size(); ++k) {
+        EXPECT_EQ(faces[k].box_px, cam.faces[k].box_px) << id << " tick " << i;
+        EXPECT_EQ(faces[k].score, cam.faces[k].score) << id << " tick " << i;
+        if (id == "camera_middle" && k == 0) {
+          EXPECT_FLOAT_EQ(faces[k].frontalness, frontalness_from_yaw(yaw)) << "tick " << i;
+          ++with_hint;
+        } else {
+          EXPECT_EQ(faces[k].frontalness, cam.faces[k].frontalness) << id << " tick " << i;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(with_hint, 12);
+}
+
+TEST(FaceDetectionAnalyzer, HeadYawIsExtrapolatedToTheCurrentTick) {
+  // The head turns 3 deg per 40-ms frame; the pose on the blackboard is a frame old. With
+  // prediction the face is rated at the current tick's yaw (last + 3), without at the last one.
+  CameraModel m;
+  m.image_size = cv::Size(1280, 960);
+  m.K = cv::Matx33d(1000, 0, 640, 0, 1000, 480, 0, 0, 1);
+  for (bool predict : {true, false}) {
+    FaceDetectionAnalyzerOptions o;
+    o.camera_models["camera_middle"] = m;
+    o.predict_head_yaw = predict;
+    auto a = make_face_detection_analyzer(o);
+    ASSERT_TRUE(a);
+    Blackboard bb;
+    for (size_t i = 0; i < 6; ++i) {
+      const MultiFrame& mf = demo().ticks[i];
+      const Timestamp pose_stamp = mf.stamp - Duration::from_ms(40);
+      HeadPose pose;
+      pose.frame_stamp = pose_stamp;
+      const double last_yaw = 3.0 * static_cast<double>(i);
+      const double r = last_yaw * CV_PI / 180;
+      pose.gaze_direction_world = cv::Vec3d(-std::sin(r), 0, -std::cos(r));
+      // Where the face of camera_middle is (its detections do not depend on the pose).
+      if (i > 0) {
+        const auto prev = bb.snapshot().get(keys::kFaceDetections);
+        ASSERT_TRUE(prev && prev->present());
+        const cv::Rect2d box = prev->value->cameras.at("camera_middle").faces.at(0).box_px;
+        pose.position_world_m = cv::Vec3d((box.x + box.width / 2 - 640) / 1000,
+                                          (box.y + box.height / 2 - 480) / 1000, 1.0);
+        BlackboardWriter wp("head_pose");
+        wp.set(keys::kHeadPose, pose, pose_stamp, 1.f);
+        bb.commit(wp, pose_stamp);
+      }
+      BlackboardWriter w("face_detection");
+      ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+      bb.commit(w, mf.stamp);
+      if (i < 2) continue;  // the first poses: nothing to extrapolate from yet
+      const auto d = bb.snapshot().get(keys::kFaceDetections);
+      ASSERT_TRUE(d && d->present());
+      const float got = d->value->cameras.at("camera_middle").faces.at(0).frontalness;
+      const double expected_yaw = predict ? last_yaw + 3.0 : last_yaw;
+      EXPECT_NEAR(got, frontalness_from_yaw(expected_yaw), 1e-4)
+          << "tick " << i << (predict ? " (predicted)" : " (last pose)");
+    }
+  }
+  FaceDetectionAnalyzerOptions bad;
+  bad.max_yaw_prediction_deg = -1;
+  EXPECT_FALSE(bad.check());
 }
 
 TEST(FaceDetectionAnalyzer, MissingCameraNoFramesAndNoFaces) {

@@ -2,9 +2,9 @@
 //
 // dlib::shape_predictor::operator() rounds its output to integer pixels (dlib::point). To keep
 // sub-pixel landmarks (they matter for head pose on ~100 px faces) the model is deserialised
-// into the same members, in the same order, as dlib's own deserialize(shape_predictor&), and the
-// cascade is evaluated with dlib's public impl:: functions exactly as operator() does, without
-// the final rounding.
+// into the same members, in the same order, as dlib's own deserialize(shape_predictor&), the
+// trees are flattened into contiguous arrays (speed), and the cascade is evaluated with dlib's
+// public impl:: functions and the same arithmetic as operator(), without the final rounding.
 
 #include "dreamsense/face_landmarks/landmarker.hpp"
 
@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <dlib/image_processing/shape_predictor.h>
 #include <dlib/opencv/cv_image.h>
 #include <fstream>
@@ -19,22 +20,58 @@
 namespace dreamsense::face_landmarks {
 namespace {
 
+// One cascade level's regression trees, flattened: every tree has the same number of splits and
+// leaves (dlib trains complete trees of one depth; checked at load), so a tree's splits and its
+// leaves are found by arithmetic, without the pointer chasing of dlib's vectors of vectors.
+struct TreeLevel {
+  struct Split {
+    uint32_t idx1 = 0, idx2 = 0;  // feature pixels compared
+    float thresh = 0;
+  };
+  size_t trees = 0, splits_per_tree = 0, leaves_per_tree = 0;
+  std::vector<Split> splits;  // trees x splits_per_tree, dlib's node order
+  std::vector<float> leaves;  // trees x leaves_per_tree x shape size
+};
+
 struct ShapeModel {
   dlib::matrix<float, 0, 1> initial_shape;  // mean shape in box-normalised coordinates
-  std::vector<std::vector<dlib::impl::regression_tree>> forests;
+  std::vector<TreeLevel> levels;
   std::vector<std::vector<unsigned long>> anchor_idx;
   std::vector<std::vector<dlib::vector<float, 2>>> deltas;
   cv::Rect2d mean_extent;  // bounding box of the mean shape (box-normalised)
 
+  // dlib's shape_predictor::operator() without the rounding, on the flattened trees. The trees of
+  // one level depend only on that level's feature pixels, so all of them are walked first (the
+  // same comparisons as dlib's regression_tree::operator()) and their leaves prefetched, then the
+  // leaves are added in tree order: the same float additions in the same order as dlib's
+  // `shape += tree(...)`, i.e. identical output, but the leaf loads (~65 MB of leaves, nearly
+  // every one a cache miss) overlap instead of stalling one after the other.
   template <typename Image>
   std::vector<cv::Point2d> predict(const Image& img, const dlib::rectangle& rect) const {
     dlib::matrix<float, 0, 1> shape = initial_shape;
+    const size_t n = static_cast<size_t>(shape.size());
     std::vector<float> feature_pixel_values;
-    for (unsigned long iter = 0; iter < forests.size(); ++iter) {
+    std::vector<const float*> leaves;
+    for (size_t iter = 0; iter < levels.size(); ++iter) {
       dlib::impl::extract_feature_pixel_values(img, rect, shape, initial_shape, anchor_idx[iter],
                                                deltas[iter], feature_pixel_values);
-      unsigned long leaf_idx = 0;
-      for (const auto& tree : forests[iter]) shape += tree(feature_pixel_values, leaf_idx);
+      const TreeLevel& level = levels[iter];
+      const float* values = feature_pixel_values.data();
+      leaves.resize(level.trees);
+      for (size_t t = 0; t < level.trees; ++t) {
+        const TreeLevel::Split* split = &level.splits[t * level.splits_per_tree];
+        size_t i = 0;
+        while (i < level.splits_per_tree)
+          i = values[split[i].idx1] - values[split[i].idx2] > split[i].thresh ? 2 * i + 1
+                                                                              : 2 * i + 2;
+        const float* leaf =
+            &level.leaves[(t * level.leaves_per_tree + (i - level.splits_per_tree)) * n];
+        leaves[t] = leaf;
+        for (size_t j = 0; j < n; j += 16) __builtin_prefetch(leaf + j);
+      }
+      float* __restrict s = &shape(0);
+      for (const float* __restrict leaf : leaves)
+        for (size_t j = 0; j < n; ++j) s[j] += leaf[j];
     }
     const dlib::point_transform_affine to_img = dlib::impl::unnormalizing_tform(rect);
     std::vector<cv::Point2d> out(shape.size() / 2);
@@ -135,6 +172,7 @@ Result<std::unique_ptr<Landmarker>> make_dlib_landmarker(const DlibLandmarkerOpt
     return make_error(ErrorCode::kIoError, "{}: cannot open the dlib landmark model",
                       options.model.string());
   ShapeModel m;
+  std::vector<std::vector<dlib::impl::regression_tree>> forests;
   try {
     int version = 0;
     dlib::deserialize(version, in);
@@ -142,15 +180,46 @@ Result<std::unique_ptr<Landmarker>> make_dlib_landmarker(const DlibLandmarkerOpt
       return make_error(ErrorCode::kUnsupported, "{}: shape_predictor version {} (expected 1)",
                         options.model.string(), version);
     dlib::deserialize(m.initial_shape, in);
-    dlib::deserialize(m.forests, in);
+    dlib::deserialize(forests, in);
     dlib::deserialize(m.anchor_idx, in);
     dlib::deserialize(m.deltas, in);
   } catch (const dlib::serialization_error& e) {
     return make_error(ErrorCode::kCorruptData, "{}: not a dlib shape_predictor ({})",
                       options.model.string(), e.what());
   }
-  if (m.initial_shape.size() < 2 || m.initial_shape.size() % 2 != 0 ||
-      m.forests.size() != m.anchor_idx.size() || m.forests.size() != m.deltas.size())
+  const auto n = static_cast<size_t>(m.initial_shape.size());
+  bool consistent = n >= 2 && n % 2 == 0 && forests.size() == m.anchor_idx.size() &&
+                    forests.size() == m.deltas.size();
+  // Flatten every level (predict() relies on: complete trees of one shape per level, leaves of n
+  // floats, split indices inside the level's feature pixels).
+  for (size_t iter = 0; consistent && iter < forests.size(); ++iter) {
+    TreeLevel level;
+    level.trees = forests[iter].size();
+    if (level.trees > 0) {
+      level.splits_per_tree = forests[iter][0].splits.size();
+      level.leaves_per_tree = forests[iter][0].leaf_values.size();
+    }
+    consistent = level.leaves_per_tree == level.splits_per_tree + 1;
+    const size_t features = m.anchor_idx[iter].size();
+    level.splits.reserve(level.trees * level.splits_per_tree);
+    level.leaves.reserve(level.trees * level.leaves_per_tree * n);
+    for (const auto& tree : forests[iter]) {
+      consistent = consistent && tree.splits.size() == level.splits_per_tree &&
+                   tree.leaf_values.size() == level.leaves_per_tree;
+      for (const auto& sp : tree.splits) {
+        consistent = consistent && sp.idx1 < features && sp.idx2 < features;
+        level.splits.push_back(
+            {static_cast<uint32_t>(sp.idx1), static_cast<uint32_t>(sp.idx2), sp.thresh});
+      }
+      for (const auto& leaf : tree.leaf_values) {
+        consistent = consistent && static_cast<size_t>(leaf.size()) == n;
+        if (consistent) level.leaves.insert(level.leaves.end(), leaf.begin(), leaf.end());
+      }
+    }
+    std::vector<dlib::impl::regression_tree>().swap(forests[iter]);  // free as we go
+    m.levels.push_back(std::move(level));
+  }
+  if (!consistent)
     return make_error(ErrorCode::kCorruptData, "{}: inconsistent shape_predictor",
                       options.model.string());
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;

@@ -9,6 +9,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <dlib/image_processing/shape_predictor.h>
+#include <dlib/opencv/cv_image.h>
+#include <fstream>
 #include <iostream>
 
 #include "demo_face.hpp"
@@ -72,6 +75,96 @@ TEST(DlibLandmarker, PortraitEyesAtHandMeasuredIrises) {
     EXPECT_GT(lm.points_px[30].y, lm.right_eye_px().y + 10);
     EXPECT_GT(lm.points_px[57].y, lm.points_px[30].y + 5);
   }
+}
+
+// Reference: dlib's cascade exactly as shape_predictor::operator() runs it (`shape +=
+// tree(...)`, one tree after the other), without the final rounding, plus the box re-derivation
+// of DlibLandmarkerOptions::refit_passes. The landmarker's prefetching evaluation must match it
+// bit for bit.
+struct ReferenceCascade {
+  dlib::matrix<float, 0, 1> initial_shape;
+  std::vector<std::vector<dlib::impl::regression_tree>> forests;
+  std::vector<std::vector<unsigned long>> anchor_idx;
+  std::vector<std::vector<dlib::vector<float, 2>>> deltas;
+
+  ReferenceCascade() {
+    std::ifstream in(DlibLandmarkerOptions{}.model, std::ios::binary);
+    int version = 0;
+    dlib::deserialize(version, in);
+    dlib::deserialize(initial_shape, in);
+    dlib::deserialize(forests, in);
+    dlib::deserialize(anchor_idx, in);
+    dlib::deserialize(deltas, in);
+  }
+  template <typename Image>
+  std::vector<cv::Point2d> predict(const Image& img, const cv::Rect2d& b) const {
+    const dlib::rectangle rect(std::lround(b.x), std::lround(b.y), std::lround(b.x + b.width - 1),
+                               std::lround(b.y + b.height - 1));
+    dlib::matrix<float, 0, 1> shape = initial_shape;
+    std::vector<float> values;
+    for (unsigned long iter = 0; iter < forests.size(); ++iter) {
+      dlib::impl::extract_feature_pixel_values(img, rect, shape, initial_shape, anchor_idx[iter],
+                                               deltas[iter], values);
+      unsigned long leaf = 0;
+      for (const auto& tree : forests[iter]) shape += tree(values, leaf);
+    }
+    const dlib::point_transform_affine to_img = dlib::impl::unnormalizing_tform(rect);
+    std::vector<cv::Point2d> out(shape.size() / 2);
+    for (size_t i = 0; i < out.size(); ++i) {
+      const dlib::vector<double, 2> p = to_img(dlib::impl::location(shape, i));
+      out[i] = {p.x(), p.y()};
+    }
+    return out;
+  }
+  template <typename Image>
+  std::vector<cv::Point2d> fit(const Image& img, cv::Rect2d box) const {
+    double mx0 = 1e300, my0 = 1e300, mx1 = -1e300, my1 = -1e300;
+    for (long i = 0; i < initial_shape.size() / 2; ++i) {
+      mx0 = std::min<double>(mx0, initial_shape(2 * i)),
+      mx1 = std::max<double>(mx1, initial_shape(2 * i));
+      my0 = std::min<double>(my0, initial_shape(2 * i + 1)),
+      my1 = std::max<double>(my1, initial_shape(2 * i + 1));
+    }
+    std::vector<cv::Point2d> pts = predict(img, box);
+    double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+    for (const cv::Point2d& p : pts) {
+      x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
+      x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+    }
+    const double w = (x1 - x0) / (mx1 - mx0), h = (y1 - y0) / (my1 - my0);
+    box = cv::Rect2d(x0 - mx0 * w, y0 - my0 * h, w, h);
+    return predict(img, box);
+  }
+};
+
+TEST(DlibLandmarker, PrefetchingCascadeMatchesDlibExactly) {
+  ASSERT_EQ(DlibLandmarkerOptions{}.refit_passes, 1);  // what ReferenceCascade::fit does
+  const ReferenceCascade ref;
+  auto l = shared_landmarker();
+  const cv::Mat img = portrait();
+  ASSERT_FALSE(img.empty());
+  cv::Mat grey;
+  cv::cvtColor(img, grey, cv::COLOR_BGR2GRAY);
+  const cv::Rect2d b = kPortrait.face_region_px;
+  int compared = 0;
+  for (const cv::Rect2d& box :
+       {b, cv::Rect2d(b.x - 0.1 * b.width, b.y + 0.05 * b.height, 1.2 * b.width, 1.2 * b.height),
+        cv::Rect2d(b.x + 7.3, b.y - 4.6, 0.9 * b.width, 0.9 * b.height)}) {
+    for (bool use_grey : {false, true}) {
+      auto r = l->fit(use_grey ? grey : img, box);
+      ASSERT_TRUE(r && r->has_value());
+      const std::vector<cv::Point2d> expected =
+          use_grey ? ref.fit(dlib::cv_image<unsigned char>(grey), box)
+                   : ref.fit(dlib::cv_image<dlib::bgr_pixel>(img), box);
+      ASSERT_EQ((*r)->size(), expected.size());
+      for (size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_EQ((**r)[i].x, expected[i].x) << "point " << i << " grey " << use_grey;
+        EXPECT_EQ((**r)[i].y, expected[i].y) << "point " << i << " grey " << use_grey;
+      }
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 6);
 }
 
 TEST(DlibLandmarker, BoxConventionDoesNotMatterMuch) {

@@ -5,7 +5,8 @@ namespace {
 
 class GazeAnalyzer : public Analyzer {
  public:
-  explicit GazeAnalyzer(GazeAnalyzerOptions o) : options_(std::move(o)), mutual_(options_.mutual) {}
+  explicit GazeAnalyzer(GazeAnalyzerOptions o)
+      : options_(std::move(o)), mutual_(options_.mutual), filter_(options_.filter) {}
 
   std::string_view name() const override { return "gaze"; }
   AnalyzerContract contract() const override {
@@ -31,6 +32,7 @@ class GazeAnalyzer : public Analyzer {
       return make_error(ErrorCode::kNotFound, "gaze: no camera model for '{}'", lm->value->camera);
     auto g = estimate_gaze(*lm->value, *eyes->value, *head->value, cam->second, options_.estimator);
     if (!g) return absent(in.stamp, out);
+    smooth(*g, *head->value);
 
     double miss = 0;
     bool raw = false;
@@ -50,11 +52,26 @@ class GazeAnalyzer : public Analyzer {
     return ok_status();
   }
 
-  void reset() override { mutual_.reset(); }
+  void reset() override {
+    mutual_.reset();
+    filter_.reset();
+  }
 
  private:
+  // Smooths the fused ray's eye-in-head direction (the head pose is smoothed on its own).
+  void smooth(EyeGaze& g, const HeadPose& head) {
+    if (!g.both.valid) return;
+    const cv::Vec3d in_head =
+        filter_.apply(g.frame_stamp, head.world_from_head.t() * g.both.direction_world);
+    g.both.direction_world = head.world_from_head * in_head;
+    const EyeAngles a = angles_of_head_direction(in_head);
+    g.both.theta_deg = a.theta_deg;
+    g.both.phi_deg = a.phi_deg;
+  }
+
   Status absent(Timestamp stamp, BlackboardWriter& out) {
     mutual_.reset();
+    filter_.reset();
     out.set_absent(keys::kEyeGaze, stamp);
     out.set_absent(keys::kMutualGaze, stamp);
     return ok_status();
@@ -62,6 +79,7 @@ class GazeAnalyzer : public Analyzer {
 
   GazeAnalyzerOptions options_;
   MutualGazeTracker mutual_;
+  DirectionFilter filter_;
 };
 
 }  // namespace
@@ -76,6 +94,7 @@ Status GazeAnalyzerOptions::check() const {
                       "GazeAnalyzerOptions: reference camera '{}' has no camera model",
                       reference_camera);
   if (auto s = estimator.check(); !s) return s;
+  if (auto s = filter.check(); !s) return s;
   return mutual.check();
 }
 

@@ -3,6 +3,9 @@
 #include <opencv2/core/persistence.hpp>
 
 #include <fstream>
+#include <optional>
+#include <utility>
+#include <vector>
 
 namespace dreamsense::gaze {
 namespace {
@@ -36,11 +39,33 @@ GazeRay ray_of(const std::optional<cv::Vec2d>& offset, const EyeAngleModel& mode
   return r;
 }
 
+GazeRay eyeball_ray_of(const EyeCenter& pupil, const std::optional<cv::Vec2d>& offset,
+                       const EyeballModel& eye, const HeadPose& head, const CameraModel& camera) {
+  GazeRay r;
+  if (!pupil.found) return r;
+  // The (smoothed) world head pose seen from this camera.
+  const cv::Matx33d camera_from_head = camera.R * head.world_from_head;
+  const cv::Vec3d position_camera = camera.R * head.position_world_m + camera.t;
+  const auto d = eyeball_direction(
+      pixel_ray_head(pupil.center_px, camera, camera_from_head, position_camera), eye);
+  if (!d) return r;
+  const EyeAngles a = angles_of_head_direction(*d);
+  r.valid = true;
+  r.features = offset.value_or(cv::Vec2d(0, 0));
+  r.theta_deg = a.theta_deg;
+  r.phi_deg = a.phi_deg;
+  r.direction_world = head.world_from_head * *d;
+  r.origin_world_m = head.position_world_m + head.world_from_head * eye.centre_head_m;
+  return r;
+}
+
 }  // namespace
 
 Status GazeEstimatorOptions::check() const {
   if (auto s = right_eye.check(); !s) return s;
   if (auto s = left_eye.check(); !s) return s;
+  if (auto s = right_eyeball.check(); !s) return s;
+  if (auto s = left_eyeball.check(); !s) return s;
   if (!(half_ipd_m > 0 && half_ipd_m < 0.1))
     return make_error(ErrorCode::kInvalidArgument,
                       "GazeEstimatorOptions: half_ipd_m must be in (0, 0.1) m (got {})",
@@ -61,9 +86,15 @@ std::optional<EyeGaze> estimate_gaze(const FaceLandmarks& landmarks, const EyeCe
   EyeGaze g;
   g.camera = landmarks.camera;
   g.frame_stamp = landmarks.frame_stamp;
-  g.method = options.plane == OffsetPlane::kImage ? "d42_eq4_image" : "d42_eq4_head_plane";
-  g.right = ray_of(o.right, options.right_eye, head, -options.half_ipd_m);
-  g.left = ray_of(o.left, options.left_eye, head, options.half_ipd_m);
+  if (options.method == GazeMethod::kEyeball) {
+    g.method = "eyeball_3d";
+    g.right = eyeball_ray_of(pupils.right, o.right, options.right_eyeball, head, camera);
+    g.left = eyeball_ray_of(pupils.left, o.left, options.left_eyeball, head, camera);
+  } else {
+    g.method = options.plane == OffsetPlane::kImage ? "d42_eq4_image" : "d42_eq4_head_plane";
+    g.right = ray_of(o.right, options.right_eye, head, -options.half_ipd_m);
+    g.left = ray_of(o.left, options.left_eye, head, options.half_ipd_m);
+  }
   if (!g.right.valid && !g.left.valid) return std::nullopt;
   cv::Vec3d sum(0, 0, 0);
   cv::Vec2d features(0, 0);
@@ -91,6 +122,19 @@ void write_eye(cv::FileStorage& fs, const char* name, const EyeAngleModel& m) {
      << "gamma" << m.gamma << "epsilon" << m.epsilon << "rest_x" << m.rest_x << "rest_y" << m.rest_y
      << "}";
 }
+void write_eyeball(cv::FileStorage& fs, const char* name, const EyeballModel& m) {
+  fs << name << "{"
+     << "centre_head_m"
+     << std::vector<double>{m.centre_head_m[0], m.centre_head_m[1], m.centre_head_m[2]}
+     << "radius_m" << m.radius_m << "}";
+}
+std::optional<EyeballModel> read_eyeball(const cv::FileNode& n) {
+  if (n.empty() || n["radius_m"].empty()) return std::nullopt;
+  std::vector<double> c;
+  n["centre_head_m"] >> c;
+  if (c.size() != 3) return std::nullopt;
+  return EyeballModel{{c[0], c[1], c[2]}, static_cast<double>(n["radius_m"])};
+}
 bool read_eye(const cv::FileNode& n, EyeAngleModel& m) {
   if (n.empty() || n["gamma"].empty() || n["epsilon"].empty()) return false;
   m.gamma = static_cast<double>(n["gamma"]);
@@ -112,6 +156,10 @@ Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& 
     fs << "model_from_head" << cv::Mat(model.model_from_head);
     write_eye(fs, "right_eye", model.right_eye);
     write_eye(fs, "left_eye", model.left_eye);
+    if (model.right_eyeball && model.left_eyeball) {
+      write_eyeball(fs, "right_eyeball", *model.right_eyeball);
+      write_eyeball(fs, "left_eyeball", *model.left_eyeball);
+    }
     fs << "samples" << model.samples << "provenance" << model.provenance;
     fs.release();
   } catch (const cv::Exception& e) {
@@ -155,6 +203,20 @@ Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
         return make_error(ErrorCode::kCorruptData, "{}: model_from_head is not a rotation",
                           path.string());
     }
+    for (auto [name, eyeball] : {std::pair{"right_eyeball", &m.right_eyeball},
+                                 std::pair{"left_eyeball", &m.left_eyeball}}) {
+      if (fs[name].empty()) continue;
+      *eyeball = read_eyeball(fs[name]);
+      if (!*eyeball)
+        return make_error(ErrorCode::kCorruptData,
+                          "{}: {} needs centre_head_m [x, y, z] and radius_m", path.string(), name);
+      if (auto s = (*eyeball)->check(); !s)
+        return make_error(ErrorCode::kCorruptData, "{}: {}: {}", path.string(), name,
+                          s.error().message);
+    }
+    if (m.right_eyeball.has_value() != m.left_eyeball.has_value())
+      return make_error(ErrorCode::kCorruptData, "{}: give both right_eyeball and left_eyeball",
+                        path.string());
     m.samples = fs["samples"].empty() ? 0 : static_cast<int>(fs["samples"]);
     m.provenance = fs["provenance"].empty() ? "" : static_cast<std::string>(fs["provenance"]);
   } catch (const cv::Exception& e) {

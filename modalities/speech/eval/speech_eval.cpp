@@ -6,9 +6,12 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
 #include <regex>
+
+#include "speaker_batch.hpp"
 
 namespace dreamsense::speech {
 namespace {
@@ -281,17 +284,16 @@ std::vector<int16_t> padded(const std::vector<int16_t>& s, size_t n, double rms,
   return out;
 }
 
-// The ten digit words; "oh" is a second spelling of 0.
-constexpr const char* kDigitGrammar =
-    "#JSGF V1.0;\ngrammar digits;\npublic <digit> = zero | oh | one | two | three | four | "
-    "five | six | seven | eight | nine;\n";
+// The ten digit words as FSDD's speakers say them; with SpeechEvalOptions::fsdd_oh also "oh",
+// a second spelling of 0 (TIDIGITS' convention, not FSDD's).
+constexpr const char* kDigitWords[] = {"zero", "one", "two",   "three", "four",
+                                       "five", "six", "seven", "eight", "nine"};
 
 std::string digit_of(const std::string& word) {
-  static const std::map<std::string, std::string> m = {
-      {"zero", "0"}, {"oh", "0"},  {"one", "1"},   {"two", "2"},   {"three", "3"}, {"four", "4"},
-      {"five", "5"}, {"six", "6"}, {"seven", "7"}, {"eight", "8"}, {"nine", "9"}};
-  const auto it = m.find(word);
-  return it == m.end() ? "none" : it->second;
+  if (word == "oh") return "0";
+  for (size_t d = 0; d < std::size(kDigitWords); ++d)
+    if (word == kDigitWords[d]) return std::to_string(d);
+  return "none";
 }
 
 Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(double)>& progress) {
@@ -309,7 +311,7 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
     ro.model_rate_hz = 8000;  // its filters end at 4 kHz: FSDD is decoded at its own rate
     ro.front_end_rate_hz = 0;
     ro.front_end_upper_hz = 0;
-    if (!o.frequency_warp) ro.frequency_warp = kFsddTidigitsWarp;
+    ro.frequency_warp = o.frequency_warp.value_or(kFsddTidigitsWarp);
     if (!fs::exists(ro.model_dir / "mdef"))
       return make_error(ErrorCode::kNotFound,
                         "eval speech: TIDIGITS model not found at {} (Debian package "
@@ -331,74 +333,188 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
     return make_error(ErrorCode::kInvalidArgument,
                       "eval speech: --fsdd-model must be tidigits or en-us (got {})", o.fsdd_model);
   }
+  if (o.fsdd_speaker_adapt && !(o.fsdd_vote.temperature > 0 && o.fsdd_vote.neighbours >= 0 &&
+                                o.fsdd_vote.weight >= 0 && o.fsdd_vote.max_distance_ratio >= 1))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "eval speech: the neighbour vote needs temperature > 0, neighbours >= 0, "
+                      "weight >= 0, distance ratio >= 1");
   const double pad_s = o.pad_seconds.value_or(kFsddPadSeconds);
   const double pad_rms = kFsddPadRms;
   const size_t pad_samples = static_cast<size_t>(std::lround(pad_s * 8000));
-  auto grammar = Grammar::from_jsgf(kDigitGrammar, "<fsdd digits>");
-  if (!grammar) return tl::unexpected(grammar.error());
-  auto rec = Recognizer::create(ro, *grammar);
-  if (!rec) return tl::unexpected(rec.error());
+  std::vector<std::string> words(std::begin(kDigitWords), std::end(kDigitWords));
+  if (o.fsdd_oh) words.push_back("oh");
 
-  std::vector<std::string> labels;
-  for (int i = 0; i < 10; ++i) labels.push_back(std::to_string(i));
-  std::map<std::string, std::map<std::string, size_t>> conf;
-  std::map<std::string, std::pair<size_t, size_t>> per_speaker, per_digit;  // correct, total
-  json records = json::array();
+  // Per-utterance decoding. Without speaker adaptation: one decode under the digit grammar.
+  // With it: one closed decode per word (the word's best-path score per frame; the grammar
+  // decode would give only the winner's), the per-utterance answer being the best word.
+  ro.confidence_pass = false;
+  std::vector<std::unique_ptr<Recognizer>> recs;
+  {
+    std::vector<std::string> grammars;
+    if (o.fsdd_speaker_adapt) {
+      for (const auto& w : words)
+        grammars.push_back("#JSGF V1.0;\ngrammar w;\npublic <w> = " + w + ";\n");
+    } else {
+      std::string g = "#JSGF V1.0;\ngrammar digits;\npublic <digit> = ";
+      for (size_t i = 0; i < words.size(); ++i) g += (i ? " | " : "") + words[i];
+      grammars.push_back(g + ";\n");
+    }
+    for (const auto& text : grammars) {
+      auto grammar = Grammar::from_jsgf(text, "<fsdd digits>");
+      if (!grammar) return tl::unexpected(grammar.error());
+      auto rec = Recognizer::create(ro, *grammar);
+      if (!rec) return tl::unexpected(rec.error());
+      recs.push_back(std::move(*rec));
+    }
+  }
+  const double decode_share = o.fsdd_speaker_adapt ? 0.8 : 1.0;  // of the progress bar
+
+  const size_t n = items->size();
+  std::vector<std::string> hyp(n), words_hyp(n);
+  std::vector<std::vector<double>> digit_scores(n);  // per clip, per digit (adaptation only)
+  std::vector<double> best_score(n, 0);
   double decode_s = 0, audio_s = 0;
   std::vector<double> ms;
-  size_t correct = 0, no_result = 0;
-  for (size_t i = 0; i < items->size(); ++i) {
+  for (size_t i = 0; i < n; ++i) {
     const AudioItem& it = (*items)[i];
     auto a = read_mono_wav(it.path, 8000, "fsdd");
     if (!a) return tl::unexpected(a.error());
     if (pad_samples > 0) a->samples = padded(a->samples, pad_samples, pad_rms, i);
-    auto d = (*rec)->decode(a->samples, a->rate_hz);
-    if (!d) return tl::unexpected(d.error());
-    const std::string hyp =
-        d->grammar_hypothesis.empty() ? "none" : digit_of(d->grammar_hypothesis);
-    const bool ok = hyp == it.label;
+    double sec = 0;
+    if (o.fsdd_speaker_adapt) {
+      digit_scores[i].assign(std::size(kDigitWords), -std::numeric_limits<double>::infinity());
+      for (size_t w = 0; w < words.size(); ++w) {
+        auto d = recs[w]->decode(a->samples, a->rate_hz);
+        if (!d) return tl::unexpected(d.error());
+        sec += d->decode_seconds;
+        if (d->grammar_hypothesis.empty()) continue;  // no path through the word
+        auto& s = digit_scores[i][static_cast<size_t>(std::stoi(digit_of(words[w])))];
+        if (d->score_per_frame > s) s = d->score_per_frame;
+        if (words_hyp[i].empty() || d->score_per_frame > best_score[i]) {
+          best_score[i] = d->score_per_frame;
+          words_hyp[i] = words[w];
+        }
+      }
+    } else {
+      auto d = recs[0]->decode(a->samples, a->rate_hz);
+      if (!d) return tl::unexpected(d.error());
+      sec = d->decode_seconds;
+      words_hyp[i] = d->grammar_hypothesis;
+      best_score[i] = d->score_per_frame;
+    }
+    hyp[i] = words_hyp[i].empty() ? "none" : digit_of(words_hyp[i]);
+    decode_s += sec;
+    audio_s += static_cast<double>(a->samples.size()) / a->rate_hz;
+    ms.push_back(sec * 1000);
+    if (progress) progress(decode_share * static_cast<double>(i + 1) / n);
+  }
+
+  // Batch speaker adaptation: neighbour vote within each speaker's clips (unpadded audio).
+  std::vector<std::string> final_hyp = hyp;
+  double adapt_s = 0;
+  if (o.fsdd_speaker_adapt) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::map<std::string, std::vector<size_t>> by_speaker;
+    for (size_t i = 0; i < n; ++i) by_speaker[(*items)[i].speaker].push_back(i);
+    std::vector<DtwFeatures> feats(n);
+    for (size_t i = 0; i < n; ++i) {
+      auto a = read_mono_wav((*items)[i].path, 8000, "fsdd");
+      if (!a) return tl::unexpected(a.error());
+      feats[i] = dtw_features(a->samples, a->rate_hz);
+    }
+    size_t pairs_total = 0, pairs_done = 0;
+    for (const auto& [_, idx] : by_speaker) pairs_total += idx.size() * (idx.size() - 1) / 2;
+    for (const auto& [_, idx] : by_speaker) {
+      const size_t m = idx.size();
+      std::vector<std::vector<double>> dist(m, std::vector<double>(m, 0.0)), scores;
+      for (size_t a = 0; a < m; ++a) {
+        for (size_t b = a + 1; b < m; ++b)
+          dist[a][b] = dist[b][a] = dtw_distance(feats[idx[a]], feats[idx[b]]);
+        pairs_done += m - a - 1;
+        if (progress && pairs_total)
+          progress(decode_share + (1 - decode_share) * static_cast<double>(pairs_done) /
+                                      static_cast<double>(pairs_total));
+      }
+      for (size_t i : idx) scores.push_back(digit_scores[i]);
+      const auto votes = neighbour_vote(scores, dist, o.fsdd_vote);
+      for (size_t a = 0; a < m; ++a)
+        if (votes[a] >= 0) final_hyp[idx[a]] = std::to_string(votes[a]);
+    }
+    adapt_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  std::vector<std::string> labels;
+  for (int i = 0; i < 10; ++i) labels.push_back(std::to_string(i));
+  std::map<std::string, std::map<std::string, size_t>> conf;
+  std::map<std::string, std::pair<size_t, size_t>> per_speaker, per_speaker_utt, per_digit;
+  json records = json::array();
+  size_t correct = 0, correct_utt = 0, no_result = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const AudioItem& it = (*items)[i];
+    const bool ok = final_hyp[i] == it.label, ok_utt = hyp[i] == it.label;
     correct += ok;
-    no_result += hyp == "none";
-    ++conf[it.label][hyp];
+    correct_utt += ok_utt;
+    no_result += final_hyp[i] == "none";
+    ++conf[it.label][final_hyp[i]];
     auto& sp = per_speaker[it.speaker];
     sp.first += ok;
     ++sp.second;
+    auto& su = per_speaker_utt[it.speaker];
+    su.first += ok_utt;
+    ++su.second;
     auto& dg = per_digit[it.label];
     dg.first += ok;
     ++dg.second;
-    decode_s += d->decode_seconds;
-    audio_s += static_cast<double>(a->samples.size()) / a->rate_hz;
-    ms.push_back(d->decode_seconds * 1000);
-    if (o.list_items)
-      records.push_back({{"clip", it.path.filename().string()},
-                         {"speaker", it.speaker},
-                         {"label", it.label},
-                         {"hypothesis", hyp},
-                         {"words", d->grammar_hypothesis},
-                         {"score_per_frame", d->score_per_frame},
-                         {"confidence", d->confidence},
-                         {"correct", ok}});
-    if (progress) progress(static_cast<double>(i + 1) / items->size());
+    if (o.list_items) {
+      json r = {{"clip", it.path.filename().string()},
+                {"speaker", it.speaker},
+                {"label", it.label},
+                {"hypothesis", final_hyp[i]},
+                {"words", words_hyp[i]},
+                {"score_per_frame", best_score[i]},
+                {"correct", ok}};
+      if (o.fsdd_speaker_adapt) {
+        r["hypothesis_per_utterance"] = hyp[i];
+        json sc = json::array();
+        for (double v : digit_scores[i]) sc.push_back(std::isfinite(v) ? json(v) : json(nullptr));
+        r["digit_scores"] = sc;
+      }
+      records.push_back(std::move(r));
+    }
   }
   json j;
   j["task"] = "speech";
-  j["dataset"] = {
-      {"name", "fsdd"}, {"items", items->size()}, {"dir", fs::absolute(o.dir).string()}};
-  std::string speakers;
+  j["dataset"] = {{"name", "fsdd"}, {"items", n}, {"dir", fs::absolute(o.dir).string()}};
+  std::string speakers, vocabulary;
   for (const auto& [s, _] : per_speaker) speakers += (speakers.empty() ? "" : ",") + s;
+  for (const auto& w : words) vocabulary += (vocabulary.empty() ? "" : "|") + w;
   j["protocol"] = fmt::format(
-      "isolated digits, closed set, no training on FSDD: {}; grammar of the ten digit words "
-      "(zero|oh, one..nine); each trimmed clip padded with {} s of -70 dBFS noise at both ends; "
-      "speakers {}; take indices {}-{}",
-      model_note, pad_s, speakers, o.fsdd.first_index, std::min(o.fsdd.last_index, 49));
-  json spk = json::object();
+      "isolated digits, closed set, no training on FSDD: {}; words {}; each trimmed clip padded "
+      "with {} s of -70 dBFS noise at both ends; {}; speakers {}; take indices {}-{}",
+      model_note, vocabulary, pad_s,
+      o.fsdd_speaker_adapt
+          ? fmt::format("unsupervised batch speaker adaptation: per-word scores, then a vote "
+                        "of the <= {} nearest clips of the same speaker within {} x the nearest "
+                        "distance (MFCC DTW; temperature {}, weight {}), no labels used",
+                        o.fsdd_vote.neighbours, o.fsdd_vote.max_distance_ratio,
+                        o.fsdd_vote.temperature, o.fsdd_vote.weight)
+          : std::string("each clip decoded on its own"),
+      speakers, o.fsdd.first_index, std::min(o.fsdd.last_index, 49));
+  json spk = json::object(), spk_utt = json::object();
   for (const auto& [s, c] : per_speaker)
     spk[s] = {{"accuracy", ratio(c.first, c.second)}, {"items", c.second}};
-  j["metrics"] = {{"accuracy", ratio(correct, items->size())},
-                  {"no_result_rate", ratio(no_result, items->size())},
+  for (const auto& [s, c] : per_speaker_utt)
+    spk_utt[s] = {{"accuracy", ratio(c.first, c.second)}, {"items", c.second}};
+  j["metrics"] = {{"accuracy", ratio(correct, n)},
+                  {"no_result_rate", ratio(no_result, n)},
                   {"per_speaker", spk},
                   {"confusion", confusion_json(labels, conf)}};
+  // Each clip decoded alone (before the speaker vote): the per-utterance recogniser.
+  if (o.fsdd_speaker_adapt)
+    j["metrics"]["per_utterance"] = {{"accuracy", ratio(correct_utt, n)}, {"per_speaker", spk_utt}};
   j["timing"] = timing_json(decode_s, audio_s, ms);
+  j["timing"]["adaptation_seconds"] = adapt_s;
+  j["timing"]["rtf_with_adaptation"] = audio_s > 0 ? (decode_s + adapt_s) / audio_s : 0.0;
   j["per_class"] = per_class_json(labels, per_digit);
   if (o.list_items) j["items"] = records;
   return j;

@@ -168,6 +168,13 @@ Result<Decoding> Recognizer::decode(std::span<const int16_t> samples, int sample
   if (!main->hyp.empty()) {
     d.first_frame = main->first;
     d.last_frame = main->last;
+    if (!impl_->options.confidence_pass && !impl_->options.reject_out_of_grammar) {
+      d.confidence = 1.0;
+      d.accepted = true;
+      d.decode_seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return d;
+    }
     auto garbage = impl_->decoder->run(true, samples);
     if (!garbage) return tl::unexpected(garbage.error());
     // No garbage path survived the beam: the grammar wins by a wide margin.

@@ -17,6 +17,9 @@
 
 namespace dreamsense::runner {
 
+// data/subjects of the source tree (calibrations shipped with dreamsense, e.g. the demo child's).
+std::filesystem::path default_subjects_dir();
+
 struct AnalysisOptions {
   std::filesystem::path session_dir;
   std::filesystem::path out_dir;             // empty: run without writing outputs (benchmarks)
@@ -35,7 +38,16 @@ struct AnalysisOptions {
   //  "off".
   std::string voice_method = "gmm_ubm";
   std::filesystem::path voice_model;
-  // Gaze constants (`dreamsense train gaze`); empty: the built-in ones (modalities/gaze/README.md).
+  // The child's calibration: a folder with face_model.yaml (the 3-D landmark shape for head pose,
+  // `dreamsense train face`) and/or gaze.yaml (gaze constants, `dreamsense train gaze`).
+  // Empty subject_dir: when subject_from_session is true and the session's metadata `subject`
+  // names a folder under subjects_dir, that folder; otherwise no calibration (the generic face
+  // model and the built-in gaze constants, modalities/head_pose and gaze READMEs).
+  std::filesystem::path subject_dir;
+  bool subject_from_session = true;
+  std::filesystem::path subjects_dir = default_subjects_dir();
+  // Explicit files, overriding the subject folder's.
+  std::filesystem::path face_model;
   std::filesystem::path gaze_model;
   // Mutual gaze (F1). Its robot_head_m is replaced by the session's metadata `robot_head_m`
   // ("x y z" in metres, world) when the session has one and robot_head_from_session is true.

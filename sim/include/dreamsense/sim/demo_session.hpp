@@ -20,6 +20,10 @@
 
 namespace dreamsense::sim {
 
+// The demo child's subject id (session metadata `subject`); its calibration ships in
+// data/subjects/demo_child (tools/train_demo_subject.sh).
+inline constexpr const char* kDemoSubject = "demo_child";
+
 struct DemoOptions {
   std::filesystem::path out_dir;  // required; must not exist, be empty, or hold an old session
   uint64_t seed = 1;
@@ -37,7 +41,7 @@ struct DemoOptions {
   bool overwrite = false;  // replace an existing session folder (only if it has session.yaml)
   // The child's face: the textured 3-D mesh with moving eyes (default), or the flat photo
   // (painted eyes: the truth eye gaze is then the head gaze).
-  enum class FaceModel { kMesh, kPlanar };
+  enum class FaceModel { kMesh, kPlanar };  // kMesh: session metadata subject = kDemoSubject
   FaceModel face_model = FaceModel::kMesh;
   // Media shipped by Debian packages.
   std::filesystem::path portrait =

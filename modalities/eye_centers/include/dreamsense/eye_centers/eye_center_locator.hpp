@@ -43,10 +43,16 @@ std::string_view to_string(EyeRejection rejection);
 
 struct EyeLocation {
   bool found = false;
-  cv::Point2d center_px;  // image pixels, sub-pixel (valid when found)
-  double radius_px = 0;   // iris radius at the peak (integro-differential methods), else 0
-  double confidence = 0;  // [0, 1], see each method's options
-  double score = 0;       // the raw peak: limbus step in grey levels, or T&B's objective
+  // The eye centre, image pixels, sub-pixel (valid when found): the pupil centre when the
+  // improved operator resolved the pupil (pupil_found), else the iris (limbus) centre.
+  cv::Point2d center_px;
+  cv::Point2d iris_center_px;  // limbus centre (integro-differential methods; T&B: = center_px)
+  double radius_px = 0;        // iris radius at the peak (integro-differential methods), else 0
+  bool pupil_found = false;    // improved operator's pupil stage accepted a pupil
+  double pupil_radius_px = 0;  // valid when pupil_found
+  double pupil_score = 0;      // the pupil stage's peak step (grey levels), 0 if it did not run
+  double confidence = 0;       // [0, 1], see each method's options
+  double score = 0;            // the raw peak: limbus step in grey levels, or T&B's objective
   EyeRejection rejection = EyeRejection::kNone;
   EyeCenter to_eye_center() const { return {found, center_px, found ? confidence : 0.0}; }
 };
@@ -59,6 +65,31 @@ struct EyeLocation {
 // call as integer pixel offsets with bilinear ring weights, so a candidate costs one weighted sum
 // over the cone pixels (about pi * r_max^2 / 2 taps) plus the short 1-D filter; no trigonometry
 // and no interpolation per candidate.
+// Second stage of the improved operator: the pupil boundary inside the found limbus, by the same
+// ring-table operator (dark inside) on radii min_radius_ratio..max_radius_ratio x the limbus
+// radius, around centres within max_offset_ratio x the limbus radius of the limbus centre. The
+// pupil centre replaces the limbus centre when its step is at least min_step grey levels and at
+// least min_step_ratio x the limbus step (a pupil that is not darker than its iris, e.g. a dark
+// iris at low resolution, keeps the limbus centre).
+struct PupilOptions {
+  bool enabled = true;
+  double min_radius_ratio = 0.2, max_radius_ratio = 0.6;  // human pupil: ~0.2-0.7 x iris radius
+  double min_radius_px = 1.0;                             // patch pixels
+  double max_offset_ratio = 0.4;
+  // The stage resamples the limbus neighbourhood 1-4x finer so that the limbus radius is about
+  // this many pixels; sigma_px and the radius step then apply to that grid.
+  double target_iris_radius_px = 12;
+  double cone_half_angle_deg = 45;  // the lids cut full circles around a small pupil too
+  double sigma_px = 1.0;            // Gaussian over radius, fine-grid pixels
+  double min_step = 8;
+  double min_step_ratio = 0.25;
+  // Grey levels above this percentile of the iris disc are clipped to it (100: off): glints
+  // (corneal reflections, often on the pupil border) and the sclera stop pulling the pupil's
+  // ring means, while the pupil edge (darker than most of the iris) is kept.
+  double clip_percentile = 50;
+  Status check() const;
+};
+
 struct ImprovedIntegroDifferentialOptions {
   double radius_step_px = 0.5;  // dr, in patch pixels
   double sigma_px = 1.0;        // Gaussian over radius, in patch pixels
@@ -71,6 +102,14 @@ struct ImprovedIntegroDifferentialOptions {
   // clamp(step / full_confidence_step, 0, 1).
   double min_step = 6;
   double full_confidence_step = 60;
+  // An open eye shows its iris: found = false (kNoEdge) also when the limbus step is below
+  // min_step_of_range x the grey-level spread (95th - 5th percentile) of the eye's window. A
+  // closed eye (lid skin and lash line, landmarks that did not follow the blink) has no such step.
+  double min_step_of_range = 0.15;
+  // Candidate search, both stages: every coarse_step-th centre, then all centres around the best
+  // of them (1 = exhaustive).
+  int coarse_step = 2;
+  PupilOptions pupil;
   Status check() const;
 };
 

@@ -49,8 +49,9 @@ struct EyeRegionOptions {
   // and from vertical_slack x width above the upper lid to as far below the lower lid.
   double corner_inset = 0.12;
   double vertical_slack = 0.10;
-  // Iris radius prior (x width): the human iris is ~12 mm wide in a ~30 mm eye, radius ~0.2.
-  double min_iris_radius = 0.12;
+  // Iris radius prior (x width): the human iris is ~12 mm wide in a ~28-30 mm eye (corner to
+  // corner), radius ~0.2. Below ~0.16 the limbus search can lock onto the pupil edge.
+  double min_iris_radius = 0.16;
   double max_iris_radius = 0.32;
   Status check() const;
 };

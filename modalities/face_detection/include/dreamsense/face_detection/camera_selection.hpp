@@ -26,8 +26,11 @@ struct HeadYawHint {
   double yaw_deg = 0;
 };
 
-// Quality of a face from its head yaw instead of the frontalness proxy:
-// (1 - |yaw| / 90) x min(1, score / kConfidentFaceScore), in [0, 1].
+// Frontalness from a head yaw relative to the camera: clamp(1 - |yaw| / 90, 0, 1).
+float frontalness_from_yaw(double yaw_deg);
+
+// Quality of a face from its head yaw instead of the frontalness proxy: frontalness_from_yaw(yaw)
+// in [0, 1] (the detection score does not enter: see camera_selection.cpp).
 float selection_quality_from_yaw(const DetectedFace& face, double yaw_deg);
 
 struct CameraSelectorOptions {

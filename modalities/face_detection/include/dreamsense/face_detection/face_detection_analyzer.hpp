@@ -32,9 +32,15 @@ struct FaceDetectionAnalyzerOptions {
   CameraSelectorOptions selection;
   // Calibrated cameras: camera selection then rates faces by the head yaw relative to each camera
   // (D4.2), from the last head pose (keys::kHeadPose of an earlier tick, at most
-  // head_pose_max_age old); without models or a recent pose, by the frontalness proxy.
+  // head_pose_max_age old); without models or a recent pose, by the frontalness proxy. A face
+  // rated by the yaw skips the proxy (the costly part of tracking), and its DetectedFace::
+  // frontalness is frontalness_from_yaw(yaw) instead.
   std::map<SensorId, CameraModel> camera_models;
   Duration head_pose_max_age = Duration::from_ms(200);
+  // Extrapolate each camera's head yaw from the last two poses to the current tick (linear, at
+  // most max_yaw_prediction_deg): the pose is a frame old when the cameras are rated.
+  bool predict_head_yaw = true;
+  double max_yaw_prediction_deg = 10;
   bool parallel = true;  // search the cameras with cv::parallel_for_
   Status check() const;
 };

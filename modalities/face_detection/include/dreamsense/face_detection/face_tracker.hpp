@@ -5,6 +5,10 @@
 
 #include "dreamsense/face_detection/face_detector.hpp"
 
+#include <functional>
+#include <optional>
+#include <vector>
+
 namespace dreamsense::face_detection {
 
 struct FaceTrackerOptions {
@@ -36,12 +40,21 @@ struct TrackedFrameFaces {
   bool full_search = false;         // the full frame was searched for this frame
 };
 
+// Frontalness known without the proxy, e.g. from a head pose: called for each frontal-cascade
+// face with the frame's final faces (best score first) and that face's index; returns the
+// frontalness to give that face, or nullopt to use the proxy. A face with a known value skips the
+// proxy (the costly part of a tracked frame); its track is marked so that the proxy is re-estimated
+// in the first later frame where the value is not known.
+using KnownFrontalness =
+    std::function<std::optional<float>(const std::vector<DetectedFace>& faces, size_t index)>;
+
 // One camera's face detection with ROI tracking. Not thread-safe; one per camera.
 class FaceTracker {
  public:
   FaceTracker(FaceDetector detector, FaceTrackerOptions options);
-  // Detects faces in the next frame of this camera.
-  TrackedFrameFaces process(const cv::Mat& image);
+  // Detects faces in the next frame of this camera. With `known`, faces it answers for get its
+  // value instead of the frontalness proxy (also when the detector's estimate_frontalness is off).
+  TrackedFrameFaces process(const cv::Mat& image, const KnownFrontalness& known = {});
   // Forget tracked faces (the next frame gets a full search).
   void reset();
   const FaceTrackerOptions& options() const { return options_; }

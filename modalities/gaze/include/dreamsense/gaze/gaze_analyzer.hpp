@@ -10,6 +10,7 @@
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/gaze/gaze_estimator.hpp"
+#include "dreamsense/gaze/gaze_filter.hpp"
 #include "dreamsense/gaze/mutual_gaze.hpp"
 
 #include <map>
@@ -20,6 +21,9 @@ namespace dreamsense::gaze {
 struct GazeAnalyzerOptions {
   std::map<SensorId, CameraModel> cameras;  // intrinsics + extrinsics per colour stream
   GazeEstimatorOptions estimator;
+  // Smoothing of the fused (both-eyes) ray, which getEyeGaze and mutual gaze use; the per-eye
+  // rays stay unfiltered.
+  GazeFilterOptions filter;
   MutualGazeOptions mutual;
   // Camera-plane mode: the camera whose plane holds the rectangle; empty = the selected camera
   // of each frame (DREAM).

@@ -6,6 +6,7 @@
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/perception.hpp"
 #include "dreamsense/gaze/eye_angles.hpp"
+#include "dreamsense/gaze/eyeball_model.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -13,7 +14,13 @@
 
 namespace dreamsense::gaze {
 
+enum class GazeMethod {
+  kEq4,     // D4.2 eq. (4) on the pupil offset from the eye-corner midpoint (eye_angles.hpp)
+  kEyeball  // the pupil ray on a 3-D eyeball rigid with the head (eyeball_model.hpp)
+};
+
 struct GazeEstimatorOptions {
+  GazeMethod method = GazeMethod::kEq4;
   OffsetPlane plane = OffsetPlane::kHeadPlane;
   // Fitted on demo seeds that are not evaluated (README.md: `dreamsense train gaze`).
   EyeAngleModel right_eye;
@@ -21,6 +28,9 @@ struct GazeEstimatorOptions {
   // Half the distance between the eyeball centres (a child's interpupillary distance is about
   // 50-55 mm, an adult's 63 mm); the per-eye ray origins are at +-this along head x.
   double half_ipd_m = 0.029;
+  // kEyeball: the subject's eyeballs (fitted by `dreamsense train gaze`; no useful default).
+  EyeballModel right_eyeball{{-0.029, 0, 0.012}, 0.012};
+  EyeballModel left_eyeball{{0.029, 0, 0.012}, 0.012};
   Status check() const;
 };
 
@@ -39,9 +49,12 @@ EyeOffsets eye_offsets(const FaceLandmarks& landmarks, const EyeCenters& pupils,
 
 // Gaze model file (YAML, written by `dreamsense train gaze`): format "dreamsense-gaze-model",
 // version 1, the plane the offsets were measured in, the head-model rotation offset of the
-// subject, one EyeAngleModel per eye, and a free-text provenance (what it was fitted on).
+// subject, one EyeAngleModel per eye, optionally one EyeballModel per eye (right_eyeball,
+// left_eyeball: centre_head_m [x, y, z], radius_m), and a free-text provenance.
 struct GazeModelFile {
   OffsetPlane plane = OffsetPlane::kHeadPlane;
+  // When both are present the file selects GazeMethod::kEyeball, else kEq4.
+  std::optional<EyeballModel> right_eyeball, left_eyeball;
   // Subject calibration of the head pose (HeadPoseAnalyzerOptions::model_from_head).
   cv::Matx33d model_from_head = cv::Matx33d::eye();
   EyeAngleModel right_eye, left_eye;
