@@ -51,7 +51,9 @@ struct DetectedFace {
   cv::Rect2d box_px;  // full-resolution pixels of that camera's image (x, y, width, height)
   float score = 0.f;  // detection score in [0, 1] (higher = more certain it is a face)
   FaceView view = FaceView::kFrontal;
-  float frontalness = 0.f;  // [0, 1], 1 = facing the camera (a proxy, not a head pose)
+  // [0, 1], 1 = facing the camera: the detector's proxy, or 1 - |yaw| / 90 from the last head
+  // pose when one was available (face_detection README).
+  float frontalness = 0.f;
 };
 
 // What the face detector saw in one camera frame. An empty `faces` means "looked, found nothing".
