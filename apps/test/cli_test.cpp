@@ -144,15 +144,23 @@ TEST_F(Cli, EvalSessionMeasuresTheBodyAgainstTruth) {
   ASSERT_TRUE(j["metrics"]["body_joint_median_error_m"].is_number());
   EXPECT_LT(j["metrics"]["body_joint_median_error_m"].get<double>(), 0.02);
   EXPECT_GT(j["metrics"]["body_joint_median_error_m"].get<double>(), 0.0);
-  // Faces are detected in the three cameras; head pose, gaze and eye centres are measured.
+  // Faces are detected in the three cameras (4 s: the first frames of each camera are searched
+  // before a track exists, so recall is a little below the 20-s sessions').
   ASSERT_TRUE(j["metrics"]["face_recall"].is_number());
   EXPECT_GE(j["metrics"]["face_recall"].get<double>(), 0.95);
   EXPECT_LE(j["metrics"]["face_false_positive_rate"].get<double>(), 0.02);
-  ASSERT_TRUE(j["metrics"]["head_pose_median_deg"].is_number());
-  EXPECT_LT(j["metrics"]["head_pose_median_deg"].get<double>(), 45.0);  // uncalibrated
-  ASSERT_TRUE(j["metrics"]["eye_center_median_px"].is_number());
-  EXPECT_LT(j["metrics"]["eye_center_median_px"].get<double>(), 5.0);
-  ASSERT_TRUE(j["metrics"]["mutual_gaze_f1"].is_number());
+  // The demo names its child, so the shipped calibration (data/subjects/demo_child, fitted on
+  // seeds 101-104) is used: issue 4's targets hold on this seed too. A failure here after a
+  // change to the demo face or the face pipeline means: re-run tools/train_demo_subject.sh.
+  const json& m = j["metrics"];
+  for (const char* k : {"head_pose_median_deg", "gaze_median_deg", "eye_center_median_px",
+                        "camera_selection_accuracy", "mutual_gaze_f1"})
+    ASSERT_TRUE(m[k].is_number()) << k;
+  EXPECT_LE(m["head_pose_median_deg"].get<double>(), 3.0);
+  EXPECT_LE(m["gaze_median_deg"].get<double>(), 5.0);
+  EXPECT_LE(m["eye_center_median_px"].get<double>(), 1.5);
+  EXPECT_GE(m["camera_selection_accuracy"].get<double>(), 0.95);
+  EXPECT_GE(m["mutual_gaze_f1"].get<double>(), 0.90);
   // Metrics of analysers that do not exist yet stay null with a reason, not zero.
   EXPECT_TRUE(j["metrics"]["action_accuracy"].is_null());
   EXPECT_TRUE(j["not_evaluated"].contains("action_accuracy"));
