@@ -139,10 +139,12 @@ class FaceDetectionAnalyzer : public Analyzer {
       previous_pose_ = last_pose_;
       last_pose_ = PoseSample{p.frame_stamp, p.gaze_direction_world};
     }
-    const double step_s =
-        previous_pose_ ? (last_pose_->stamp - previous_pose_->stamp).seconds() : 0.0;
-    const double ahead_s = (now - last_pose_->stamp).seconds();
-    const bool predict = options_.predict_head_yaw && step_s > 0 &&
+    // Poses without a frame stamp (unset) are not extrapolated.
+    const bool stamped =
+        last_pose_->stamp.is_set() && previous_pose_ && previous_pose_->stamp.is_set();
+    const double step_s = stamped ? (last_pose_->stamp - previous_pose_->stamp).seconds() : 0.0;
+    const double ahead_s = stamped ? (now - last_pose_->stamp).seconds() : 0.0;
+    const bool predict = options_.predict_head_yaw && stamped && step_s > 0 &&
                          step_s <= options_.head_pose_max_age.seconds() && ahead_s > 0;
     auto yaw_in = [](const CameraModel& m, const cv::Vec3d& gaze) {
       const cv::Vec3d g = m.R * gaze;

@@ -18,6 +18,7 @@ struct Cluster {
 // Groups raw cascade windows as cv::groupRectangles does (similarity eps 0.2, clusters of at least
 // `min_neighbors` windows, small clusters inside a stronger one dropped), but keeps the counts.
 std::vector<Cluster> group_windows(const std::vector<cv::Rect>& windows, int min_neighbors) {
+  if (windows.empty()) return {};  // cv::partition indexes element 0 of its input
   std::vector<int> labels;
   const int n = cv::partition(windows, labels, [](const cv::Rect& a, const cv::Rect& b) {
     const double d = 0.2 * 0.5 * (std::min(a.width, b.width) + std::min(a.height, b.height));
