@@ -28,7 +28,10 @@ struct FaceDetectorOptions {
   // Images wider than this are shrunk by an integer factor k = ceil(width / detection_width)
   // (block average) before detection: 1280x960 -> 320x240 with the default.
   int detection_width = 320;
-  double scale_factor = 1.1;  // cascade pyramid step
+  // Cascade pyramid step. 1.05 rather than OpenCV's usual 1.1: turned faces (35-45 deg of yaw)
+  // collect too few windows at the coarser step (demo seed 77: recall 0.966 -> 0.981, no false
+  // positives; pipeline 44 -> 34 fps).
+  double scale_factor = 1.05;
   // A face is a cluster of at least this many raw cascade windows (OpenCV's minNeighbors + 1).
   int min_neighbors = 3;
   // Face sizes searched, in full-resolution pixels; max_face_px 0 = up to the image height.
