@@ -21,6 +21,11 @@ cv::Vec3d CameraModel::pixel_ray(const cv::Point2d& px) const {
   return ray / cv::norm(ray);
 }
 
+double CameraModel::yaw_towards_deg(const cv::Vec3d& direction_world) const {
+  const cv::Vec3d d = R * direction_world;
+  return std::atan2(-d[0], -d[2]) * 180.0 / CV_PI;
+}
+
 Status CameraModel::check() const {
   std::string bad;
   if (image_size.width <= 0 || image_size.height <= 0) bad += " image size must be positive;";

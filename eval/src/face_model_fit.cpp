@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <map>
-#include <memory>
 
 #include "records.hpp"
 
@@ -40,13 +39,14 @@ Result<FaceModelFitResult> fit_subject_face_model(
   if (!landmarker) return tl::unexpected(landmarker.error());
 
   FaceModelFitResult result;
-  // Cameras live in a stable container: views point at them.
-  std::vector<std::unique_ptr<CameraModel>> cameras;
   std::vector<head_pose::LandmarkView> views;
+  // Every session is checked before the slow part. Views point at the cameras of `planned`,
+  // which is not resized after this loop (map nodes keep their addresses).
   struct Planned {
     std::filesystem::path dir;
     sources::SessionManifest manifest;
-    std::vector<std::string> streams;
+    std::map<SensorId, CameraModel> cameras;  // calibrated colour streams used
+    std::vector<SensorId> streams;            // their ids
   };
   std::vector<Planned> planned;
   for (const auto& dir : sessions) {
@@ -56,13 +56,15 @@ Result<FaceModelFitResult> fit_subject_face_model(
       return make_error(ErrorCode::kNotFound,
                         "{}: the session has no truth head poses to fit a face model on",
                         dir.string());
-    Planned p{dir, *manifest, {}};
-    for (const auto& s : manifest->streams) {
-      if (s.kind != SensorKind::kColor || s.calibration.empty()) continue;
+    auto calibrated = sources::read_color_calibrations(dir, *manifest);
+    if (!calibrated) return tl::unexpected(calibrated.error());
+    Planned p{dir, *manifest, {}, {}};
+    for (auto& [id, camera] : *calibrated) {
       if (!options.cameras.empty() &&
-          std::find(options.cameras.begin(), options.cameras.end(), s.id) == options.cameras.end())
+          std::find(options.cameras.begin(), options.cameras.end(), id) == options.cameras.end())
         continue;
-      p.streams.push_back(s.id);
+      p.streams.push_back(id);
+      p.cameras.emplace(id, std::move(camera));
     }
     if (p.streams.empty())
       return make_error(ErrorCode::kNotFound, "{}: no calibrated camera among the colour streams",
@@ -77,13 +79,6 @@ Result<FaceModelFitResult> fit_subject_face_model(
     for (const auto& t : *truth)
       if (t.value("type", "") == "face" && t.contains("head_position_m"))
         poses[t.value("stamp_ns", int64_t{0})] = {ypr_rotation(t), vec3(t["head_position_m"])};
-    std::map<std::string, const CameraModel*> cams;
-    for (const std::string& id : p.streams) {
-      auto m = read_camera_model(p.dir / p.manifest.find(id)->calibration);
-      if (!m) return tl::unexpected(m.error());
-      cameras.push_back(std::make_unique<CameraModel>(*m));
-      cams[id] = cameras.back().get();
-    }
     sources::SessionReaderOptions ro;
     ro.only = p.streams;
     auto reader = sources::SessionReader::open(p.dir, ro);
@@ -110,8 +105,8 @@ Result<FaceModelFitResult> fit_subject_face_model(
       auto pts = (*landmarker)->fit(img->image, faces.front().box_px);
       if (!pts) return tl::unexpected(pts.error());
       if (!*pts) continue;
-      views.push_back({cams.at(f.sensor), pose->second.world_from_head, pose->second.position_m,
-                       std::move(**pts)});
+      views.push_back({&p.cameras.at(f.sensor), pose->second.world_from_head,
+                       pose->second.position_m, std::move(**pts)});
     }
     provenance += fmt::format("{}{} ({} views)", provenance.empty() ? "" : ", ", p.manifest.name,
                               static_cast<int>(views.size()) - views_before);

@@ -52,13 +52,8 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
           truth_eye_dirs[stamp] = {vec3(t["eye_gaze_dirs"]["right"]),
                                    vec3(t["eye_gaze_dirs"]["left"])};
       }
-    std::map<std::string, CameraModel> cameras;
-    for (const auto& st : manifest->streams) {
-      if (st.kind != SensorKind::kColor || st.calibration.empty()) continue;
-      auto cam = read_camera_model(in.session_dir / st.calibration);
-      if (!cam) return tl::unexpected(cam.error());
-      cameras[st.id] = *cam;
-    }
+    auto cameras = sources::read_color_calibrations(in.session_dir, *manifest);
+    if (!cameras) return tl::unexpected(cameras.error());
 
     const auto path = in.analysis_dir / "primitives.jsonl";
     auto records = read_jsonl(path);
@@ -80,7 +75,7 @@ Result<gaze::GazeModelFile> fit_gaze_model(const std::vector<GazeFitInput>& inpu
       ++offset_count;
     }
     runs.push_back({std::move(head), std::move(eye), std::move(pupils), std::move(truth_gaze),
-                    std::move(truth_eye_dirs), std::move(cameras)});
+                    std::move(truth_eye_dirs), std::move(*cameras)});
     names.push_back(manifest->name);
   }
   if (offset_count == 0)

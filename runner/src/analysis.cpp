@@ -271,16 +271,15 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
 
   // Face detection on the colour cameras that watch the child (ids "camera*", DREAM's three
   // 1280x960 cameras); their calibrations give the faces' 3-D positions.
+  auto calibrated = sources::read_color_calibrations((*full)->dir(), manifest);
+  if (!calibrated) return tl::unexpected(calibrated.error());
   std::map<SensorId, CameraModel> face_cameras;
   for (const auto& s : manifest.streams) {
     if (s.kind != SensorKind::kColor || s.id.rfind("camera", 0) != 0) continue;
-    if (s.calibration.empty()) {
+    if (const auto c = calibrated->find(s.id); c != calibrated->end())
+      face_cameras[s.id] = c->second;
+    else
       log::warn("camera '{}' has no calibration: no face positions from it", s.id);
-      continue;
-    }
-    auto m = read_camera_model((*full)->dir() / s.calibration);
-    if (!m) return tl::unexpected(m.error());
-    face_cameras[s.id] = *m;
   }
   if (!face_cameras.empty()) {
     face_detection::FaceDetectionAnalyzerOptions fo;

@@ -569,8 +569,7 @@ json face_record(const Generator& gen, int64_t stamp) {
   const auto region = face.face_region_head();
   for (size_t c = 0; c < kCameraIds.size(); ++c) {
     const CameraModel& cam = gen.cameras()[c];
-    const cv::Vec3d gc = cam.R * gaze;
-    const double yaw_rel = std::atan2(-gc[0], -gc[2]) * 180 / CV_PI;
+    const double yaw_rel = cam.yaw_towards_deg(gaze);
     const cv::Vec3d to_cam = cam.centre_world() - hp.position_m;
     const double facing = gaze.dot(to_cam) / cv::norm(to_cam);
     const auto pl = cam.project(left), pr = cam.project(right);

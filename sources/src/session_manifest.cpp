@@ -345,6 +345,18 @@ Status check_manifest(const SessionManifest& m) {
   return ok_status();
 }
 
+Result<std::map<SensorId, CameraModel>> read_color_calibrations(
+    const std::filesystem::path& session_dir, const SessionManifest& manifest) {
+  std::map<SensorId, CameraModel> out;
+  for (const StreamEntry& s : manifest.streams) {
+    if (s.kind != SensorKind::kColor || s.calibration.empty()) continue;
+    auto m = read_camera_model(session_dir / s.calibration);
+    if (!m) return tl::unexpected(m.error());
+    out.emplace(s.id, std::move(*m));
+  }
+  return out;
+}
+
 Result<SessionManifest> read_manifest(const std::filesystem::path& session_dir) {
   const auto path = session_dir / kManifestName;
   std::error_code ec;

@@ -97,14 +97,14 @@ int run(const std::string& session, const std::string& out_path) {
     std::fprintf(stderr, "%s\n", full.error().message.c_str());
     return 1;
   }
+  auto calibrated = ds::sources::read_color_calibrations((*full)->dir(), (*full)->manifest());
+  if (!calibrated) return std::fprintf(stderr, "%s\n", calibrated.error().message.c_str()), 1;
   std::map<ds::SensorId, ds::CameraModel> cams;
   std::vector<ds::SensorId> ids;
-  for (const auto& s : (*full)->manifest().streams) {
-    if (s.kind != ds::SensorKind::kColor || s.id.rfind("camera", 0) != 0) continue;
-    auto m = ds::read_camera_model((*full)->dir() / s.calibration);
-    if (!m) return std::fprintf(stderr, "%s\n", m.error().message.c_str()), 1;
-    cams[s.id] = *m;
-    ids.push_back(s.id);
+  for (const auto& [id, m] : *calibrated) {
+    if (id.rfind("camera", 0) != 0) continue;
+    cams[id] = m;
+    ids.push_back(id);
   }
   const double rate = (*full)->manifest().frame_rate > 0 ? (*full)->manifest().frame_rate : 25.0;
   const auto start = (*full)->info().start;

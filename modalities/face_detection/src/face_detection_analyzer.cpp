@@ -146,16 +146,12 @@ class FaceDetectionAnalyzer : public Analyzer {
     const double ahead_s = stamped ? (now - last_pose_->stamp).seconds() : 0.0;
     const bool predict = options_.predict_head_yaw && stamped && step_s > 0 &&
                          step_s <= options_.head_pose_max_age.seconds() && ahead_s > 0;
-    auto yaw_in = [](const CameraModel& m, const cv::Vec3d& gaze) {
-      const cv::Vec3d g = m.R * gaze;
-      return std::atan2(-g[0], -g[2]) * 180.0 / CV_PI;
-    };
     for (const auto& [id, model] : options_.camera_models) {
       const auto px = model.project(p.position_world_m);
       if (!px) continue;
-      double yaw = yaw_in(model, p.gaze_direction_world);
+      double yaw = model.yaw_towards_deg(p.gaze_direction_world);
       if (predict) {
-        double change = yaw - yaw_in(model, previous_pose_->gaze);
+        double change = yaw - model.yaw_towards_deg(previous_pose_->gaze);
         change = std::remainder(change, 360.0);
         yaw += std::clamp(change * ahead_s / step_s, -options_.max_yaw_prediction_deg,
                           options_.max_yaw_prediction_deg);

@@ -23,26 +23,17 @@ std::optional<cv::Vec2d> normalised_offset(cv::Point2d a, cv::Point2d b, cv::Poi
   return cv::Vec2d(d.dot(u) / length, d.dot(n) / length);
 }
 
-std::optional<cv::Vec3d> undistorted_ray(const CameraModel& camera, const cv::Point2d& px) {
-  if (cv::countNonZero(camera.distortion) == 0) return camera.pixel_ray(px);
-  std::vector<cv::Point2d> in{px}, out;
-  cv::undistortPoints(in, out, cv::Mat(camera.K), camera.distortion);
-  cv::Vec3d r(out[0].x, out[0].y, 1.0);
-  return r / cv::norm(r);
-}
-
 // Head-frame (x, y) where the pixel's ray meets the head plane z = 0.
 std::optional<cv::Point2d> on_head_plane(const CameraModel& camera, const cv::Point2d& px,
                                          const cv::Matx33d& camera_from_head,
                                          const cv::Vec3d& head_position_camera_m) {
-  const auto ray = undistorted_ray(camera, px);
-  if (!ray) return std::nullopt;
+  const cv::Vec3d ray = camera.pixel_ray(px);
   const cv::Vec3d normal = camera_from_head * cv::Vec3d(0, 0, 1);
-  const double denom = normal.dot(*ray);
+  const double denom = normal.dot(ray);
   if (std::abs(denom) < 1e-6) return std::nullopt;
   const double t = normal.dot(head_position_camera_m) / denom;
   if (!(t > 0)) return std::nullopt;
-  const cv::Vec3d head = camera_from_head.t() * (*ray * t - head_position_camera_m);
+  const cv::Vec3d head = camera_from_head.t() * (ray * t - head_position_camera_m);
   return cv::Point2d(head[0], head[1]);
 }
 

@@ -20,11 +20,8 @@ Status EyeballModel::check() const {
 HeadRay pixel_ray_head(const cv::Point2d& px, const CameraModel& camera,
                        const cv::Matx33d& camera_from_head,
                        const cv::Vec3d& head_position_camera_m) {
-  std::vector<cv::Point2d> in{px}, out;
-  cv::undistortPoints(in, out, cv::Mat(camera.K), camera.distortion);
   const cv::Matx33d head_from_camera = camera_from_head.t();
-  cv::Vec3d d = head_from_camera * cv::Vec3d(out[0].x, out[0].y, 1.0);
-  return {head_from_camera * (-head_position_camera_m), d / cv::norm(d)};
+  return {head_from_camera * (-head_position_camera_m), head_from_camera * camera.pixel_ray(px)};
 }
 
 std::optional<cv::Vec3d> eyeball_direction(const HeadRay& ray, const EyeballModel& eye) {

@@ -1,14 +1,11 @@
 #include "dreamsense/gaze/gaze_filter.hpp"
 
+#include "dreamsense/core/one_euro.hpp"
+
 #include <algorithm>
 #include <cmath>
 
 namespace dreamsense::gaze {
-namespace {
-double alpha(double cutoff_hz, double dt) {
-  return 1.0 / (1.0 + 1.0 / (2 * CV_PI * cutoff_hz * dt));
-}
-}  // namespace
 
 Status GazeFilterOptions::check() const {
   std::string bad;
@@ -30,10 +27,10 @@ cv::Vec3d DirectionFilter::apply(Timestamp stamp, const cv::Vec3d& direction) {
   }
   if (dt == 0) return state_->direction;  // the same frame again
   const double angle = std::acos(std::clamp(state_->direction.dot(d), -1.0, 1.0));
-  state_->speed_deg_s +=
-      alpha(options_.derivative_cutoff_hz, dt) * (angle * 180 / CV_PI / dt - state_->speed_deg_s);
+  state_->speed_deg_s += one_euro_alpha(options_.derivative_cutoff_hz, dt) *
+                         (angle * 180 / CV_PI / dt - state_->speed_deg_s);
   const double a =
-      alpha(options_.min_cutoff_hz + options_.beta_per_deg_s * state_->speed_deg_s, dt);
+      one_euro_alpha(options_.min_cutoff_hz + options_.beta_per_deg_s * state_->speed_deg_s, dt);
   // Rotate a fraction a of the way (spherical interpolation).
   if (angle > 1e-12) {
     const double s = std::sin(angle);

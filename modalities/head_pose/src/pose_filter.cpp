@@ -1,5 +1,6 @@
 #include "dreamsense/head_pose/pose_filter.hpp"
 
+#include "dreamsense/core/one_euro.hpp"
 #include "dreamsense/head_pose/head_pose_estimator.hpp"
 
 #include <opencv2/calib3d.hpp>
@@ -7,12 +8,6 @@
 #include <cmath>
 
 namespace dreamsense::head_pose {
-namespace {
-double alpha(double cutoff_hz, double dt) {
-  const double tau = 1.0 / (2 * CV_PI * cutoff_hz);
-  return 1.0 / (1.0 + tau / dt);
-}
-}  // namespace
 
 Status PoseFilterOptions::check() const {
   std::string bad;
@@ -43,12 +38,12 @@ void PoseFilter::apply(HeadPose& pose) {
   cv::Vec3d r;
   cv::Rodrigues(cv::Matx33d(state_->R.t() * pose.world_from_head), r);
   const cv::Vec3d dp = pose.position_world_m - state_->p;
-  const double ad = alpha(options_.derivative_cutoff_hz, dt);
+  const double ad = one_euro_alpha(options_.derivative_cutoff_hz, dt);
   state_->ang_speed += ad * (cv::norm(r) * 180.0 / CV_PI / dt - state_->ang_speed);
   state_->lin_speed += ad * (cv::norm(dp) / dt - state_->lin_speed);
   const double fc = options_.min_cutoff_hz + options_.beta_per_deg_s * state_->ang_speed +
                     options_.beta_per_m_s * state_->lin_speed;
-  const double a = alpha(fc, dt);
+  const double a = one_euro_alpha(fc, dt);
   cv::Matx33d step;
   cv::Rodrigues(cv::Vec3d(a * r), step);
   state_->R = state_->R * step;

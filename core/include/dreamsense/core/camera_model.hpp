@@ -36,6 +36,9 @@ struct CameraModel {
   }
   // Unit ray in camera coordinates through an (undistorted) pixel.
   cv::Vec3d pixel_ray(const cv::Point2d& px) const;
+  // Yaw (deg) of a world direction relative to this camera: 0 when it points straight at the
+  // camera, positive when it turns to the camera's -x (the demo truth's and D4.2's head yaw).
+  double yaw_towards_deg(const cv::Vec3d& direction_world) const;
   Status check() const;
 };
 

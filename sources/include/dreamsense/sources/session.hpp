@@ -15,6 +15,7 @@
 //   calib/<id>.yaml         CameraModel files (dreamsense/core/camera_model.hpp)
 //   truth.jsonl             optional ground truth (docs/truth_format.md)
 
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
 #include "dreamsense/core/source.hpp"
 #include "dreamsense/core/status.hpp"
@@ -73,6 +74,11 @@ struct SessionManifest {
 Result<SessionManifest> read_manifest(const std::filesystem::path& session_dir);
 // Atomic: writes a temporary file and renames it.
 Status write_manifest(const std::filesystem::path& session_dir, const SessionManifest& manifest);
+// The CameraModel of every colour stream that has a calibration file (keyed by stream id); streams
+// without one are left out. A calibration file that does not read is an error naming it.
+Result<std::map<SensorId, CameraModel>> read_color_calibrations(
+    const std::filesystem::path& session_dir, const SessionManifest& manifest);
+
 // The checks read_manifest applies after parsing (version, required fields, duplicate ids,
 // encoding valid for the kind, relative file paths); errors name session.yaml and the key.
 Status check_manifest(const SessionManifest& manifest);
