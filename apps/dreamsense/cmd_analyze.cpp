@@ -2,8 +2,13 @@
 
 #include "dreamsense/primitives/catalogue.hpp"
 #include "dreamsense/runner/analysis.hpp"
+#include "dreamsense/sources/recorder.hpp"
 
+#include <atomic>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <thread>
 
 #include "commands.hpp"
 #include "progress.hpp"
@@ -13,6 +18,8 @@ namespace {
 
 struct AnalyzeFlags {
   std::string session, out;
+  std::string config, record;  // live
+  double duration_s = 0;       // live
   std::string policy = "settled";
   std::string grammar;
   bool overlay = false;
@@ -40,6 +47,47 @@ void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path
     std::fprintf(stderr, "  %-4s %-24s%s\n", info.code, info.name, line.c_str());
   }
   if (!out.empty()) std::fprintf(stderr, "outputs in %s\n", out.string().c_str());
+}
+
+// Analysis flags shared by analyze and live.
+void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
+  cmd.add_option("--grammar", flags.grammar,
+                 "Speech grammar (JSGF or SRGS .grxml); default: the session's own, if any")
+      ->check(CLI::ExistingFile);
+  cmd.add_flag("--overlay", flags.overlay,
+               "Also write overlay.mp4: the selected camera with face boxes, landmarks, head "
+               "axes, eye centres, gaze rays and mutual gaze");
+  add_subject_flags(cmd, flags.subject);
+  cmd.add_option("--mutual-gaze", flags.mutual_mode,
+                 "Mutual-gaze test: 3d (ray within 0.2 m of the robot head) or camera-plane "
+                 "(DREAM's rectangle on the selected camera's plane)")
+      ->check(CLI::IsMember({"3d", "camera-plane"}));
+  cmd.add_option("--robot-head", flags.robot_head,
+                 "Robot head position in world metres, X Y Z (default: the session's "
+                 "robot_head_m metadata)")
+      ->expected(3);
+  cmd.add_option("--voice-method", flags.voice_method,
+                 "identifyVoice: gmm_ubm (speaker models: --voice-model, or trained from the "
+                 "session's enrolment audio), direction_rule (DREAM's sound-direction rule) "
+                 "or off")
+      ->check(CLI::IsMember({"gmm_ubm", "direction_rule", "off"}));
+  cmd.add_option("--voice-model", flags.voice_model,
+                 "Voice model from `dreamsense train voices` (gmm_ubm)")
+      ->check(CLI::ExistingFile);
+}
+
+void apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& o) {
+  o.overlay = flags.overlay;
+  apply_subject_flags(flags.subject, o);
+  if (flags.mutual_mode == "camera-plane") o.mutual_gaze.mode = gaze::MutualGazeMode::kCameraPlane;
+  if (flags.robot_head.size() == 3) {
+    o.mutual_gaze.robot_head_m = {flags.robot_head[0], flags.robot_head[1], flags.robot_head[2]};
+    o.robot_head_from_session = false;
+  }
+  o.policy = flags.policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
+  o.speech_grammar = flags.grammar;
+  o.voice_method = flags.voice_method;
+  o.voice_model = flags.voice_model;
 }
 
 }  // namespace
@@ -83,52 +131,99 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--policy", flags->policy,
                   "Synchronisation: settled (deterministic replay) or live (real-time, drops)")
       ->check(CLI::IsMember({"settled", "live"}));
-  cmd->add_option("--grammar", flags->grammar,
-                  "Speech grammar (JSGF or SRGS .grxml); default: the session's own, if any")
-      ->check(CLI::ExistingFile);
-  cmd->add_flag("--overlay", flags->overlay,
-                "Also write overlay.mp4: the selected camera with face boxes, landmarks, head "
-                "axes, eye centres, gaze rays and mutual gaze");
-  add_subject_flags(*cmd, flags->subject);
-  cmd->add_option("--mutual-gaze", flags->mutual_mode,
-                  "Mutual-gaze test: 3d (ray within 0.2 m of the robot head) or camera-plane "
-                  "(DREAM's rectangle on the selected camera's plane)")
-      ->check(CLI::IsMember({"3d", "camera-plane"}));
-  cmd->add_option("--robot-head", flags->robot_head,
-                  "Robot head position in world metres, X Y Z (default: the session's "
-                  "robot_head_m metadata)")
-      ->expected(3);
-  cmd->add_option("--voice-method", flags->voice_method,
-                  "identifyVoice: gmm_ubm (speaker models: --voice-model, or trained from the "
-                  "session's enrolment audio), direction_rule (DREAM's sound-direction rule) "
-                  "or off")
-      ->check(CLI::IsMember({"gmm_ubm", "direction_rule", "off"}));
-  cmd->add_option("--voice-model", flags->voice_model,
-                  "Voice model from `dreamsense train voices` (gmm_ubm)")
-      ->check(CLI::ExistingFile);
+  add_analysis_flags(*cmd, *flags);
   cmd->callback([flags, &g, &exit_code] {
     runner::AnalysisOptions o;
     o.session_dir = flags->session;
     o.out_dir = flags->out;
-    o.overlay = flags->overlay;
-    apply_subject_flags(flags->subject, o);
-    if (flags->mutual_mode == "camera-plane")
-      o.mutual_gaze.mode = gaze::MutualGazeMode::kCameraPlane;
-    if (flags->robot_head.size() == 3) {
-      o.mutual_gaze.robot_head_m = {flags->robot_head[0], flags->robot_head[1],
-                                    flags->robot_head[2]};
-      o.robot_head_from_session = false;
-    }
-    o.policy = flags->policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
-    o.speech_grammar = flags->grammar;
-    o.voice_method = flags->voice_method;
-    o.voice_model = flags->voice_model;
+    apply_analysis_flags(*flags, o);
     auto r = run_analysis_with_progress(o, g.quiet);
     if (!r) {
       exit_code = fail(r.error());
       return;
     }
     print_summary(*r, o.out_dir);
+  });
+}
+
+namespace {
+std::atomic<bool> g_stop_live{false};
+extern "C" void on_live_stop_signal(int /*signal*/) { g_stop_live = true; }
+}  // namespace
+
+void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
+  auto flags = std::make_shared<AnalyzeFlags>();
+  CLI::App* cmd = app.add_subcommand(
+      "live",
+      "Live analysis of cameras and the microphone array (docs/recording.md): the outputs of "
+      "analyze, written as the session runs; --record also records it");
+  cmd->add_option("--config", flags->config,
+                  "Device configuration (YAML: session, cameras, audio; docs/recording.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", flags->out, "Output folder (created if needed)")->required();
+  cmd->add_option("--record", flags->record, "Also record the session into this new folder");
+  cmd->add_option("--duration", flags->duration_s,
+                  "Stop after this many seconds (default: until Ctrl-C or SIGTERM)")
+      ->check(CLI::NonNegativeNumber);
+  add_analysis_flags(*cmd, *flags);
+  cmd->callback([flags, &g, &exit_code] {
+    auto config = sources::read_record_config(flags->config);
+    if (!config) {
+      exit_code = fail(config.error());
+      return;
+    }
+    runner::AnalysisOptions o;
+    o.out_dir = flags->out;
+    apply_analysis_flags(*flags, o);
+    std::optional<std::filesystem::path> record;
+    if (!flags->record.empty()) record = flags->record;
+    auto capture = sources::LiveCapture::open(*config, record);
+    if (!capture) {
+      exit_code = fail(capture.error());
+      return;
+    }
+    std::signal(SIGINT, on_live_stop_signal);
+    std::signal(SIGTERM, on_live_stop_signal);
+    if (!g.quiet)
+      std::fprintf(stderr, "live analysis into %s%s (%s)\n", flags->out.c_str(),
+                   record ? (" recording into " + record->string()).c_str() : "",
+                   flags->duration_s > 0 ? fmt::format("{} s", flags->duration_s).c_str()
+                                         : "Ctrl-C to stop");
+    std::atomic<bool> analysis_done{false};
+    Result<runner::AnalysisSummary> result = make_error(ErrorCode::kInternal, "not run");
+    std::thread analysis([&] {
+      result = runner::analyze_live(o, **capture);
+      analysis_done = true;
+      (*capture)->stop();  // an analysis error ends the capture too
+    });
+    const auto start = std::chrono::steady_clock::now();
+    while (!analysis_done && !g_stop_live &&
+           !(flags->duration_s > 0 &&
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >=
+                 flags->duration_s))
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    (*capture)->stop();
+    analysis.join();
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    auto stats = (*capture)->finish();
+    if (!result) {
+      exit_code = fail(result.error());
+      return;
+    }
+    if (!stats) {
+      exit_code = fail(stats.error());
+      return;
+    }
+    if (!g.quiet) {
+      print_summary(*result, o.out_dir);
+      for (const auto& [id, st] : stats->streams)
+        std::fprintf(stderr, "  %s: %llu frames captured, %llu dropped, %llu overruns\n",
+                     id.c_str(), static_cast<unsigned long long>(st.frames_written),
+                     static_cast<unsigned long long>(st.frames_dropped),
+                     static_cast<unsigned long long>(st.overruns));
+    }
   });
 }
 

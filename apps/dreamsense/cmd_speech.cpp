@@ -89,7 +89,8 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                 "Grammar only: no out-of-grammar rejection");
   cmd->add_option("--fsdd-model", flags->options.fsdd_model,
                   "fsdd: tidigits (PocketSphinx's TIDIGITS digit model from "
-                  "pocketsphinx-testdata, 8 kHz front end) or en-us (--model, resampled)")
+                  "pocketsphinx-testdata, 8 kHz front end), en-us (--model, resampled) or the "
+                  "folder of a TIDIGITS-family model (e.g. adapted by train digits)")
       ->default_val(flags->options.fsdd_model);
   cmd->add_option("--speakers", flags->speakers, "fsdd: comma-separated speakers (default all)");
   cmd->add_option("--indices", flags->indices,

@@ -36,6 +36,8 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code);
 void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code);
 void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code);
 void add_bench(CLI::App& app, const GlobalFlags& g, int& exit_code);
+void add_record(CLI::App& app, const GlobalFlags& g, int& exit_code);  // cmd_record.cpp
+void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code);    // cmd_analyze.cpp
 
 // Verbs of other modules, each in its own file (cmd_<module>.cpp).
 void add_calibrate(CLI::App& app, const GlobalFlags& g, int& exit_code);  // cmd_calibrate.cpp

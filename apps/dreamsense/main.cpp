@@ -50,6 +50,8 @@ int main(int argc, char** argv) {
   app::add_analyze(app, g, exit_code);
   app::add_eval(app, g, exit_code);
   app::add_bench(app, g, exit_code);
+  app::add_record(app, g, exit_code);
+  app::add_live(app, g, exit_code);
   app::add_calibrate(app, g, exit_code);
   CLI::App* train =
       app.add_subcommand("train", "Train a model from a dataset (writes a versioned model file)");

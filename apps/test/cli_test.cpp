@@ -1,8 +1,12 @@
 // Whole-pipeline tests through the `dreamsense` executable, as a user runs it.
 // One short demo session is generated once per test binary and copied for the bad-input cases.
 
+#include "dreamsense/sources/session.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
 
 #include <algorithm>
 #include <array>
@@ -215,6 +219,82 @@ TEST_F(Cli, UnwritableOutputFolderIsRejected) {
       run("analyze " + demo().string() + " --out " + (root() / "a_file" / "out").string());
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("a_file/out"), std::string::npos) << r.err;
+}
+
+// record with a video file standing in for the camera, then analyze the recording; and a
+// configuration typo is a one-line error before anything is recorded.
+TEST_F(Cli, RecordWritesASessionThatAnalyzeReads) {
+  const fs::path dir = root() / "record";
+  fs::create_directories(dir);
+  const fs::path video = dir / "cam.avi";
+  {
+    cv::VideoWriter w(video.string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                      cv::Size(160, 120));
+    ASSERT_TRUE(w.isOpened());
+    for (int k = 0; k < 40; ++k) w.write(cv::Mat(120, 160, CV_8UC3, cv::Scalar(k, 80, 160)));
+  }
+  std::ofstream(dir / "rec.yaml") << "session: {name: dry, metadata: {subject: none}}\n"
+                                     "cameras:\n  - {id: camera_middle, device: cam.avi}\n";
+  RunResult r = run("record --config " + (dir / "rec.yaml").string() + " --out " +
+                    (dir / "s").string() + " --duration 0.5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto m = dreamsense::sources::read_manifest(dir / "s");
+  ASSERT_TRUE(m) << m.error().message;
+  EXPECT_TRUE(m->complete);
+  EXPECT_EQ(m->metadata.at("generator"), "dreamsense record");
+  r = run("analyze " + (dir / "s").string() + " --out " + (dir / "a").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(read_jsonl(dir / "a" / "primitives.jsonl").empty());
+
+  std::ofstream(dir / "typo.yaml") << "cameras:\n  - {id: camera_middle, devise: cam.avi}\n";
+  r = run("record --config " + (dir / "typo.yaml").string() + " --out " + (dir / "t").string() +
+          " --duration 0.5");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cameras[0].devise: unknown key"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "t" / "session.yaml"));
+}
+
+// live: the demo's middle camera played from a video file as if it were a device, with its
+// calibration; the face analysers run as frames arrive and the session is recorded on the way.
+TEST_F(Cli, LiveAnalysesACameraAsItDeliversAndRecordsIt) {
+  const fs::path dir = root() / "live";
+  fs::create_directories(dir);
+  {
+    dreamsense::sources::SessionReaderOptions ro;
+    ro.only = {"camera_middle"};
+    auto reader = dreamsense::sources::SessionReader::open(demo(), ro);
+    ASSERT_TRUE(reader) << reader.error().message;
+    cv::VideoWriter w((dir / "middle.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+                      25, cv::Size(1280, 960));
+    ASSERT_TRUE(w.isOpened());
+    for (auto f = (*reader)->next(); f; f = (*reader)->next())
+      w.write(std::get<dreamsense::ColorImage>((*f)->payload).image);
+  }
+  std::ofstream(dir / "live.yaml")
+      << "session: {name: live-test, metadata: {subject: demo_child}}\n"
+         "cameras:\n  - {id: camera_middle, device: middle.avi, "
+         "calibration: "
+      << (demo() / "calib" / "camera_middle.yaml").string() << "}\n";
+  RunResult r =
+      run("live --config " + (dir / "live.yaml").string() + " --out " + (dir / "out").string() +
+          " --record " + (dir / "rec").string() + " --duration 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  int faces_ok = 0, head_ok = 0, ticks = 0;
+  for (const auto& rec : read_jsonl(dir / "out" / "primitives.jsonl")) {
+    if (rec["primitive"] == "getFaces") {
+      ++ticks;
+      faces_ok += rec["status"] == "ok";
+    }
+    head_ok += rec["primitive"] == "getHead" && rec["status"] == "ok";
+  }
+  EXPECT_GE(ticks, 25);     // 3 s at 25 Hz, minus what a loaded machine drops
+  EXPECT_GE(faces_ok, 10);  // the child faces the middle camera most of the time
+  EXPECT_GE(head_ok, 5);
+  auto m = dreamsense::sources::read_manifest(dir / "rec");
+  ASSERT_TRUE(m) << m.error().message;
+  EXPECT_TRUE(m->complete);
+  EXPECT_EQ(m->find("camera_middle")->calibration, "calib/camera_middle.yaml");
+  EXPECT_EQ(m->metadata.at("subject"), "demo_child");
 }
 
 TEST_F(Cli, BenchPipelineReportsTheContractKeys) {

@@ -15,6 +15,7 @@
 #include "dreamsense/head_pose/face_shape_fit.hpp"
 #include "dreamsense/head_pose/head_pose_analyzer.hpp"
 #include "dreamsense/sound_direction/sound_direction_analyzer.hpp"
+#include "dreamsense/sources/recorder.hpp"
 #include "dreamsense/sources/session.hpp"
 #include "dreamsense/speech/speech_analyzer.hpp"
 #include "dreamsense/voice_id/audio_files.hpp"
@@ -65,12 +66,12 @@ nlohmann::json AnalysisSummary::to_json() const {
 namespace {
 
 // world_from_sensor of a stream from its calibration file (identity when it has none).
-Status sensor_pose(const sources::SessionReader& reader, const sources::StreamEntry& s,
-                   cv::Matx33d& R, cv::Vec3d& t) {
+Status sensor_pose(const fs::path& session_dir, const sources::StreamEntry& s, cv::Matx33d& R,
+                   cv::Vec3d& t) {
   R = cv::Matx33d::eye();
   t = {0, 0, 0};
   if (s.calibration.empty()) return ok_status();
-  auto m = read_camera_model(reader.dir() / s.calibration);
+  auto m = read_camera_model(session_dir / s.calibration);
   if (!m) return tl::unexpected(m.error());
   R = m->R.t();
   t = -(m->R.t() * m->t);
@@ -174,29 +175,29 @@ Result<SubjectCalibration> subject_calibration(const AnalysisOptions& options,
 
 }  // namespace
 
-Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
-                                        const AnalysisProgress& progress) {
-  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+namespace {
 
-  // Validate the whole session first (every stream, even those no analyser reads yet), so a
-  // damaged recording is reported before any output is written.
-  auto full = sources::SessionReader::open(options.session_dir);
-  if (!full) return tl::unexpected(in_session(full.error(), options.session_dir));
-  if (!options.out_dir.empty())
-    if (auto s = exporters::ensure_writable_dir(options.out_dir); !s)
-      return tl::unexpected(s.error());
-  const sources::SessionManifest manifest = (*full)->manifest();
-  const SourceInfo full_info = (*full)->info();
-
-  // Analysers the session's streams support.
+struct AnalysisPlan {
   std::vector<std::unique_ptr<Analyzer>> analyzers;
-  std::vector<SensorId> used;
-  SensorId body_sensor;
+  std::vector<SensorId> used;  // streams the analysers read
+  SensorId body_sensor, audio_sensor, speech_sensor, voice_sensor;
+  std::map<SensorId, CameraModel> face_cameras;
+};
+
+// Builds the analysers a session's streams support. File references of the manifest
+// (calibrations, grammar, enrolment) are relative to `dir` (or absolute: live capture).
+Result<AnalysisPlan> plan_analysis(const AnalysisOptions& options,
+                                   const sources::SessionManifest& manifest, const fs::path& dir) {
+  // Analysers the session's streams support.
+  AnalysisPlan plan;
+  auto& analyzers = plan.analyzers;
+  auto& used = plan.used;
+  SensorId& body_sensor = plan.body_sensor;
   for (const auto& s : manifest.streams) {
     if (s.kind != SensorKind::kSkeleton || !body_sensor.empty()) continue;
     body::BodyAnalyzerOptions bo;
     bo.skeleton_sensor = s.id;
-    if (auto st = sensor_pose(**full, s, bo.world_from_sensor_R, bo.world_from_sensor_t); !st)
+    if (auto st = sensor_pose(dir, s, bo.world_from_sensor_R, bo.world_from_sensor_t); !st)
       return tl::unexpected(st.error());
     auto a = body::make_body_analyzer(bo);
     if (!a) return tl::unexpected(a.error());
@@ -206,14 +207,14 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   }
   // Sound direction on the first audio stream: array geometry from its calibration file
   // (calib/<id>.yaml: mic positions, rate, extrinsics), Kinect v1 when it has none.
-  SensorId audio_sensor;
+  SensorId& audio_sensor = plan.audio_sensor;
   std::vector<cv::Vec3d> audio_mics;  // the array's geometry, for the speech beamformer
   for (const auto& s : manifest.streams) {
     if (s.kind != SensorKind::kAudio || !audio_sensor.empty()) continue;
     sound_direction::SoundDirectionAnalyzerOptions so;
     so.audio_sensor = s.id;
     if (!s.calibration.empty()) {
-      auto g = sound_direction::read_mic_array((*full)->dir() / s.calibration);
+      auto g = sound_direction::read_mic_array(dir / s.calibration);
       if (!g) return tl::unexpected(g.error());
       so.geometry = *g;
     } else {
@@ -225,8 +226,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
       return make_error(ErrorCode::kInvalidArgument,
                         "{}: audio stream '{}' has {} channel(s) at {} Hz but its microphone "
                         "array{} has {} microphones at {} Hz",
-                        (options.session_dir / sources::kManifestName).string(), s.id, s.channels,
-                        s.sample_rate,
+                        (dir / sources::kManifestName).string(), s.id, s.channels, s.sample_rate,
                         s.calibration.empty() ? " (Kinect v1 default)" : " (" + s.calibration + ")",
                         so.geometry.mics_m.size(), so.geometry.sample_rate);
     auto a = sound_direction::make_sound_direction_analyzer(so);
@@ -238,12 +238,12 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   }
 
   // Speech recognition on the same audio stream, when a grammar is known.
-  SensorId speech_sensor;
+  SensorId& speech_sensor = plan.speech_sensor;
   if (!audio_sensor.empty()) {
     fs::path grammar = options.speech_grammar;
     if (grammar.empty()) {
       auto g = manifest.metadata.find("speech_grammar");
-      if (g != manifest.metadata.end()) grammar = (*full)->dir() / g->second;
+      if (g != manifest.metadata.end()) grammar = dir / g->second;
     }
     if (!grammar.empty()) {
       speech::SpeechAnalyzerOptions so;
@@ -259,9 +259,9 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
 
   // Speaker identification on the same audio stream, after the sound direction analyser (the
   // direction rule reads its directions).
-  SensorId voice_sensor;
+  SensorId& voice_sensor = plan.voice_sensor;
   if (!audio_sensor.empty()) {
-    auto a = make_voice_analyzer(options, manifest, (*full)->dir(), audio_sensor);
+    auto a = make_voice_analyzer(options, manifest, dir, audio_sensor);
     if (!a) return tl::unexpected(a.error());
     if (*a) {
       analyzers.push_back(std::move(*a));
@@ -271,9 +271,9 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
 
   // Face detection on the colour cameras that watch the child (ids "camera*", DREAM's three
   // 1280x960 cameras); their calibrations give the faces' 3-D positions.
-  auto calibrated = sources::read_color_calibrations((*full)->dir(), manifest);
+  auto calibrated = sources::read_color_calibrations(dir, manifest);
   if (!calibrated) return tl::unexpected(calibrated.error());
-  std::map<SensorId, CameraModel> face_cameras;
+  std::map<SensorId, CameraModel>& face_cameras = plan.face_cameras;
   for (const auto& s : manifest.streams) {
     if (s.kind != SensorKind::kColor || s.id.rfind("camera", 0) != 0) continue;
     if (const auto c = calibrated->find(s.id); c != calibrated->end())
@@ -348,7 +348,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
           return make_error(ErrorCode::kCorruptData,
                             "{}: metadata robot_head_m must be three numbers \"x y z\" in metres "
                             "(got \"{}\")",
-                            (options.session_dir / sources::kManifestName).string(), it->second);
+                            (dir / sources::kManifestName).string(), it->second);
         go.mutual.robot_head_m = *v;
       } else {
         log::info("the session has no robot_head_m metadata: mutual gaze uses ({}, {}, {}) m",
@@ -367,22 +367,25 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     analyzers.push_back(std::move(*t));
   }
 
-  sources::SessionReaderOptions ro;
-  ro.only = used;
-  auto reader =
-      used.empty() ? std::move(full) : sources::SessionReader::open(options.session_dir, ro);
-  if (!reader) return tl::unexpected(in_session(reader.error(), options.session_dir));
-  full = {};
+  return plan;
+}
 
-  PipelineOptions po;
-  po.sync.policy = options.policy;
-  po.sync.tick_period = period_from_rate(manifest.frame_rate > 0 ? manifest.frame_rate : 25.0);
-  po.sync.tolerance = po.sync.tick_period / 2;
-  po.sync.start = full_info.start;  // ticks on the session clock, whatever streams are read
-  po.pace_source = options.pace_source;
+// Runs the planned analysers over `source` and writes the outputs (options.out_dir).
+// [t0, t1] is the media span for progress (unset for live sources).
+Result<AnalysisSummary> run_plan(const AnalysisOptions& options, AnalysisPlan plan,
+                                 const sources::SessionManifest& manifest, Source& source,
+                                 const PipelineOptions& po, const AnalysisProgress& progress,
+                                 Timestamp t0, Timestamp t1, const fs::path& error_dir,
+                                 const std::string& session_name) {
+  auto& analyzers = plan.analyzers;
+  const SensorId& body_sensor = plan.body_sensor;
+  const SensorId& audio_sensor = plan.audio_sensor;
+  const SensorId& speech_sensor = plan.speech_sensor;
+  const SensorId& voice_sensor = plan.voice_sensor;
+  const auto& face_cameras = plan.face_cameras;
   AnalysisSummary summary;
   for (const auto& a : analyzers) summary.analyzers.emplace_back(a->name());
-  auto pipeline = Pipeline::build(po, (*reader)->info(), std::move(analyzers));
+  auto pipeline = Pipeline::build(po, source.info(), std::move(analyzers));
   if (!pipeline) return tl::unexpected(pipeline.error());
 
   const bool write = !options.out_dir.empty();
@@ -436,13 +439,12 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     dream.add(f);
     return ok_status();
   };
-  const Timestamp t0 = full_info.start, t1 = full_info.end;
   auto on_progress = [&](Timestamp t) {
     if (progress && t0.is_set() && t1.is_set() && t1 > t0)
       progress(std::clamp((t - t0).seconds() / (t1 - t0).seconds(), 0.0, 1.0));
   };
-  if (auto s = (*pipeline)->run(**reader, on_tick, on_progress); !s)
-    return tl::unexpected(in_session(s.error(), options.session_dir));
+  if (auto s = (*pipeline)->run(source, on_tick, on_progress); !s)
+    return tl::unexpected(in_session(s.error(), error_dir));
   summary.pipeline = (*pipeline)->stats();
 
   if (write) {
@@ -469,11 +471,70 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     exporters::OutputFile f;
     if (auto s = f.open(options.out_dir / "summary.json"); !s) return tl::unexpected(s.error());
     nlohmann::json sj = summary.to_json();
-    sj["session"] = fs::absolute(options.session_dir).string();
+    sj["session"] = session_name;
     if (auto s = f.write(sj.dump(2) + "\n"); !s) return tl::unexpected(s.error());
     if (auto s = f.commit(); !s) return tl::unexpected(s.error());
   }
   return summary;
+}
+
+}  // namespace
+
+Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
+                                        const AnalysisProgress& progress) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+
+  // Validate the whole session first (every stream, even those no analyser reads yet), so a
+  // damaged recording is reported before any output is written.
+  auto full = sources::SessionReader::open(options.session_dir);
+  if (!full) return tl::unexpected(in_session(full.error(), options.session_dir));
+  if (!options.out_dir.empty())
+    if (auto s = exporters::ensure_writable_dir(options.out_dir); !s)
+      return tl::unexpected(s.error());
+  const sources::SessionManifest manifest = (*full)->manifest();
+  const SourceInfo full_info = (*full)->info();
+
+  auto plan = plan_analysis(options, manifest, (*full)->dir());
+  if (!plan) return tl::unexpected(plan.error());
+  const std::vector<SensorId> used = plan->used;
+
+  sources::SessionReaderOptions ro;
+  ro.only = used;
+  auto reader =
+      used.empty() ? std::move(full) : sources::SessionReader::open(options.session_dir, ro);
+  if (!reader) return tl::unexpected(in_session(reader.error(), options.session_dir));
+  full = {};
+
+  PipelineOptions po;
+  po.sync.policy = options.policy;
+  po.sync.tick_period = period_from_rate(manifest.frame_rate > 0 ? manifest.frame_rate : 25.0);
+  po.sync.tolerance = po.sync.tick_period / 2;
+  po.sync.start = full_info.start;  // ticks on the session clock, whatever streams are read
+  po.pace_source = options.pace_source;
+  return run_plan(options, std::move(*plan), manifest, **reader, po, progress, full_info.start,
+                  full_info.end, options.session_dir, fs::absolute(options.session_dir).string());
+}
+
+Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
+                                     sources::LiveCapture& capture) {
+  if (options.voice_method != "off")
+    if (auto m = voice_id::parse_voice_id_method(options.voice_method); !m)
+      return tl::unexpected(m.error());
+  if (auto s = options.evaluator.check(); !s) return tl::unexpected(s.error());
+  if (!options.out_dir.empty())
+    if (auto s = exporters::ensure_writable_dir(options.out_dir); !s)
+      return tl::unexpected(s.error());
+  const sources::SessionManifest& manifest = capture.manifest();
+  // The live manifest's file references are absolute.
+  auto plan = plan_analysis(options, manifest, fs::current_path());
+  if (!plan) return tl::unexpected(plan.error());
+  PipelineOptions po;
+  po.sync.policy = SyncPolicy::kLatestWithinTolerance;
+  po.sync.tick_period = period_from_rate(manifest.frame_rate > 0 ? manifest.frame_rate : 25.0);
+  po.sync.tolerance = po.sync.tick_period / 2;
+  po.pace_source = false;  // the devices deliver in real time
+  return run_plan(options, std::move(*plan), manifest, capture, po, nullptr, Timestamp::unset(),
+                  Timestamp::unset(), fs::path("live"), manifest.name);
 }
 
 }  // namespace dreamsense::runner

@@ -305,8 +305,12 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
   ro.reject_out_of_grammar = false;
   if (o.garbage_phone_weight) ro.garbage_phone_weight = *o.garbage_phone_weight;
   std::string model_note;
-  if (o.fsdd_model == "tidigits") {
-    ro.model_dir = kTidigitsModel;
+  // A folder is a TIDIGITS-family model (same units and 8 kHz front end), e.g. one adapted by
+  // `dreamsense train digits`.
+  const bool tidigits_family =
+      o.fsdd_model == "tidigits" || (o.fsdd_model != "en-us" && fs::is_directory(o.fsdd_model));
+  if (tidigits_family) {
+    ro.model_dir = o.fsdd_model == "tidigits" ? kTidigitsModel : fs::path(o.fsdd_model);
     ro.dictionary = kTidigitsDictionary;
     ro.model_rate_hz = 8000;  // its filters end at 4 kHz: FSDD is decoded at its own rate
     ro.front_end_rate_hz = 0;
@@ -318,8 +322,8 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
                         "pocketsphinx-testdata; or --fsdd-model en-us)",
                         ro.model_dir.string());
     model_note = fmt::format(
-        "PocketSphinx TIDIGITS digit model (pocketsphinx-testdata; filters 1-4000 Hz) at 8 kHz, "
-        "frequency warp {}",
+        "PocketSphinx TIDIGITS digit model ({}; filters 1-4000 Hz) at 8 kHz, frequency warp {}",
+        o.fsdd_model == "tidigits" ? "pocketsphinx-testdata" : ro.model_dir.string(),
         ro.frequency_warp);
   } else if (o.fsdd_model == "en-us") {
     if (o.frequency_warp) ro.frequency_warp = *o.frequency_warp;
@@ -330,8 +334,11 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
             : fmt::format("PocketSphinx en-us, audio resampled to {} Hz ({})", ro.model_rate_hz,
                           to_string(ro.resampler));
   } else {
-    return make_error(ErrorCode::kInvalidArgument,
-                      "eval speech: --fsdd-model must be tidigits or en-us (got {})", o.fsdd_model);
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        "eval speech: --fsdd-model must be tidigits, en-us or a TIDIGITS-family model "
+        "folder (got {})",
+        o.fsdd_model);
   }
   if (o.fsdd_speaker_adapt && !(o.fsdd_vote.temperature > 0 && o.fsdd_vote.neighbours >= 0 &&
                                 o.fsdd_vote.weight >= 0 && o.fsdd_vote.max_distance_ratio >= 1))

@@ -27,7 +27,8 @@ struct SpeechEvalOptions {
   // speech-commands: kCommandsGarbageWeight / kCommandsMinConfidence.
   std::optional<double> garbage_phone_weight, min_confidence;
   FsddSelection fsdd;                    // fsdd: speakers and take indices
-  std::string fsdd_model = "tidigits";   // fsdd: tidigits (default) | en-us (options above)
+  std::string fsdd_model = "tidigits";   // fsdd: tidigits (default) | en-us (options above) | a
+                                         // TIDIGITS-family model folder
   std::optional<double> pad_seconds;     // fsdd: silence added at both ends (kFsddPadSeconds)
   std::optional<double> frequency_warp;  // fsdd: overrides kFsddTidigitsWarp
   bool fsdd_oh = false;                  // fsdd: "oh" as a second word for 0

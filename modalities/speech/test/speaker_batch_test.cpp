@@ -182,5 +182,34 @@ TEST(SpeechFsddRunner, ReportsPerUtteranceAndVotedResultsAndAppliesTheWarp) {
   EXPECT_FALSE(run_speech_eval(o));
 }
 
+// --fsdd-model DIR: a TIDIGITS-family model folder (e.g. an adapted copy) decodes like the
+// packaged one; a name that is neither a model nor a folder is an error saying what is allowed.
+TEST(SpeechFsddRunner, ModelFolderDecodesLikeThePackagedModel) {
+  if (!fs::exists(kTidigitsModel / "mdef"))
+    GTEST_SKIP() << "needs pocketsphinx-testdata (TIDIGITS model)";
+  TempDir t;
+  write_wav(t.path() / "1_ann_0.wav", glide(120, 300, 0.4));
+  write_wav(t.path() / "2_bob_0.wav", glide(300, 120, 0.4));
+  fs::copy(kTidigitsModel, t.path() / "model");
+  SpeechEvalOptions o;
+  o.dataset = "fsdd";
+  o.dir = t.path();
+  auto packaged = run_speech_eval(o);
+  ASSERT_TRUE(packaged) << packaged.error().to_string();
+  o.fsdd_model = (t.path() / "model").string();
+  auto folder = run_speech_eval(o);
+  ASSERT_TRUE(folder) << folder.error().to_string();
+  ASSERT_EQ((*folder)["items"].size(), 2u);
+  for (size_t i = 0; i < 2; ++i)
+    EXPECT_EQ((*folder)["items"][i]["hypothesis"], (*packaged)["items"][i]["hypothesis"]);
+  EXPECT_NE((*folder)["protocol"].get<std::string>().find((t.path() / "model").string()),
+            std::string::npos);
+  o.fsdd_model = "tidigitz";
+  auto bad = run_speech_eval(o);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("TIDIGITS-family model folder"), std::string::npos)
+      << bad.error().message;
+}
+
 }  // namespace
 }  // namespace dreamsense::speech

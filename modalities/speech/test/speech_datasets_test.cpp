@@ -228,7 +228,9 @@ TEST(SpeechEval, UnknownLayoutAndBadOptions) {
   o.dir = t.path();
   auto m = run_speech_eval(o);
   ASSERT_FALSE(m);
-  EXPECT_NE(m.error().message.find("tidigits or en-us"), std::string::npos) << m.error().message;
+  EXPECT_NE(m.error().message.find("tidigits, en-us or a TIDIGITS-family model folder"),
+            std::string::npos)
+      << m.error().message;
 
   RecognizerOptions ro;
   ro.front_end_rate_hz = 8000;  // needs an upper filter edge below 4 kHz

@@ -200,6 +200,11 @@ Result<json> run_voice_eval(const VoiceEvalOptions& o,
     const size_t first = !is_known && o.model.empty() ? 0 : static_cast<size_t>(o.enroll);
     for (size_t i = first; i < list.size(); ++i) tests.push_back({&list[i], is_known});
   }
+  if (tests.empty() && !o.model.empty())
+    return make_error(ErrorCode::kInvalidArgument,
+                      "eval voices: no test recordings left (with --model the first --enroll {} "
+                      "recordings of each speaker are skipped; --enroll 0 tests all of them)",
+                      o.enroll);
   if (tests.empty())
     return make_error(ErrorCode::kInvalidArgument, "eval voices: no test recordings left");
 

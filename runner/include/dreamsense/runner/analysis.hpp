@@ -15,6 +15,10 @@
 #include <map>
 #include <string>
 
+namespace dreamsense::sources {
+class LiveCapture;
+}
+
 namespace dreamsense::runner {
 
 // data/subjects of the source tree (calibrations shipped with dreamsense, e.g. the demo child's).
@@ -70,5 +74,12 @@ using AnalysisProgress = std::function<void(double fraction)>;
 
 Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
                                         const AnalysisProgress& progress = nullptr);
+
+// Live analysis (`dreamsense live`): the analysers the capture's streams support, run on its
+// frames as they arrive (latest-within-tolerance policy with the flow limiter: a slow analyser
+// drops ticks, counted, instead of falling behind), with the same outputs as analyze_session.
+// options.session_dir is not used (the capture's manifest describes the streams). Returns when
+// the capture has ended (LiveCapture::stop()); the caller then calls capture.finish().
+Result<AnalysisSummary> analyze_live(const AnalysisOptions& options, sources::LiveCapture& capture);
 
 }  // namespace dreamsense::runner

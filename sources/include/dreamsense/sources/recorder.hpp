@@ -1,0 +1,123 @@
+#pragma once
+// Recording a session from live devices (`dreamsense record --config FILE --out DIR`).
+//
+// The configuration (YAML, docs/recording.md) names the cameras (OpenCV VideoCapture devices)
+// and the microphone array (ALSA), their calibration files and the session's metadata. Every
+// source runs its own capture thread; a writer thread per source moves its frames into one
+// SessionWriter (crash-safe, flushed every second of session time), so a slow stream never holds
+// up another. Stamps are the monotonic clock from the start of the recording (stamp 0); the wall
+// clock of stamp 0 goes into the manifest for exports. Dropped frames and audio overruns are
+// counted and reported, never hidden.
+
+#include "dreamsense/core/source.hpp"
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/sources/session.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dreamsense::sources {
+
+struct RecordCameraConfig {
+  SensorId id;
+  std::string device;  // V4L2 index, /dev/videoN, URL or (for dry runs) a video file
+  int width = 0, height = 0;
+  double fps = 0;
+  std::filesystem::path calibration;  // CameraModel YAML, copied to calib/<id>.yaml; optional
+};
+
+struct RecordAudioConfig {
+  SensorId id = "mic_array";
+  std::string device = "default";  // ALSA PCM name
+  int sample_rate = 16000;
+  int channels = 4;
+  std::filesystem::path calibration;  // microphone geometry YAML, copied to calib/<id>.yaml
+};
+
+struct RecordConfig {
+  std::string name;  // session name (default: the output folder's name)
+  Participant participant;
+  std::string condition;  // "RET" | "SHT" | ""
+  std::string task;
+  std::map<std::string, std::string> metadata;  // copied into session.yaml
+  std::filesystem::path speech_grammar;         // copied to speech.gram (metadata speech_grammar)
+  std::filesystem::path voice_enroll;  // folder <speaker>/*.wav, copied to enroll/ (voice_enroll)
+  std::vector<RecordCameraConfig> cameras;
+  std::optional<RecordAudioConfig> audio;
+  Status check() const;  // every problem in one message
+};
+
+// Reads the YAML configuration; relative paths are taken from the file's folder. Unknown keys
+// are errors (a typo must not silently drop a camera).
+Result<RecordConfig> read_record_config(const std::filesystem::path& file);
+
+struct RecordStreamStats {
+  uint64_t frames_written = 0;  // recorded (when recording) or delivered
+  uint64_t frames_dropped = 0;  // by the source because its consumer fell behind
+  uint64_t overruns = 0;        // audio samples lost in the device (ALSA overruns)
+};
+
+struct RecordStats {
+  double duration_s = 0;
+  std::map<SensorId, RecordStreamStats> streams;
+};
+
+// The configured devices as one live Source (frames of all devices in arrival order; each
+// stream's stamps increase), optionally recorded on the way through.
+//
+// manifest() describes the streams. Its file references (calibration, speech grammar, voice
+// enrolment) are absolute paths into the configuration's files, so analysers can be set up from
+// it without a recording; the recorded session.yaml holds its own copies under relative names.
+class LiveCapture : public Source {
+ public:
+  // Opens every device (an error before anything is written when one fails). With
+  // `record_dir`, creates the session there (it must not already hold one) and writes every
+  // delivered frame into it.
+  static Result<std::unique_ptr<LiveCapture>> open(
+      const RecordConfig& config, const std::optional<std::filesystem::path>& record_dir = {},
+      const SessionWriterOptions& writer = {});
+  ~LiveCapture() override;
+  LiveCapture(const LiveCapture&) = delete;
+  LiveCapture& operator=(const LiveCapture&) = delete;
+
+  // Blocks until a frame arrives. After stop(): the queued frames, then kEndOfStream. A device
+  // or disk failure is returned once, after the frames before it.
+  Result<FramePtr> next() override;
+  SourceInfo info() const override;
+  const SessionManifest& manifest() const;
+  // The steady-clock time of stamp 0.
+  std::chrono::steady_clock::time_point clock_origin() const;
+  void stop();          // thread-safe; ends every device
+  bool failed() const;  // a device or the recording failed (next() reports why)
+  // After the end of stream: closes the recording (complete: true) and returns the counts.
+  Result<RecordStats> finish();
+
+ private:
+  struct Impl;
+  explicit LiveCapture(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+struct RecordOptions {
+  std::optional<double> duration_s;         // stop after this long; none: until *stop
+  const std::atomic<bool>* stop = nullptr;  // set (e.g. by SIGINT) to end the recording
+  SessionWriterOptions writer;
+  std::function<void(double elapsed_s)> progress;  // called about once a second
+};
+
+// Records into `out_dir` (created; must not already hold a session). Returns when the duration
+// has passed, *stop was set, or a source failed (the session is then closed with what was
+// recorded and the error is returned).
+Result<RecordStats> record_session(const RecordConfig& config,
+                                   const std::filesystem::path& out_dir,
+                                   const RecordOptions& options);
+
+}  // namespace dreamsense::sources

@@ -1,0 +1,475 @@
+#include "dreamsense/sources/recorder.hpp"
+
+#include "dreamsense/core/log.hpp"
+#include "dreamsense/sources/alsa_audio_source.hpp"
+#include "dreamsense/sources/camera_source.hpp"
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include <yaml-cpp/yaml.h>
+
+namespace dreamsense::sources {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// YAML access with errors that name the file and the key.
+class ConfigReader {
+ public:
+  explicit ConfigReader(fs::path file) : file_(std::move(file)) {}
+
+  tl::unexpected<Error> error(const std::string& key, const std::string& what) const {
+    return make_error(ErrorCode::kInvalidArgument, "{}: {}{}{}", file_.string(), key,
+                      key.empty() ? "" : ": ", what);
+  }
+
+  Status only_keys(const YAML::Node& map, const std::string& context,
+                   std::initializer_list<const char*> allowed) const {
+    if (!map.IsMap()) return error(context, "expected a map");
+    for (const auto& kv : map) {
+      const auto key = kv.first.as<std::string>();
+      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* k) { return key == k; })) {
+        std::string list;
+        for (const char* k : allowed) list += (list.empty() ? "" : ", ") + std::string(k);
+        return error(context.empty() ? key : context + "." + key,
+                     fmt::format("unknown key (allowed: {})", list));
+      }
+    }
+    return ok_status();
+  }
+
+  template <typename T>
+  Status get(const YAML::Node& map, const std::string& context, const char* key, T& out) const {
+    const YAML::Node n = map[key];
+    if (!n || n.IsNull()) return ok_status();
+    try {
+      if (!n.IsScalar()) throw YAML::BadConversion(n.Mark());
+      out = n.as<T>();
+    } catch (const YAML::Exception&) {
+      return error(context.empty() ? key : context + "." + key, "wrong type");
+    }
+    return ok_status();
+  }
+
+  Status get_path(const YAML::Node& map, const std::string& context, const char* key,
+                  fs::path& out) const {
+    std::string s;
+    if (auto st = get(map, context, key, s); !st) return st;
+    if (!s.empty()) out = fs::path(s).is_absolute() ? fs::path(s) : file_.parent_path() / s;
+    return ok_status();
+  }
+
+ private:
+  fs::path file_;
+};
+
+#define DS_TRY(expr)                                    \
+  do {                                                  \
+    if (auto ds_st_ = (expr); !ds_st_) return tl::unexpected(ds_st_.error()); \
+  } while (0)
+
+Status copy_into(const fs::path& from, const fs::path& to) {
+  std::error_code ec;
+  fs::create_directories(to.parent_path(), ec);
+  if (fs::is_directory(from))
+    fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing, ec);
+  else
+    fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
+  if (ec) return make_error(ErrorCode::kIoError, "cannot copy {} to {}: {}", from.string(),
+                            to.string(), ec.message());
+  return ok_status();
+}
+
+}  // namespace
+
+Status RecordConfig::check() const {
+  std::string bad;
+  auto add = [&](const std::string& s) { bad += (bad.empty() ? "" : "; ") + s; };
+  if (cameras.empty() && !audio) add("no cameras and no audio: nothing to record");
+  std::set<std::string> ids;
+  for (const auto& c : cameras) {
+    if (c.id.empty()) add("a camera has no id");
+    if (c.device.empty()) add(fmt::format("camera '{}' has no device", c.id));
+    if (!ids.insert(c.id).second) add(fmt::format("stream id '{}' is used twice", c.id));
+    if (!c.calibration.empty() && !fs::is_regular_file(c.calibration))
+      add(fmt::format("camera '{}': calibration {} not found", c.id, c.calibration.string()));
+  }
+  if (audio) {
+    if (audio->id.empty()) add("audio has no id");
+    if (!ids.insert(audio->id).second) add(fmt::format("stream id '{}' is used twice", audio->id));
+    if (!audio->calibration.empty() && !fs::is_regular_file(audio->calibration))
+      add(fmt::format("audio: calibration {} not found", audio->calibration.string()));
+  }
+  if (!speech_grammar.empty() && !fs::is_regular_file(speech_grammar))
+    add(fmt::format("speech_grammar {} not found", speech_grammar.string()));
+  if (!voice_enroll.empty() && !fs::is_directory(voice_enroll))
+    add(fmt::format("voice_enroll {} is not a folder", voice_enroll.string()));
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "record config: {}", bad);
+  return ok_status();
+}
+
+Result<RecordConfig> read_record_config(const fs::path& file) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::BadFile&) {
+    return make_error(ErrorCode::kNotFound, "{}: cannot read the configuration", file.string());
+  } catch (const YAML::Exception& e) {
+    return make_error(ErrorCode::kInvalidArgument, "{}:{}: {}", file.string(), e.mark.line + 1,
+                      e.msg);
+  }
+  const ConfigReader r(file);
+  RecordConfig c;
+  DS_TRY(r.only_keys(root, "", {"session", "cameras", "audio"}));
+  if (const YAML::Node s = root["session"]; s && !s.IsNull()) {
+    DS_TRY(r.only_keys(s, "session", {"name", "participant", "condition", "task", "metadata",
+                                      "speech_grammar", "voice_enroll"}));
+    DS_TRY(r.get(s, "session", "name", c.name));
+    DS_TRY(r.get(s, "session", "condition", c.condition));
+    DS_TRY(r.get(s, "session", "task", c.task));
+    DS_TRY(r.get_path(s, "session", "speech_grammar", c.speech_grammar));
+    DS_TRY(r.get_path(s, "session", "voice_enroll", c.voice_enroll));
+    if (const YAML::Node p = s["participant"]; p && !p.IsNull()) {
+      DS_TRY(r.only_keys(p, "session.participant", {"id", "gender", "age_months"}));
+      DS_TRY(r.get(p, "session.participant", "id", c.participant.id));
+      std::string gender;
+      DS_TRY(r.get(p, "session.participant", "gender", gender));
+      if (!gender.empty()) c.participant.gender = gender;
+      double age = -1;
+      DS_TRY(r.get(p, "session.participant", "age_months", age));
+      if (age >= 0) c.participant.age_months = age;
+    }
+    if (const YAML::Node m = s["metadata"]; m && !m.IsNull()) {
+      if (!m.IsMap()) return r.error("session.metadata", "expected a map");
+      for (const auto& kv : m) {
+        const auto key = kv.first.as<std::string>();
+        if (!kv.second.IsScalar())
+          return r.error("session.metadata." + key, "expected a single value");
+        c.metadata[key] = kv.second.Scalar();
+      }
+    }
+  }
+  if (const YAML::Node cams = root["cameras"]; cams && !cams.IsNull()) {
+    if (!cams.IsSequence()) return r.error("cameras", "expected a list");
+    for (size_t i = 0; i < cams.size(); ++i) {
+      const std::string ctx = fmt::format("cameras[{}]", i);
+      RecordCameraConfig cam;
+      DS_TRY(r.only_keys(cams[i], ctx, {"id", "device", "width", "height", "fps", "calibration"}));
+      DS_TRY(r.get(cams[i], ctx, "id", cam.id));
+      DS_TRY(r.get(cams[i], ctx, "device", cam.device));
+      DS_TRY(r.get(cams[i], ctx, "width", cam.width));
+      DS_TRY(r.get(cams[i], ctx, "height", cam.height));
+      DS_TRY(r.get(cams[i], ctx, "fps", cam.fps));
+      DS_TRY(r.get_path(cams[i], ctx, "calibration", cam.calibration));
+      // A video file given by a relative path is relative to the configuration too.
+      if (!cam.device.empty() && !fs::path(cam.device).is_absolute() &&
+          fs::is_regular_file(file.parent_path() / cam.device))
+        cam.device = (file.parent_path() / cam.device).string();
+      c.cameras.push_back(cam);
+    }
+  }
+  if (const YAML::Node a = root["audio"]; a && !a.IsNull()) {
+    RecordAudioConfig au;
+    DS_TRY(r.only_keys(a, "audio", {"id", "device", "sample_rate", "channels", "calibration"}));
+    DS_TRY(r.get(a, "audio", "id", au.id));
+    DS_TRY(r.get(a, "audio", "device", au.device));
+    DS_TRY(r.get(a, "audio", "sample_rate", au.sample_rate));
+    DS_TRY(r.get(a, "audio", "channels", au.channels));
+    DS_TRY(r.get_path(a, "audio", "calibration", au.calibration));
+    c.audio = au;
+  }
+  if (auto st = c.check(); !st)
+    return make_error(st.error().code, "{}: {}", file.string(), st.error().message);
+  return c;
+}
+
+struct LiveCapture::Impl {
+  SessionManifest manifest;  // absolute file references (see manifest())
+  std::chrono::steady_clock::time_point origin;
+  std::vector<std::unique_ptr<CameraSource>> cameras;
+  std::unique_ptr<AlsaAudioSource> audio;
+  std::unique_ptr<SessionWriter> writer;  // when recording
+  std::vector<std::thread> pumps;
+  mutable std::mutex mutex;
+  std::condition_variable cv;
+  std::deque<FramePtr> queue;
+  size_t max_queued = 256;  // frames of all devices waiting for next()
+  int running = 0;          // pump threads still delivering
+  std::optional<Error> failure;
+  bool failure_reported = false;
+  bool finished = false;
+  RecordStats stats;
+
+  ~Impl() {
+    stop_all();
+    for (auto& t : pumps)
+      if (t.joinable()) t.join();
+  }
+
+  void stop_all() {
+    for (auto& c : cameras) c->stop();
+    if (audio) audio->stop();
+  }
+
+  void fail(const Error& e) {
+    {
+      std::lock_guard lock(mutex);
+      if (!failure) failure = e;
+    }
+    stop_all();
+  }
+
+  // Moves one device's frames into the recording and the merged queue.
+  void pump(Source& source, const SensorId& id) {
+    while (true) {
+      auto f = source.next();
+      if (!f) {
+        if (!is_end_of_stream(f.error())) fail(f.error());
+        break;
+      }
+      std::unique_lock lock(mutex);
+      if (writer) {
+        if (auto st = writer->write(**f); !st) {
+          lock.unlock();
+          fail(st.error());
+          break;
+        }
+      }
+      ++stats.streams[id].frames_written;
+      queue.push_back(std::move(*f));
+      while (queue.size() > max_queued) {  // the consumer fell behind: drop the oldest
+        ++stats.streams[queue.front()->sensor].frames_dropped;
+        queue.pop_front();
+      }
+      cv.notify_all();
+    }
+    std::lock_guard lock(mutex);
+    --running;
+    cv.notify_all();
+  }
+};
+
+LiveCapture::LiveCapture(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+LiveCapture::~LiveCapture() = default;
+
+Result<std::unique_ptr<LiveCapture>> LiveCapture::open(
+    const RecordConfig& config, const std::optional<fs::path>& record_dir,
+    const SessionWriterOptions& writer_options) {
+  if (auto st = config.check(); !st) return tl::unexpected(st.error());
+  if (auto st = writer_options.check(); !st) return tl::unexpected(st.error());
+  if (record_dir && fs::exists(*record_dir / kManifestName))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "{} already holds a session (choose a new folder)", record_dir->string());
+
+  auto m = std::make_unique<Impl>();
+  // Open every device first: a missing camera is an error before anything is written.
+  m->origin = std::chrono::steady_clock::now();
+  const auto wall_origin = std::chrono::system_clock::now();
+  for (const auto& c : config.cameras) {
+    CameraSourceOptions co;
+    co.sensor = c.id;
+    co.device = c.device;
+    co.width = c.width;
+    co.height = c.height;
+    co.fps = c.fps;
+    co.clock_origin = m->origin;
+    auto cam = CameraSource::open(co);
+    if (!cam) return tl::unexpected(cam.error());
+    m->cameras.push_back(std::move(*cam));
+  }
+  if (config.audio) {
+    AlsaAudioSourceOptions ao;
+    ao.sensor = config.audio->id;
+    ao.device = config.audio->device;
+    ao.sample_rate = config.audio->sample_rate;
+    ao.channels = config.audio->channels;
+    ao.clock_origin = m->origin;
+    auto a = AlsaAudioSource::open(ao);
+    if (!a) return tl::unexpected(a.error());
+    m->audio = std::move(*a);
+  }
+
+  SessionManifest& man = m->manifest;
+  man.name = !config.name.empty() ? config.name
+             : record_dir         ? record_dir->filename().string()
+                                  : std::string("live");
+  man.clock_origin_unix_ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(wall_origin.time_since_epoch()).count();
+  man.participant = config.participant;
+  man.condition = config.condition;
+  man.task = config.task;
+  man.metadata = config.metadata;
+  man.metadata["generator"] = "dreamsense record";
+  auto absolute = [](const fs::path& p) { return fs::absolute(p).lexically_normal().string(); };
+  for (size_t i = 0; i < m->cameras.size(); ++i) {
+    StreamEntry s;
+    s.id = config.cameras[i].id;
+    s.kind = SensorKind::kColor;
+    s.encoding = "mjpeg";
+    s.rate_hz = m->cameras[i]->fps();
+    s.width = m->cameras[i]->size().width;
+    s.height = m->cameras[i]->size().height;
+    if (!config.cameras[i].calibration.empty()) s.calibration = absolute(config.cameras[i].calibration);
+    man.streams.push_back(s);
+  }
+  if (m->audio) {
+    StreamEntry s;
+    s.id = config.audio->id;
+    s.kind = SensorKind::kAudio;
+    s.encoding = "wav";
+    s.sample_rate = config.audio->sample_rate;
+    s.channels = config.audio->channels;
+    s.rate_hz = m->audio->info().sensors.front().rate_hz;
+    if (!config.audio->calibration.empty()) s.calibration = absolute(config.audio->calibration);
+    man.streams.push_back(s);
+  }
+  if (!config.speech_grammar.empty()) man.metadata["speech_grammar"] = absolute(config.speech_grammar);
+  if (!config.voice_enroll.empty()) man.metadata["voice_enroll"] = absolute(config.voice_enroll);
+
+  if (record_dir) {
+    // The recording holds copies of every referenced file, under relative names.
+    SessionManifest rec = man;
+    std::error_code ec;
+    fs::create_directories(*record_dir, ec);
+    if (ec)
+      return make_error(ErrorCode::kIoError, "cannot create {}: {}", record_dir->string(),
+                        ec.message());
+    for (auto& s : rec.streams) {
+      if (s.calibration.empty()) continue;
+      const std::string rel = "calib/" + s.id + ".yaml";
+      if (auto st = copy_into(s.calibration, *record_dir / rel); !st)
+        return tl::unexpected(st.error());
+      s.calibration = rel;
+    }
+    if (auto g = rec.metadata.find("speech_grammar"); g != rec.metadata.end()) {
+      if (auto st = copy_into(g->second, *record_dir / "speech.gram"); !st)
+        return tl::unexpected(st.error());
+      g->second = "speech.gram";
+    }
+    if (auto v = rec.metadata.find("voice_enroll"); v != rec.metadata.end()) {
+      if (auto st = copy_into(v->second, *record_dir / "enroll"); !st)
+        return tl::unexpected(st.error());
+      v->second = "enroll";
+    }
+    auto w = SessionWriter::create(*record_dir, rec, writer_options);
+    if (!w) return tl::unexpected(w.error());
+    m->writer = std::move(*w);
+  }
+
+  for (const auto& s : man.streams) m->stats.streams[s.id] = {};
+  Impl* raw = m.get();
+  m->running = static_cast<int>(m->cameras.size()) + (m->audio ? 1 : 0);
+  for (size_t i = 0; i < m->cameras.size(); ++i)
+    m->pumps.emplace_back([raw, i] { raw->pump(*raw->cameras[i], raw->manifest.streams[i].id); });
+  if (m->audio)
+    m->pumps.emplace_back([raw] { raw->pump(*raw->audio, raw->manifest.streams.back().id); });
+  return std::unique_ptr<LiveCapture>(new LiveCapture(std::move(m)));
+}
+
+Result<FramePtr> LiveCapture::next() {
+  Impl& m = *impl_;
+  std::unique_lock lock(m.mutex);
+  m.cv.wait(lock, [&] { return !m.queue.empty() || m.running == 0; });
+  if (!m.queue.empty()) {
+    FramePtr f = std::move(m.queue.front());
+    m.queue.pop_front();
+    return f;
+  }
+  if (m.failure && !m.failure_reported) {
+    m.failure_reported = true;
+    return tl::unexpected(*m.failure);
+  }
+  return make_error(ErrorCode::kEndOfStream, "live capture stopped");
+}
+
+SourceInfo LiveCapture::info() const {
+  SourceInfo i;
+  i.live = true;
+  for (const auto& s : impl_->manifest.streams) {
+    SensorDescription d;
+    d.id = s.id;
+    d.kind = s.kind;
+    d.rate_hz = s.rate_hz;
+    d.width = s.width;
+    d.height = s.height;
+    d.sample_rate = s.sample_rate;
+    d.channels = s.channels;
+    d.calibration = s.calibration;
+    d.frame = s.id;
+    i.sensors.push_back(d);
+  }
+  return i;
+}
+
+const SessionManifest& LiveCapture::manifest() const { return impl_->manifest; }
+std::chrono::steady_clock::time_point LiveCapture::clock_origin() const { return impl_->origin; }
+void LiveCapture::stop() { impl_->stop_all(); }
+
+bool LiveCapture::failed() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->failure.has_value();
+}
+
+Result<RecordStats> LiveCapture::finish() {
+  Impl& m = *impl_;
+  if (m.finished) return make_error(ErrorCode::kInvalidArgument, "live capture already finished");
+  m.finished = true;
+  m.stop_all();
+  for (auto& t : m.pumps)
+    if (t.joinable()) t.join();
+  m.stats.duration_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - m.origin).count();
+  for (size_t i = 0; i < m.cameras.size(); ++i)
+    m.stats.streams[m.manifest.streams[i].id].frames_dropped += m.cameras[i]->stats().dropped_frames;
+  if (m.audio) {
+    auto& s = m.stats.streams[m.manifest.streams.back().id];
+    s.frames_dropped += m.audio->stats().dropped_chunks;
+    s.overruns = m.audio->stats().overruns;
+  }
+  for (const auto& [id, s] : m.stats.streams)
+    if (s.frames_dropped > 0 || s.overruns > 0)
+      log::warn("live capture: stream '{}' dropped {} frames/chunks, {} audio overruns", id,
+                s.frames_dropped, s.overruns);
+  if (m.writer)
+    if (auto st = m.writer->close(); !st) return tl::unexpected(st.error());
+  if (m.failure)
+    return make_error(m.failure->code, "{} (the recording was closed with what was captured)",
+                      m.failure->message);
+  return m.stats;
+}
+
+Result<RecordStats> record_session(const RecordConfig& config, const fs::path& out_dir,
+                                   const RecordOptions& options) {
+  auto capture = LiveCapture::open(config, out_dir, options.writer);
+  if (!capture) return tl::unexpected(capture.error());
+  // Frames are written by the capture's own threads; here they are only taken off the queue.
+  std::thread drain([&] {
+    while ((*capture)->next()) {
+    }
+  });
+  const auto origin = (*capture)->clock_origin();
+  auto last_progress = std::chrono::steady_clock::now();
+  while (true) {
+    const auto now = std::chrono::steady_clock::now();
+    const double elapsed = std::chrono::duration<double>(now - origin).count();
+    if (options.duration_s && elapsed >= *options.duration_s) break;
+    if (options.stop && options.stop->load()) break;
+    if ((*capture)->failed()) break;
+    if (options.progress && now - last_progress >= std::chrono::seconds(1)) {
+      options.progress(elapsed);
+      last_progress = now;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  (*capture)->stop();
+  drain.join();
+  return (*capture)->finish();
+}
+
+}  // namespace dreamsense::sources

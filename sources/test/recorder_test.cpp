@@ -1,0 +1,230 @@
+// Recording from live devices: the configuration file, and a recording whose "camera" is a
+// video file (OpenCV plays it back at its frame rate, as a device would deliver it). Audio from a
+// real ALSA card is only exercised where one exists (ALSA's "null" device is not paced).
+
+#include "dreamsense/sources/camera_source.hpp"
+#include "dreamsense/sources/recorder.hpp"
+#include "session_test_util.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <fstream>
+
+namespace dreamsense::sources {
+namespace {
+
+namespace fs = std::filesystem;
+using test_util::TempDir;
+
+// A 25 fps MJPG AVI whose frame k shows k as a bright bar position (so order can be checked).
+fs::path write_video(const fs::path& dir, int frames, cv::Size size = {160, 120}) {
+  const fs::path file = dir / "camera.avi";
+  cv::VideoWriter w(file.string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25, size);
+  EXPECT_TRUE(w.isOpened());
+  for (int k = 0; k < frames; ++k) {
+    cv::Mat img(size, CV_8UC3, cv::Scalar(30, 30, 30));
+    cv::rectangle(img, cv::Rect(k % size.width, 0, 4, size.height), cv::Scalar(255, 255, 255),
+                  cv::FILLED);
+    w.write(img);
+  }
+  return file;
+}
+
+void write_text(const fs::path& file, const std::string& text) {
+  std::ofstream(file) << text;
+}
+
+const char* kCalibration = R"(%YAML:1.0
+---
+)";
+
+TEST(RecordConfig, ReadsRelativePathsAndSessionFields) {
+  TempDir tmp;
+  write_video(tmp.path(), 3);
+  write_text(tmp.path() / "cam.yaml", kCalibration);
+  write_text(tmp.path() / "speech.gram", "#JSGF V1.0;\ngrammar g;\npublic <a> = yes | no;\n");
+  write_text(tmp.path() / "rec.yaml", R"(
+session:
+  name: s01
+  participant: {id: 12, gender: female, age_months: 61}
+  condition: RET
+  task: TT
+  metadata: {subject: child12}
+  speech_grammar: speech.gram
+cameras:
+  - {id: camera_middle, device: camera.avi, width: 160, height: 120, fps: 25, calibration: cam.yaml}
+audio: {id: mic_array, device: "hw:1,0", sample_rate: 16000, channels: 4}
+)");
+  auto c = read_record_config(tmp.path() / "rec.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_EQ(c->name, "s01");
+  EXPECT_EQ(c->participant.id, 12);
+  EXPECT_EQ(c->participant.gender.value_or(""), "female");
+  EXPECT_DOUBLE_EQ(c->participant.age_months.value_or(0), 61);
+  EXPECT_EQ(c->metadata.at("subject"), "child12");
+  EXPECT_EQ(c->speech_grammar, tmp.path() / "speech.gram");
+  ASSERT_EQ(c->cameras.size(), 1u);
+  EXPECT_EQ(c->cameras[0].device, (tmp.path() / "camera.avi").string());
+  EXPECT_EQ(c->cameras[0].calibration, tmp.path() / "cam.yaml");
+  ASSERT_TRUE(c->audio);
+  EXPECT_EQ(c->audio->device, "hw:1,0");
+  EXPECT_EQ(c->audio->channels, 4);
+}
+
+TEST(RecordConfig, BadConfigurationsNameTheProblem) {
+  TempDir tmp;
+  const auto expect_error = [&](const std::string& yaml, const std::string& needle) {
+    write_text(tmp.path() / "rec.yaml", yaml);
+    auto c = read_record_config(tmp.path() / "rec.yaml");
+    ASSERT_FALSE(c) << yaml;
+    EXPECT_NE(c.error().message.find(needle), std::string::npos) << c.error().message;
+    EXPECT_NE(c.error().message.find("rec.yaml"), std::string::npos) << c.error().message;
+  };
+  expect_error("cameras:\n  - {id: a, device: 0, widht: 640}\n", "cameras[0].widht: unknown key");
+  expect_error("camera:\n  - {id: a, device: 0}\n", "camera: unknown key");
+  expect_error("session: {name: x}\n", "nothing to record");
+  expect_error("cameras:\n  - {id: a, device: 0}\n  - {id: a, device: 1}\n", "used twice");
+  expect_error("cameras:\n  - {id: a, device: 0, calibration: nope.yaml}\n", "not found");
+  expect_error("cameras:\n  - {id: a, device: 0, width: wide}\n", "cameras[0].width: wrong type");
+  expect_error("cameras: [\n", "rec.yaml:");
+  auto missing = read_record_config(tmp.path() / "absent.yaml");
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
+}
+
+TEST(CameraSource, VideoFilePlaysBackInOrderWithIncreasingStamps) {
+  TempDir tmp;
+  CameraSourceOptions o;
+  o.sensor = "cam";
+  o.device = write_video(tmp.path(), 10).string();
+  o.clock_origin = std::chrono::steady_clock::now();
+  auto cam = CameraSource::open(o);
+  ASSERT_TRUE(cam) << cam.error().message;
+  EXPECT_EQ((*cam)->size(), cv::Size(160, 120));
+  EXPECT_NEAR((*cam)->fps(), 25, 0.5);
+  int64_t last = -1;
+  int n = 0;
+  while (true) {
+    auto f = (*cam)->next();
+    if (!f) {
+      EXPECT_TRUE(is_end_of_stream(f.error())) << f.error().message;
+      break;
+    }
+    EXPECT_EQ((*f)->sequence, static_cast<uint64_t>(n));
+    EXPECT_GT((*f)->stamp.ns(), last);
+    last = (*f)->stamp.ns();
+    const auto* img = std::get_if<ColorImage>(&(*f)->payload);
+    ASSERT_NE(img, nullptr);
+    // The bar of frame k is at column k (JPEG blurs it a little).
+    cv::Mat grey;
+    cv::cvtColor(img->image, grey, cv::COLOR_BGR2GRAY);
+    cv::Point at;
+    cv::minMaxLoc(grey.row(60), nullptr, nullptr, nullptr, &at);
+    EXPECT_NEAR(at.x, n + 1.5, 2.5);
+    ++n;
+  }
+  EXPECT_EQ(n, 10);
+  // Played at 25 fps: ten frames span about 0.36 s, not the microseconds of decoding.
+  EXPECT_GT(last, 300'000'000);
+}
+
+TEST(CameraSource, MissingDeviceIsAClearError) {
+  CameraSourceOptions o;
+  o.device = "/nonexistent/video.avi";
+  auto cam = CameraSource::open(o);
+  ASSERT_FALSE(cam);
+  EXPECT_EQ(cam.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(cam.error().message.find("/nonexistent/video.avi"), std::string::npos);
+  o.width = 640;  // height missing
+  EXPECT_FALSE(o.check());
+}
+
+TEST(Recorder, RecordsAReadableCompleteSession) {
+  TempDir tmp;
+  write_text(tmp.path() / "cam.yaml", kCalibration);
+  RecordConfig c;
+  c.name = "dry-run";
+  c.metadata["subject"] = "child01";
+  RecordCameraConfig cam;
+  cam.id = "camera_middle";
+  cam.device = write_video(tmp.path(), 50).string();
+  cam.calibration = tmp.path() / "cam.yaml";
+  c.cameras.push_back(cam);
+  RecordOptions o;
+  o.duration_s = 0.6;
+  const fs::path out = tmp.path() / "session";
+  auto stats = record_session(c, out, o);
+  ASSERT_TRUE(stats) << stats.error().message;
+  EXPECT_GE(stats->duration_s, 0.6);
+  const auto written = stats->streams.at("camera_middle").frames_written;
+  EXPECT_GE(written, 8u);   // 25 fps for 0.6 s = 15 frames, allowing for a slow machine
+  EXPECT_LE(written, 17u);  // never faster than the device
+
+  auto reader = SessionReader::open(out);
+  ASSERT_TRUE(reader) << reader.error().message;
+  const auto& m = (*reader)->manifest();
+  EXPECT_TRUE(m.complete);
+  EXPECT_EQ(m.name, "dry-run");
+  EXPECT_EQ(m.metadata.at("subject"), "child01");
+  EXPECT_GT(m.clock_origin_unix_ns, 1'600'000'000'000'000'000LL);  // a wall-clock time
+  ASSERT_NE(m.find("camera_middle"), nullptr);
+  EXPECT_EQ(m.find("camera_middle")->calibration, "calib/camera_middle.yaml");
+  EXPECT_TRUE(fs::exists(out / "calib/camera_middle.yaml"));
+  uint64_t read = 0;
+  int64_t last = -1;
+  while (true) {
+    auto f = (*reader)->next();
+    if (!f) {
+      EXPECT_TRUE(is_end_of_stream(f.error())) << f.error().message;
+      break;
+    }
+    EXPECT_GT((*f)->stamp.ns(), last);
+    EXPECT_LT((*f)->stamp.ns(), 1'000'000'000);  // stamps count from the start of the recording
+    last = (*f)->stamp.ns();
+    ++read;
+  }
+  EXPECT_EQ(read, written);
+
+  // A second recording into the same folder must not overwrite it.
+  auto again = record_session(c, out, o);
+  ASSERT_FALSE(again);
+  EXPECT_NE(again.error().message.find("already holds a session"), std::string::npos);
+}
+
+TEST(Recorder, MissingCameraFailsBeforeWritingAnything) {
+  TempDir tmp;
+  RecordConfig c;
+  RecordCameraConfig cam;
+  cam.id = "camera_left";
+  cam.device = (tmp.path() / "absent.avi").string();
+  c.cameras.push_back(cam);
+  RecordOptions o;
+  o.duration_s = 0.2;
+  auto stats = record_session(c, tmp.path() / "session", o);
+  ASSERT_FALSE(stats);
+  EXPECT_NE(stats.error().message.find("camera_left"), std::string::npos);
+  EXPECT_FALSE(fs::exists(tmp.path() / "session" / kManifestName));
+}
+
+TEST(Recorder, StopFlagEndsTheRecording) {
+  TempDir tmp;
+  RecordConfig c;
+  RecordCameraConfig cam;
+  cam.id = "camera_middle";
+  cam.device = write_video(tmp.path(), 250).string();
+  c.cameras.push_back(cam);
+  std::atomic<bool> stop{true};  // already set: the recording ends at once, cleanly
+  RecordOptions o;
+  o.stop = &stop;
+  auto stats = record_session(c, tmp.path() / "session", o);
+  ASSERT_TRUE(stats) << stats.error().message;
+  EXPECT_LT(stats->duration_s, 1.0);
+  auto m = read_manifest(tmp.path() / "session");
+  ASSERT_TRUE(m) << m.error().message;
+  EXPECT_TRUE(m->complete);
+}
+
+}  // namespace
+}  // namespace dreamsense::sources
