@@ -16,6 +16,8 @@ packages=(
   libsoxr-dev libasound2-dev
   # MJPEG session frames decoded straight to BGR (sources/)
   libjpeg62-turbo-dev
+  # DDS publishing of the primitives (live --publish dds; publish/), operator page (live --ui; ui/)
+  libfastrtps-dev libcpp-httplib-dev
   # models and media (the demo session is built from these; nothing is downloaded)
   opencv-data opencv-doc libdlib-data pocketsphinx-en-us pocketsphinx-testdata python3-skimage
   # tests: JSON-schema validation of the DREAM export; synthetic spoken words (speech tests)

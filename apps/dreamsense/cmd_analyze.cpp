@@ -1,8 +1,10 @@
 // `dreamsense analyze SESSION --out DIR`
 
 #include "dreamsense/primitives/catalogue.hpp"
+#include "dreamsense/publish/dds_publisher.hpp"
 #include "dreamsense/runner/analysis.hpp"
 #include "dreamsense/sources/recorder.hpp"
+#include "dreamsense/ui/operator_page.hpp"
 
 #include <atomic>
 #include <chrono>
@@ -20,6 +22,11 @@ struct AnalyzeFlags {
   std::string session, out;
   std::string config, record;  // live
   double duration_s = 0;       // live
+  std::string publish;         // live: "dds"
+  int dds_domain = 0;          // live
+  bool dds_network = false;    // live
+  int ui_port = -1;            // live: operator page (-1: none)
+  std::string ui_host = "127.0.0.1";
   std::string policy = "settled";
   std::string grammar;
   bool overlay = false;
@@ -166,8 +173,36 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--duration", flags->duration_s,
                   "Stop after this many seconds (default: until Ctrl-C or SIGTERM)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--publish", flags->publish,
+                  "Publish the primitives as they are produced: dds (ROS 2 topics "
+                  "rt/dreamsense/<primitive>, std_msgs/String holding the primitives.jsonl line)")
+      ->check(CLI::IsMember({"dds"}));
+  cmd->add_option("--dds-domain", flags->dds_domain, "DDS domain (ROS_DOMAIN_ID)")
+      ->default_val(0)
+      ->check(CLI::Range(0, 232));
+  cmd->add_flag("--dds-network", flags->dds_network,
+                "Publish on every network interface (default: this machine only)");
+  cmd->add_option("--ui", flags->ui_port,
+                  "Serve the operator page (latest primitives and camera frames) on this port "
+                  "(0: any free port)")
+      ->check(CLI::Range(0, 65535));
+  cmd->add_option("--ui-host", flags->ui_host,
+                  "Address the operator page listens on (default 127.0.0.1: this machine only)")
+      ->default_val(flags->ui_host);
   add_analysis_flags(*cmd, *flags);
   cmd->callback([flags, &g, &exit_code] {
+    std::unique_ptr<publish::DdsPublisher> publisher;
+    if (flags->publish == "dds") {
+      publish::DdsPublisherOptions po;
+      po.domain_id = flags->dds_domain;
+      po.network = flags->dds_network;
+      auto p = publish::DdsPublisher::create(po);
+      if (!p) {
+        exit_code = fail(p.error());
+        return;
+      }
+      publisher = std::move(*p);
+    }
     auto config = sources::read_record_config(flags->config);
     if (!config) {
       exit_code = fail(config.error());
@@ -176,6 +211,29 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     runner::AnalysisOptions o;
     o.out_dir = flags->out;
     apply_analysis_flags(*flags, o);
+    std::unique_ptr<ui::OperatorPage> page;
+    if (flags->ui_port >= 0) {
+      ui::OperatorPageOptions uo;
+      uo.port = flags->ui_port;
+      uo.host = flags->ui_host;
+      auto p = ui::OperatorPage::start(uo);
+      if (!p) {
+        exit_code = fail(p.error());
+        return;
+      }
+      page = std::move(*p);
+      std::fprintf(stderr, "operator page: %s\n", page->url().c_str());
+      auto ticks = std::make_shared<uint64_t>(0);
+      o.on_tick_frames = [&page, ticks](const MultiFrame& tick) {
+        for (const auto& [id, frame] : tick.frames) page->update_frame(id, frame);
+        page->set_status({{"ticks", ++*ticks}, {"stamp_s", tick.stamp.seconds()}});
+      };
+    }
+    if (publisher || page)
+      o.on_records = [&publisher, &page](const std::vector<primitives::PrimitiveRecord>& records) {
+        if (page) page->update(records);
+        return publisher ? publisher->publish(records) : ok_status();
+      };
     std::optional<std::filesystem::path> record;
     if (!flags->record.empty()) record = flags->record;
     auto capture = sources::LiveCapture::open(*config, record);
@@ -223,6 +281,10 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                      id.c_str(), static_cast<unsigned long long>(st.frames_written),
                      static_cast<unsigned long long>(st.frames_dropped),
                      static_cast<unsigned long long>(st.overruns));
+      if (publisher)
+        std::fprintf(stderr, "DDS: %llu messages published, %llu refused\n",
+                     static_cast<unsigned long long>(publisher->stats().published),
+                     static_cast<unsigned long long>(publisher->stats().failed));
     }
   });
 }

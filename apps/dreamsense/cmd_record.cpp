@@ -2,11 +2,12 @@
 // cameras (OpenCV VideoCapture) and the microphone array (ALSA) until the duration has passed or
 // Ctrl-C / SIGTERM (the session is then closed properly: complete: true).
 
+#include "dreamsense/sources/recorder.hpp"
+
 #include <csignal>
 #include <cstdio>
 
 #include "commands.hpp"
-#include "dreamsense/sources/recorder.hpp"
 
 namespace dreamsense::app {
 namespace {
@@ -60,8 +61,8 @@ void add_record(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     }
     if (!g.quiet) {
       for (const auto& [id, s] : stats->streams)
-        std::fprintf(stderr, "  %s: %llu frames written, %llu dropped, %llu overruns\n",
-                     id.c_str(), static_cast<unsigned long long>(s.frames_written),
+        std::fprintf(stderr, "  %s: %llu frames written, %llu dropped, %llu overruns\n", id.c_str(),
+                     static_cast<unsigned long long>(s.frames_written),
                      static_cast<unsigned long long>(s.frames_dropped),
                      static_cast<unsigned long long>(s.overruns));
       std::fprintf(stderr, "recorded %.1f s into %s\n", stats->duration_s, flags->out.c_str());

@@ -1,6 +1,7 @@
 // Whole-pipeline tests through the `dreamsense` executable, as a user runs it.
 // One short demo session is generated once per test binary and copied for the bad-input cases.
 
+#include "dreamsense/publish/dds_publisher.hpp"
 #include "dreamsense/sources/session.hpp"
 
 #include <gtest/gtest.h>
@@ -275,10 +276,24 @@ TEST_F(Cli, LiveAnalysesACameraAsItDeliversAndRecordsIt) {
          "cameras:\n  - {id: camera_middle, device: middle.avi, "
          "calibration: "
       << (demo() / "calib" / "camera_middle.yaml").string() << "}\n";
-  RunResult r =
-      run("live --config " + (dir / "live.yaml").string() + " --out " + (dir / "out").string() +
-          " --record " + (dir / "rec").string() + " --duration 3");
+  // A ROS 2-style subscriber on getFaces hears the live run (DDS, this machine only).
+  dreamsense::publish::DdsPublisherOptions dds;
+  dds.domain_id = 100 + static_cast<int>(::getpid() % 100);
+  auto faces_topic = dreamsense::publish::DdsStringSubscriber::create(dds, "getFaces");
+  const bool have_dds = static_cast<bool>(faces_topic);
+  RunResult r = run(
+      "live --config " + (dir / "live.yaml").string() + " --out " + (dir / "out").string() +
+      " --record " + (dir / "rec").string() + " --duration 3 --ui 0" +
+      (have_dds ? " --publish dds --dds-domain " + std::to_string(dds.domain_id) : std::string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("operator page: http://127.0.0.1:"), std::string::npos) << r.err;
+  if (have_dds) {
+    const auto heard = (*faces_topic)->wait_for(5, 2000);
+    ASSERT_GE(heard.size(), 5u);
+    const auto first = json::parse(heard.front());
+    EXPECT_EQ(first["primitive"], "getFaces");
+    EXPECT_EQ(first["status"], "ok");
+  }
   int faces_ok = 0, head_ok = 0, ticks = 0;
   for (const auto& rec : read_jsonl(dir / "out" / "primitives.jsonl")) {
     if (rec["primitive"] == "getFaces") {

@@ -419,9 +419,12 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, AnalysisPlan pl
   auto on_tick = [&](const MultiFrame& tick, const BlackboardView& view) -> Status {
     if (want_overlay)
       if (auto s = overlay.add(tick, view); !s) return s;
+    if (options.on_tick_frames) options.on_tick_frames(tick);
     const auto records = evaluator.evaluate(tick, view);
     for (const auto& r : records)
       summary.status_counts[primitives::info(r.id).name][primitives::to_string(r.status)]++;
+    if (options.on_records)
+      if (auto s = options.on_records(records); !s) return s;
     if (!write) return ok_status();
     if (auto s = jsonl.write(records); !s) return s;
     if (auto s = events.write(records); !s) return s;

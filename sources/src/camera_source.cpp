@@ -2,6 +2,9 @@
 
 #include "dreamsense/core/log.hpp"
 
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -10,9 +13,6 @@
 #include <mutex>
 #include <optional>
 #include <thread>
-
-#include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
 namespace dreamsense::sources {
 
@@ -33,8 +33,7 @@ Status CameraSourceOptions::check() const {
     add(fmt::format("width and height must both be 0 or both > 0 (are {} x {})", width, height));
   if (!(fps >= 0 && fps <= 1000)) add(fmt::format("fps must be in [0, 1000] (is {})", fps));
   if (max_queued < 1) add("max_queued must be >= 1");
-  if (!bad.empty())
-    return make_error(ErrorCode::kInvalidArgument, "CameraSourceOptions: {}", bad);
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "CameraSourceOptions: {}", bad);
   return ok_status();
 }
 

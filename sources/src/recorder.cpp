@@ -4,14 +4,14 @@
 #include "dreamsense/sources/alsa_audio_source.hpp"
 #include "dreamsense/sources/camera_source.hpp"
 
+#include <yaml-cpp/yaml.h>
+
 #include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <mutex>
 #include <set>
 #include <thread>
-
-#include <yaml-cpp/yaml.h>
 
 namespace dreamsense::sources {
 
@@ -69,8 +69,8 @@ class ConfigReader {
   fs::path file_;
 };
 
-#define DS_TRY(expr)                                    \
-  do {                                                  \
+#define DS_TRY(expr)                                                          \
+  do {                                                                        \
     if (auto ds_st_ = (expr); !ds_st_) return tl::unexpected(ds_st_.error()); \
   } while (0)
 
@@ -81,8 +81,9 @@ Status copy_into(const fs::path& from, const fs::path& to) {
     fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing, ec);
   else
     fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
-  if (ec) return make_error(ErrorCode::kIoError, "cannot copy {} to {}: {}", from.string(),
-                            to.string(), ec.message());
+  if (ec)
+    return make_error(ErrorCode::kIoError, "cannot copy {} to {}: {}", from.string(), to.string(),
+                      ec.message());
   return ok_status();
 }
 
@@ -128,8 +129,9 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
   RecordConfig c;
   DS_TRY(r.only_keys(root, "", {"session", "cameras", "audio"}));
   if (const YAML::Node s = root["session"]; s && !s.IsNull()) {
-    DS_TRY(r.only_keys(s, "session", {"name", "participant", "condition", "task", "metadata",
-                                      "speech_grammar", "voice_enroll"}));
+    DS_TRY(r.only_keys(s, "session",
+                       {"name", "participant", "condition", "task", "metadata", "speech_grammar",
+                        "voice_enroll"}));
     DS_TRY(r.get(s, "session", "name", c.name));
     DS_TRY(r.get(s, "session", "condition", c.condition));
     DS_TRY(r.get(s, "session", "task", c.task));
@@ -258,9 +260,9 @@ struct LiveCapture::Impl {
 LiveCapture::LiveCapture(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 LiveCapture::~LiveCapture() = default;
 
-Result<std::unique_ptr<LiveCapture>> LiveCapture::open(
-    const RecordConfig& config, const std::optional<fs::path>& record_dir,
-    const SessionWriterOptions& writer_options) {
+Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& config,
+                                                       const std::optional<fs::path>& record_dir,
+                                                       const SessionWriterOptions& writer_options) {
   if (auto st = config.check(); !st) return tl::unexpected(st.error());
   if (auto st = writer_options.check(); !st) return tl::unexpected(st.error());
   if (record_dir && fs::exists(*record_dir / kManifestName))
@@ -315,7 +317,8 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(
     s.rate_hz = m->cameras[i]->fps();
     s.width = m->cameras[i]->size().width;
     s.height = m->cameras[i]->size().height;
-    if (!config.cameras[i].calibration.empty()) s.calibration = absolute(config.cameras[i].calibration);
+    if (!config.cameras[i].calibration.empty())
+      s.calibration = absolute(config.cameras[i].calibration);
     man.streams.push_back(s);
   }
   if (m->audio) {
@@ -329,7 +332,8 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(
     if (!config.audio->calibration.empty()) s.calibration = absolute(config.audio->calibration);
     man.streams.push_back(s);
   }
-  if (!config.speech_grammar.empty()) man.metadata["speech_grammar"] = absolute(config.speech_grammar);
+  if (!config.speech_grammar.empty())
+    man.metadata["speech_grammar"] = absolute(config.speech_grammar);
   if (!config.voice_enroll.empty()) man.metadata["voice_enroll"] = absolute(config.voice_enroll);
 
   if (record_dir) {
@@ -426,7 +430,8 @@ Result<RecordStats> LiveCapture::finish() {
   m.stats.duration_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - m.origin).count();
   for (size_t i = 0; i < m.cameras.size(); ++i)
-    m.stats.streams[m.manifest.streams[i].id].frames_dropped += m.cameras[i]->stats().dropped_frames;
+    m.stats.streams[m.manifest.streams[i].id].frames_dropped +=
+        m.cameras[i]->stats().dropped_frames;
   if (m.audio) {
     auto& s = m.stats.streams[m.manifest.streams.back().id];
     s.frames_dropped += m.audio->stats().dropped_chunks;

@@ -2,15 +2,17 @@
 // video file (OpenCV plays it back at its frame rate, as a device would deliver it). Audio from a
 // real ALSA card is only exercised where one exists (ALSA's "null" device is not paced).
 
-#include "dreamsense/sources/camera_source.hpp"
 #include "dreamsense/sources/recorder.hpp"
-#include "session_test_util.hpp"
+
+#include "dreamsense/sources/camera_source.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <fstream>
+
+#include "session_test_util.hpp"
 
 namespace dreamsense::sources {
 namespace {
@@ -32,9 +34,7 @@ fs::path write_video(const fs::path& dir, int frames, cv::Size size = {160, 120}
   return file;
 }
 
-void write_text(const fs::path& file, const std::string& text) {
-  std::ofstream(file) << text;
-}
+void write_text(const fs::path& file, const std::string& text) { std::ofstream(file) << text; }
 
 const char* kCalibration = R"(%YAML:1.0
 ---

@@ -59,6 +59,11 @@ struct AnalysisOptions {
   bool robot_head_from_session = true;
   // Also write overlay.mp4 (boxes, landmarks, head axes, gaze rays, selected camera).
   bool overlay = false;
+  // Called with every tick's primitive records as they are produced (e.g. DDS publishing in
+  // `live --publish dds`); an error ends the analysis.
+  std::function<Status(const std::vector<primitives::PrimitiveRecord>&)> on_records;
+  // Called with every tick's frames before its primitives (e.g. the operator page's cameras).
+  std::function<void(const MultiFrame&)> on_tick_frames;
   Status check() const;
 };
 

@@ -17,12 +17,12 @@
 #include "dreamsense/core/source.hpp"
 #include "dreamsense/core/status.hpp"
 
+#include <opencv2/core.hpp>
+
 #include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
-
-#include <opencv2/core.hpp>
 
 namespace dreamsense::sources {
 
@@ -31,8 +31,8 @@ struct CameraSourceOptions {
   std::string device = "0";  // all digits: V4L2 index; otherwise a path or URL
   int width = 0;             // requested size; 0 = the device's default
   int height = 0;
-  double fps = 0;            // requested rate; 0 = the device's default
-  size_t max_queued = 8;     // frames waiting for next(); older ones are dropped beyond this
+  double fps = 0;         // requested rate; 0 = the device's default
+  size_t max_queued = 8;  // frames waiting for next(); older ones are dropped beyond this
   std::chrono::steady_clock::time_point clock_origin{};  // steady-clock time of stamp 0
   Status check() const;                                  // lists every bad field
 };

@@ -15,11 +15,11 @@
 
 #include <atomic>
 #include <chrono>
-#include <memory>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -116,8 +116,7 @@ struct RecordOptions {
 // Records into `out_dir` (created; must not already hold a session). Returns when the duration
 // has passed, *stop was set, or a source failed (the session is then closed with what was
 // recorded and the error is returned).
-Result<RecordStats> record_session(const RecordConfig& config,
-                                   const std::filesystem::path& out_dir,
+Result<RecordStats> record_session(const RecordConfig& config, const std::filesystem::path& out_dir,
                                    const RecordOptions& options);
 
 }  // namespace dreamsense::sources
