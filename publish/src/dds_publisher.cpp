@@ -60,8 +60,7 @@ Status DdsPublisherOptions::check() const {
     add(fmt::format("topic_prefix must be a non-empty name without leading/trailing '/' (is '{}')",
                     topic_prefix));
   for (const auto& name : only)
-    if (!is_primitive_name(name))
-      add(fmt::format("'{}' is not a primitive name", name));
+    if (!is_primitive_name(name)) add(fmt::format("'{}' is not a primitive name", name));
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "DdsPublisherOptions: {}", bad);
   return ok_status();
 }
@@ -108,14 +107,15 @@ class StringType : public dds::TopicDataType {
     const uint8_t* p = payload->data;
     const bool little = p[1] == 0x01;
     uint32_t n = 0;
-    for (int i = 0; i < 4; ++i)
-      n |= static_cast<uint32_t>(p[4 + (little ? i : 3 - i)]) << (8 * i);
+    for (int i = 0; i < 4; ++i) n |= static_cast<uint32_t>(p[4 + (little ? i : 3 - i)]) << (8 * i);
     if (n == 0 || 8 + n > payload->length) return false;
     static_cast<StringMessage*>(data)->data.assign(reinterpret_cast<const char*>(p + 8), n - 1);
     return true;
   }
   std::function<uint32_t()> getSerializedSizeProvider(void* data) override {
-    return [data] { return static_cast<uint32_t>(8 + static_cast<StringMessage*>(data)->data.size() + 1); };
+    return [data] {
+      return static_cast<uint32_t>(8 + static_cast<StringMessage*>(data)->data.size() + 1);
+    };
   }
   void* createData() override { return new StringMessage(); }
   void deleteData(void* data) override { delete static_cast<StringMessage*>(data); }
@@ -190,7 +190,8 @@ Result<std::unique_ptr<DdsPublisher>> DdsPublisher::create(const DdsPublisherOpt
   if (m->type.register_type(m->participant) != ReturnCode_t::RETCODE_OK)
     return make_error(ErrorCode::kInternal, "DDS: cannot register type {}", kDdsStringTypeName);
   m->publisher = m->participant->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-  if (m->publisher == nullptr) return make_error(ErrorCode::kIoError, "DDS: cannot create a publisher");
+  if (m->publisher == nullptr)
+    return make_error(ErrorCode::kIoError, "DDS: cannot create a publisher");
   log::info("DDS: publishing primitives on rt/{}/<primitive> (domain {}, {})", options.topic_prefix,
             options.domain_id, options.network ? "all network interfaces" : "this machine only");
   return std::unique_ptr<DdsPublisher>(new DdsPublisher(std::move(m)));

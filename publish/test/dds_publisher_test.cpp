@@ -25,7 +25,8 @@ TEST(DdsTopics, RosNamesForEveryPrimitive) {
   for (const auto& i : primitives::catalogue()) {
     const std::string token = dds_topic_token(i.name);
     ASSERT_FALSE(token.empty()) << i.name;
-    for (char c : token) EXPECT_TRUE(std::isalnum(static_cast<unsigned char>(c)) || c == '_') << token;
+    for (char c : token)
+      EXPECT_TRUE(std::isalnum(static_cast<unsigned char>(c)) || c == '_') << token;
   }
 }
 

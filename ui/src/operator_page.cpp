@@ -2,14 +2,14 @@
 
 #include "dreamsense/core/log.hpp"
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include <chrono>
+#include <httplib.h>
 #include <map>
 #include <mutex>
 #include <thread>
-
-#include <httplib.h>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 namespace dreamsense::ui {
 
@@ -59,7 +59,8 @@ Status OperatorPageOptions::check() const {
   if (port < 0 || port > 65535) add(fmt::format("port must be in [0, 65535] (is {})", port));
   if (jpeg_quality < 1 || jpeg_quality > 100)
     add(fmt::format("jpeg_quality must be in [1, 100] (is {})", jpeg_quality));
-  if (max_image_width < 16) add(fmt::format("max_image_width must be >= 16 (is {})", max_image_width));
+  if (max_image_width < 16)
+    add(fmt::format("max_image_width must be >= 16 (is {})", max_image_width));
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "OperatorPageOptions: {}", bad);
   return ok_status();
 }
@@ -84,7 +85,8 @@ struct OperatorPage::Impl {
     std::lock_guard lock(mutex);
     nlohmann::json out = {{"stamp_ns", stamp_ns}, {"primitives", nlohmann::json::object()}};
     for (const auto& i : primitives::catalogue())
-      if (auto it = records.find(i.name); it != records.end()) out["primitives"][i.name] = it->second;
+      if (auto it = records.find(i.name); it != records.end())
+        out["primitives"][i.name] = it->second;
     return out;
   }
 

@@ -3,8 +3,9 @@
 #include "dreamsense/ui/operator_page.hpp"
 
 #include <gtest/gtest.h>
-#include <httplib.h>
 #include <opencv2/imgcodecs.hpp>
+
+#include <httplib.h>
 
 namespace dreamsense::ui {
 namespace {

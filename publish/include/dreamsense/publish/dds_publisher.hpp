@@ -23,9 +23,9 @@
 namespace dreamsense::publish {
 
 struct DdsPublisherOptions {
-  int domain_id = 0;                      // ROS_DOMAIN_ID
+  int domain_id = 0;                        // ROS_DOMAIN_ID
   std::string topic_prefix = "dreamsense";  // topics rt/<prefix>/<primitiveName>
-  bool network = false;                   // false: this machine only (127.0.0.1 + shared memory)
+  bool network = false;                     // false: this machine only (127.0.0.1 + shared memory)
   // Also publish records whose status is not ok (disabled, no_data, ...): a subscriber then sees
   // every tick. Default: ok records only.
   bool all_statuses = false;
