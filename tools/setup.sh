@@ -20,6 +20,8 @@ packages=(
   libfastrtps-dev libcpp-httplib-dev
   # models and media (the demo session is built from these; nothing is downloaded)
   opencv-data opencv-doc libdlib-data pocketsphinx-en-us pocketsphinx-testdata python3-skimage
+  # speech enrolment (train speech): sphinxtrain's bw and map_adapt, pocketsphinx_mdef_convert
+  sphinxtrain pocketsphinx
   # tests: JSON-schema validation of the DREAM export; synthetic spoken words (speech tests)
   python3 python3-jsonschema espeak-ng
 )

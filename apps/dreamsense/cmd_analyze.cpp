@@ -107,7 +107,8 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
 
 void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
   cmd.add_option("--subject", flags.subject,
-                 "The child's calibration folder (face_model.yaml, gaze.yaml), or 'none'; "
+                 "The child's calibration folder (face_model.yaml, gaze.yaml, speech_model/), or "
+                 "'none'; "
                  "default: data/subjects/<the session's metadata subject>, if it exists")
       ->check(CLI::ExistingDirectory | CLI::IsMember({"none"}));
   cmd.add_option("--face-model", flags.face_model,
@@ -117,6 +118,10 @@ void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
                  "Gaze constants from `dreamsense train gaze` (overrides the subject's; "
                  "default: built in)")
       ->check(CLI::ExistingFile);
+  cmd.add_option("--speech-model", flags.speech_model,
+                 "Acoustic model folder for recognizeSpeech, e.g. adapted to the child by "
+                 "`dreamsense train speech` (overrides the subject's; default: en-us)")
+      ->check(CLI::ExistingDirectory);
 }
 
 void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o) {
@@ -126,6 +131,7 @@ void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o) 
     o.subject_dir = flags.subject;
   o.face_model = flags.face_model;
   o.gaze_model = flags.gaze_model;
+  o.speech_model = flags.speech_model;
 }
 
 void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {

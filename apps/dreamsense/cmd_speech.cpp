@@ -1,7 +1,12 @@
 // `dreamsense eval speech --dataset pocketsphinx|fsdd|speech-commands DIR [--json FILE|-]`
 // (flags -> speech::SpeechEvalOptions; protocols in modalities/speech/README.md).
+// `dreamsense train speech --dataset fsdd|list PATH --out DIR`: a talker's acoustic model
+// (MAP adaptation, speech/acoustic_adaptation.hpp).
+
+#include "dreamsense/speech/acoustic_adaptation.hpp"
 
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 
 #include "commands.hpp"
@@ -33,6 +38,41 @@ Status parse_indices(const std::string& s, speech::FsddSelection& sel) {
     return make_error(ErrorCode::kInvalidArgument, "--indices must be N or A-B, A <= B (got '{}')",
                       s);
   return ok_status();
+}
+
+std::vector<std::string> split_commas(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// A list file: one utterance per line, "AUDIO WORDS..." (AUDIO relative to the list's folder,
+// any rate, mono); '#' starts a comment. Ids are the line numbers.
+Result<std::vector<speech::AdaptationUtterance>> read_utterance_list(
+    const std::filesystem::path& list) {
+  std::ifstream in(list);
+  if (!in) return make_error(ErrorCode::kNotFound, "train speech: cannot read {}", list.string());
+  std::vector<speech::AdaptationUtterance> out;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (const size_t hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    std::istringstream ls(line);
+    std::string audio, word, words;
+    if (!(ls >> audio)) continue;
+    while (ls >> word) words += (words.empty() ? "" : " ") + word;
+    if (words.empty())
+      return make_error(ErrorCode::kInvalidArgument,
+                        "{}:{}: expected an audio file and the words said in it", list.string(),
+                        number);
+    auto a = speech::read_mono_wav(list.parent_path() / audio, 0, "train speech");
+    if (!a)
+      return make_error(a.error().code, "{}:{}: {}", list.string(), number, a.error().message);
+    out.push_back({fmt::format("line{}", number), std::move(a->samples), a->rate_hz, words});
+  }
+  return out;
 }
 
 void print_summary(const nlohmann::json& r) {
@@ -90,7 +130,7 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--fsdd-model", flags->options.fsdd_model,
                   "fsdd: tidigits (PocketSphinx's TIDIGITS digit model from "
                   "pocketsphinx-testdata, 8 kHz front end), en-us (--model, resampled) or the "
-                  "folder of a TIDIGITS-family model (e.g. adapted by train digits)")
+                  "folder of a TIDIGITS-family model (e.g. adapted by train speech)")
       ->default_val(flags->options.fsdd_model);
   cmd->add_option("--speakers", flags->speakers, "fsdd: comma-separated speakers (default all)");
   cmd->add_option("--indices", flags->indices,
@@ -151,12 +191,7 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
     if (flags->min_confidence >= 0) o.min_confidence = flags->min_confidence;
     if (flags->pad >= 0) o.pad_seconds = flags->pad;
     if (flags->warp != 0) o.frequency_warp = flags->warp;
-    if (!flags->speakers.empty()) {
-      std::stringstream ss(flags->speakers);
-      std::string s;
-      while (std::getline(ss, s, ','))
-        if (!s.empty()) o.fsdd.speakers.push_back(s);
-    }
+    o.fsdd.speakers = split_commas(flags->speakers);
     if (!flags->indices.empty())
       if (auto st = parse_indices(flags->indices, o.fsdd); !st) {
         exit_code = fail(st.error());
@@ -171,6 +206,108 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
     }
     if (!g.quiet) print_summary(*res);
     if (auto s = write_json(flags->json, *res); !s) exit_code = fail(s.error());
+  });
+}
+
+namespace {
+struct TrainSpeechFlags {
+  std::vector<std::string> dataset;  // NAME PATH
+  std::string out, speakers, indices, fsdd_model = "tidigits";
+  std::filesystem::path model = speech::RecognizerOptions{}.model_dir,
+                        dict = speech::RecognizerOptions{}.dictionary;
+  double warp = 0;
+  speech::AcousticAdaptationOptions options;
+};
+}  // namespace
+
+void add_train_speech(CLI::App& train, const GlobalFlags& g, int& exit_code) {
+  auto flags = std::make_shared<TrainSpeechFlags>();
+  CLI::App* cmd = train.add_subcommand(
+      "speech",
+      "Adapt a speech recogniser's acoustic model to one talker (MAP of the means with "
+      "sphinxtrain) from their utterances with known words; decode with the written folder");
+  cmd->add_option("--dataset", flags->dataset,
+                  "NAME PATH; NAME: list (a text file, one utterance per line: AUDIO WORDS..., "
+                  "AUDIO relative to the file; base model --model/--dict, default en-us) or fsdd "
+                  "(a FSDD folder; TIDIGITS model and front end of eval speech --dataset fsdd)")
+      ->expected(2)
+      ->required();
+  cmd->add_option("--out", flags->out, "Folder for the adapted model (new or empty)")->required();
+  cmd->add_option("--model", flags->model, "list: base acoustic model folder")
+      ->default_val(flags->model.string());
+  cmd->add_option("--dict", flags->dict, "list: pronunciation dictionary")
+      ->default_val(flags->dict.string());
+  cmd->add_option("--speakers", flags->speakers, "fsdd: comma-separated speakers (default all)");
+  cmd->add_option("--indices", flags->indices, "fsdd: take indices N or A-B");
+  cmd->add_option("--fsdd-model", flags->fsdd_model,
+                  "fsdd: base model, tidigits or a TIDIGITS-family folder")
+      ->default_val(flags->fsdd_model);
+  cmd->add_option("--warp", flags->warp,
+                  "fsdd: frequency warp of the front end (default " +
+                      fmt::format("{}", speech::kFsddTidigitsWarp) +
+                      "); decode the adapted model with the same");
+  cmd->add_option("--min-utterances", flags->options.min_utterances, "Fewer utterances is an error")
+      ->default_val(flags->options.min_utterances);
+  cmd->add_flag("--keep-work", flags->options.keep_work_dir,
+                "Keep OUT/work (features, Baum-Welch statistics, tool logs)");
+  cmd->callback([flags, &g, &exit_code] {
+    const std::string& name = flags->dataset[0];
+    const std::filesystem::path path = flags->dataset[1];
+    std::vector<speech::AdaptationUtterance> utterances;
+    auto& o = flags->options;
+    if (name == "fsdd") {
+      speech::SpeechEvalOptions eo;
+      eo.fsdd_model = flags->fsdd_model;
+      if (flags->warp != 0) eo.frequency_warp = flags->warp;
+      eo.fsdd.speakers = split_commas(flags->speakers);
+      if (!flags->indices.empty())
+        if (auto st = parse_indices(flags->indices, eo.fsdd); !st) {
+          exit_code = fail(st.error());
+          return;
+        }
+      auto setup = speech::fsdd_recognizer(eo);
+      auto items = setup ? speech::load_fsdd(path, eo.fsdd)
+                         : Result<std::vector<speech::AudioItem>>(tl::unexpected(setup.error()));
+      if (!items) {
+        exit_code = fail(items.error());
+        return;
+      }
+      o.recognizer = setup->options;
+      auto enrolment = speech::fsdd_enrolment(*items);
+      if (!enrolment) {
+        exit_code = fail(enrolment.error());
+        return;
+      }
+      utterances = std::move(*enrolment);
+    } else if (name == "list") {
+      o.recognizer.model_dir = flags->model;
+      o.recognizer.dictionary = flags->dict;
+      auto list = read_utterance_list(path);
+      if (!list) {
+        exit_code = fail(list.error());
+        return;
+      }
+      utterances = std::move(*list);
+    } else {
+      exit_code = fail("train speech: dataset " + name + " is not supported (list, fsdd)");
+      return;
+    }
+    auto r = with_progress("train speech", g.quiet, [&](const auto& progress) {
+      return speech::adapt_acoustic_model(utterances, o, flags->out, progress);
+    });
+    if (!r) {
+      exit_code = fail(r.error());
+      return;
+    }
+    if (!g.quiet) {
+      std::fprintf(stderr,
+                   "train speech: %d utterances (%.1f s of audio, %d aligned) adapted %s in "
+                   "%.1f s -> %s\n",
+                   r->utterances, r->audio_seconds, r->trained_utterances,
+                   o.recognizer.model_dir.c_str(), r->seconds, flags->out.c_str());
+      for (const auto& s : r->skipped)
+        std::fprintf(stderr, "  not aligned with its words (left out): %s\n", s.c_str());
+    }
   });
 }
 

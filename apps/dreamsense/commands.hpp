@@ -42,19 +42,20 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code);    // cmd_an
 // Verbs of other modules, each in its own file (cmd_<module>.cpp).
 void add_calibrate(CLI::App& app, const GlobalFlags& g, int& exit_code);  // cmd_calibrate.cpp
 void add_eval_calibration(CLI::App& eval, const GlobalFlags& g,
-                          int& exit_code);                                   // cmd_calibrate.cpp
-void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code);     // cmd_audio.cpp
-void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code);  // cmd_speech.cpp
-void add_eval_eyes(CLI::App& eval, const GlobalFlags& g, int& exit_code);    // cmd_eyes.cpp
+                          int& exit_code);                                     // cmd_calibrate.cpp
+void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code);       // cmd_audio.cpp
+void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code);    // cmd_speech.cpp
+void add_train_speech(CLI::App& train, const GlobalFlags& g, int& exit_code);  // cmd_speech.cpp
+void add_eval_eyes(CLI::App& eval, const GlobalFlags& g, int& exit_code);      // cmd_eyes.cpp
 
 // cmd_voices.cpp: `train voices` (under the `train` verb of main.cpp) and `eval voices`.
 void add_train_voices(CLI::App& train, const GlobalFlags& g, int& exit_code);
 void add_eval_voices(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 
 // The child's calibration for analyses (cmd_analyze.cpp): --subject DIR|none, --face-model,
-// --gaze-model.
+// --gaze-model, --speech-model.
 struct SubjectFlags {
-  std::string subject, face_model, gaze_model;
+  std::string subject, face_model, gaze_model, speech_model;
 };
 void add_subject_flags(CLI::App& cmd, SubjectFlags& flags);
 void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o);

@@ -472,6 +472,52 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   EXPECT_NE(r.err.find("no calibration for subject 'nobody_known'"), std::string::npos) << r.err;
 }
 
+// `train speech --dataset list` adapts the en-us model to a talker (the five cards utterances of
+// pocketsphinx-testdata, one speaker) and `analyze --speech-model` decodes with it; bad list
+// lines and unknown words are one-line errors that leave no model folder behind.
+TEST_F(Cli, TrainSpeechAdaptsToATalkerAndAnalyzeUsesTheModel) {
+  const fs::path cards = "/usr/share/pocketsphinx/test/data/cards";
+  if (!fs::exists(cards / "005.wav") || !fs::exists("/usr/lib/sphinxtrain/bw"))
+    GTEST_SKIP() << "pocketsphinx-testdata or sphinxtrain missing";
+  const fs::path list = root() / "cards.list", model = root() / "child_speech";
+  std::ofstream(list) << "# the cards talker\n"
+                      << (cards / "001.wav").string() << " ten of clubs\n"
+                      << (cards / "002.wav").string() << " four queen of clubs\n"
+                      << (cards / "003.wav").string() << " seven of clubs\n"
+                      << (cards / "004.wav").string() << " five five\n"
+                      << (cards / "005.wav").string()
+                      << " eight of spades four of clubs seven of hearts\n";
+  RunResult r = run("train speech --dataset list " + list.string() + " --out " + model.string() +
+                    " --min-utterances 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string provenance = slurp(model / "adaptation.yaml");
+  EXPECT_NE(provenance.find("utterances: 5"), std::string::npos) << provenance;
+  EXPECT_NE(provenance.find("rate_hz: 16000"), std::string::npos) << provenance;
+  EXPECT_TRUE(fs::exists(model / "means"));
+
+  const fs::path out = root() / "with-speech-model";
+  r = run("-v analyze " + demo().string() + " --out " + out.string() + " --speech-model " +
+          model.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("speech: acoustic model " + model.string()), std::string::npos) << r.err;
+
+  const fs::path bad_list = root() / "bad.list";
+  std::ofstream(bad_list) << (cards / "001.wav").string() << " ten of clubs\n"
+                          << (cards / "002.wav").string() << "\n";
+  r = run("train speech --dataset list " + bad_list.string() + " --out " +
+          (root() / "m2").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("bad.list:2"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  std::ofstream(bad_list) << (cards / "001.wav").string() << " ten of clubz\n"
+                          << (cards / "002.wav").string() << " four queen of clubs\n";
+  r = run("train speech --dataset list " + bad_list.string() + " --out " +
+          (root() / "m3").string() + " --min-utterances 2");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("clubz"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(root() / "m3"));
+}
+
 TEST_F(Cli, HelpAndUsageErrors) {
   EXPECT_EQ(run("analyze --help").exit_code, 0);
   EXPECT_NE(run("analyze").exit_code, 0) << "missing SESSION";

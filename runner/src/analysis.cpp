@@ -17,6 +17,7 @@
 #include "dreamsense/sound_direction/sound_direction_analyzer.hpp"
 #include "dreamsense/sources/recorder.hpp"
 #include "dreamsense/sources/session.hpp"
+#include "dreamsense/speech/acoustic_adaptation.hpp"
 #include "dreamsense/speech/speech_analyzer.hpp"
 #include "dreamsense/voice_id/audio_files.hpp"
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
@@ -139,7 +140,7 @@ Error in_session(Error e, const fs::path& session_dir) {
 }
 
 struct SubjectCalibration {
-  std::filesystem::path face_model, gaze_model;  // empty = none
+  std::filesystem::path face_model, gaze_model, speech_model;  // empty = none
 };
 
 // The calibration files in effect (AnalysisOptions: explicit files, else the subject folder's).
@@ -163,13 +164,16 @@ Result<SubjectCalibration> subject_calibration(const AnalysisOptions& options,
   if (!dir.empty()) {
     if (std::filesystem::exists(dir / "face_model.yaml")) c.face_model = dir / "face_model.yaml";
     if (std::filesystem::exists(dir / "gaze.yaml")) c.gaze_model = dir / "gaze.yaml";
-    if (c.face_model.empty() && c.gaze_model.empty())
+    if (std::filesystem::is_directory(dir / "speech_model")) c.speech_model = dir / "speech_model";
+    if (c.face_model.empty() && c.gaze_model.empty() && c.speech_model.empty())
       return make_error(ErrorCode::kNotFound,
-                        "{}: a subject folder needs face_model.yaml and/or gaze.yaml",
+                        "{}: a subject folder needs face_model.yaml, gaze.yaml and/or "
+                        "speech_model/",
                         dir.string());
   }
   if (!options.face_model.empty()) c.face_model = options.face_model;
   if (!options.gaze_model.empty()) c.gaze_model = options.gaze_model;
+  if (!options.speech_model.empty()) c.speech_model = options.speech_model;
   return c;
 }
 
@@ -237,6 +241,10 @@ Result<AnalysisPlan> plan_analysis(const AnalysisOptions& options,
     used.push_back(s.id);
   }
 
+  // The child's calibration files (face model, gaze constants, speech model).
+  auto calibration = subject_calibration(options, manifest);
+  if (!calibration) return tl::unexpected(calibration.error());
+
   // Speech recognition on the same audio stream, when a grammar is known.
   SensorId& speech_sensor = plan.speech_sensor;
   if (!audio_sensor.empty()) {
@@ -249,6 +257,11 @@ Result<AnalysisPlan> plan_analysis(const AnalysisOptions& options,
       speech::SpeechAnalyzerOptions so;
       so.audio_sensor = audio_sensor;
       so.grammar = grammar;
+      if (!calibration->speech_model.empty()) {
+        if (auto st = speech::use_acoustic_model(so.recognizer, calibration->speech_model); !st)
+          return tl::unexpected(st.error());
+        log::info("speech: acoustic model {}", calibration->speech_model.string());
+      }
       so.mic_positions_m = audio_mics;  // steers toward the sound direction (runs before it)
       auto a = speech::make_speech_analyzer(so);
       if (!a) return tl::unexpected(a.error());
@@ -301,8 +314,6 @@ Result<AnalysisPlan> plan_analysis(const AnalysisOptions& options,
     analyzers.push_back(std::move(*l));
     head_pose::HeadPoseAnalyzerOptions ho;
     ho.cameras = face_cameras;
-    auto calibration = subject_calibration(options, manifest);
-    if (!calibration) return tl::unexpected(calibration.error());
     std::optional<gaze::GazeModelFile> gaze_model;
     if (!calibration->gaze_model.empty()) {
       auto m = gaze::read_gaze_model(calibration->gaze_model);

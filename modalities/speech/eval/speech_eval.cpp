@@ -3,6 +3,7 @@
 #include <sndfile.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -296,17 +297,18 @@ std::string digit_of(const std::string& word) {
   return "none";
 }
 
-Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(double)>& progress) {
-  auto items = load_fsdd(o.dir, o.fsdd);
-  if (!items) return tl::unexpected(items.error());
-  RecognizerOptions ro = o.recognizer;
+}  // namespace
+
+Result<FsddRecognizer> fsdd_recognizer(const SpeechEvalOptions& o) {
+  FsddRecognizer f;
+  RecognizerOptions& ro = f.options;
+  ro = o.recognizer;
   // Closed set: every clip is a digit, so the best grammar path is the answer (a rejection
   // could only turn a right answer into a wrong one).
   ro.reject_out_of_grammar = false;
   if (o.garbage_phone_weight) ro.garbage_phone_weight = *o.garbage_phone_weight;
-  std::string model_note;
   // A folder is a TIDIGITS-family model (same units and 8 kHz front end), e.g. one adapted by
-  // `dreamsense train digits`.
+  // `dreamsense train speech`.
   const bool tidigits_family =
       o.fsdd_model == "tidigits" || (o.fsdd_model != "en-us" && fs::is_directory(o.fsdd_model));
   if (tidigits_family) {
@@ -315,19 +317,22 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
     ro.model_rate_hz = 8000;  // its filters end at 4 kHz: FSDD is decoded at its own rate
     ro.front_end_rate_hz = 0;
     ro.front_end_upper_hz = 0;
-    ro.frequency_warp = o.frequency_warp.value_or(kFsddTidigitsWarp);
+    ro.frequency_warp = kFsddTidigitsWarp;
     if (!fs::exists(ro.model_dir / "mdef"))
       return make_error(ErrorCode::kNotFound,
                         "eval speech: TIDIGITS model not found at {} (Debian package "
                         "pocketsphinx-testdata; or --fsdd-model en-us)",
                         ro.model_dir.string());
-    model_note = fmt::format(
+    // A folder from `train speech` brings the front end it was adapted with.
+    if (auto st = use_acoustic_model(ro, ro.model_dir); !st) return tl::unexpected(st.error());
+    if (o.frequency_warp) ro.frequency_warp = *o.frequency_warp;
+    f.description = fmt::format(
         "PocketSphinx TIDIGITS digit model ({}; filters 1-4000 Hz) at 8 kHz, frequency warp {}",
         o.fsdd_model == "tidigits" ? "pocketsphinx-testdata" : ro.model_dir.string(),
         ro.frequency_warp);
   } else if (o.fsdd_model == "en-us") {
     if (o.frequency_warp) ro.frequency_warp = *o.frequency_warp;
-    model_note =
+    f.description =
         ro.front_end_rate_hz == 8000
             ? fmt::format("PocketSphinx en-us through an 8 kHz front end (filters to {} Hz)",
                           ro.front_end_upper_hz)
@@ -340,16 +345,53 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
         "folder (got {})",
         o.fsdd_model);
   }
+  f.words.assign(std::begin(kDigitWords), std::end(kDigitWords));
+  if (o.fsdd_oh) f.words.push_back("oh");
+  return f;
+}
+
+Result<Audio> fsdd_clip(const AudioItem& item, double pad_seconds, size_t seed) {
+  auto a = read_mono_wav(item.path, 8000, "fsdd");
+  if (!a) return tl::unexpected(a.error());
+  const size_t pad_samples = static_cast<size_t>(std::lround(pad_seconds * 8000));
+  if (pad_samples > 0) a->samples = padded(a->samples, pad_samples, kFsddPadRms, seed);
+  return a;
+}
+
+std::string fsdd_digit_word(const std::string& label) {
+  const int d =
+      label.size() == 1 && std::isdigit(static_cast<unsigned char>(label[0])) ? label[0] - '0' : -1;
+  return d >= 0 ? kDigitWords[d] : std::string();
+}
+
+Result<std::vector<AdaptationUtterance>> fsdd_enrolment(const std::vector<AudioItem>& items,
+                                                        double pad_seconds) {
+  std::vector<AdaptationUtterance> out;
+  for (size_t i = 0; i < items.size(); ++i) {
+    auto a = fsdd_clip(items[i], pad_seconds, i);
+    if (!a) return tl::unexpected(a.error());
+    out.push_back({items[i].path.stem().string(), std::move(a->samples), a->rate_hz,
+                   fsdd_digit_word(items[i].label)});
+  }
+  return out;
+}
+
+namespace {
+
+Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(double)>& progress) {
+  auto items = load_fsdd(o.dir, o.fsdd);
+  if (!items) return tl::unexpected(items.error());
+  auto setup = fsdd_recognizer(o);
+  if (!setup) return tl::unexpected(setup.error());
+  RecognizerOptions ro = setup->options;
+  const std::string model_note = setup->description;
   if (o.fsdd_speaker_adapt && !(o.fsdd_vote.temperature > 0 && o.fsdd_vote.neighbours >= 0 &&
                                 o.fsdd_vote.weight >= 0 && o.fsdd_vote.max_distance_ratio >= 1))
     return make_error(ErrorCode::kInvalidArgument,
                       "eval speech: the neighbour vote needs temperature > 0, neighbours >= 0, "
                       "weight >= 0, distance ratio >= 1");
   const double pad_s = o.pad_seconds.value_or(kFsddPadSeconds);
-  const double pad_rms = kFsddPadRms;
-  const size_t pad_samples = static_cast<size_t>(std::lround(pad_s * 8000));
-  std::vector<std::string> words(std::begin(kDigitWords), std::end(kDigitWords));
-  if (o.fsdd_oh) words.push_back("oh");
+  const std::vector<std::string>& words = setup->words;
 
   // Per-utterance decoding. Without speaker adaptation: one decode under the digit grammar.
   // With it: one closed decode per word (the word's best-path score per frame; the grammar
@@ -384,9 +426,8 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
   std::vector<double> ms;
   for (size_t i = 0; i < n; ++i) {
     const AudioItem& it = (*items)[i];
-    auto a = read_mono_wav(it.path, 8000, "fsdd");
+    auto a = fsdd_clip(it, pad_s, i);
     if (!a) return tl::unexpected(a.error());
-    if (pad_samples > 0) a->samples = padded(a->samples, pad_samples, pad_rms, i);
     double sec = 0;
     if (o.fsdd_speaker_adapt) {
       digit_scores[i].assign(std::size(kDigitWords), -std::numeric_limits<double>::infinity());

@@ -4,6 +4,7 @@
 // layout; JSON of spec/cli.md. Protocols and measured numbers: modalities/speech/README.md.
 
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/speech/acoustic_adaptation.hpp"
 #include "dreamsense/speech/recognizer.hpp"
 #include "dreamsense/speech/voice_activity.hpp"
 
@@ -53,6 +54,25 @@ inline const std::filesystem::path kTidigitsDictionary =
 inline constexpr double kFsddTidigitsWarp = 1.4;
 inline constexpr double kFsddPadSeconds = 0.2;
 inline constexpr double kFsddPadRms = 10.0;  // about -70 dBFS
+
+// The recogniser `eval speech --dataset fsdd` decodes with (model, dictionary, 8 kHz front end
+// and warp per SpeechEvalOptions::fsdd_model; closed set), a description for the JSON, and the
+// digit words of the grammar. `train speech --dataset fsdd` adapts with the same front end.
+struct FsddRecognizer {
+  RecognizerOptions options;
+  std::string description;
+  std::vector<std::string> words;  // "zero".."nine" (+ "oh" with fsdd_oh)
+};
+Result<FsddRecognizer> fsdd_recognizer(const SpeechEvalOptions& options);
+// An FSDD clip as it is decoded: 8 kHz mono, padded at both ends with `pad_seconds` of quiet
+// noise (kFsddPadRms) drawn from a generator seeded with `seed` (deterministic per clip).
+Result<Audio> fsdd_clip(const AudioItem& item, double pad_seconds, size_t seed);
+// "0".."9" -> "zero".."nine" (empty for anything else).
+std::string fsdd_digit_word(const std::string& label);
+// FSDD items as enrolment utterances for adapt_acoustic_model (train speech): each clip as it
+// is decoded (fsdd_clip, seeded by its position), its digit word, its file name as the id.
+Result<std::vector<AdaptationUtterance>> fsdd_enrolment(const std::vector<AudioItem>& items,
+                                                        double pad_seconds = kFsddPadSeconds);
 
 // Speech Commands decision constants, chosen on the synthetic espeak-ng *tuning* voices plus
 // FSDD speaker george's digits (real speech, all out of the 10-word grammar); see README.md.

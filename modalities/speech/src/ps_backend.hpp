@@ -28,6 +28,7 @@ struct PsConfig {
   bool reject = true;
   double garbage_phone_weight = 1.0;
   double frequency_warp = 1.0;  // 1 = off
+  std::string mfc_log_dir;      // -mfclogdir (empty = off)
 };
 
 class PsDecoder {

@@ -132,6 +132,7 @@ Result<std::unique_ptr<Recognizer>> Recognizer::create(const RecognizerOptions& 
   c.remove_silence = options.remove_silence;
   c.remove_noise = options.remove_noise;
   c.frequency_warp = options.frequency_warp;
+  c.mfc_log_dir = options.feature_log_dir.string();
   c.jsgf = grammar.jsgf;
   c.source = grammar.source;
   c.reject = options.reject_out_of_grammar;

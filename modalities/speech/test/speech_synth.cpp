@@ -5,6 +5,7 @@
 //
 //   speech_synth OUT [--layout speech-commands|fsdd] [--per-class N] [--voices tune|test|all]
 //                [--seed S] [--rate HZ (fsdd only, default 8000)] [--require] [--fresh]
+//   --voices also takes a comma-separated list of espeak-ng voices (e.g. one talker).
 //
 // Voices are espeak-ng accents x variants, split into two disjoint halves (accents and
 // variants both differ) so that thresholds tuned on `tune` can be reported on `test`.
@@ -27,6 +28,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <random>
+#include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -56,6 +58,12 @@ std::vector<std::string> voices(const std::string& set) {
   };
   if (set == "tune" || set == "all") add(tune_accents, tune_variants);
   if (set == "test" || set == "all") add(test_accents, test_variants);
+  if (out.empty()) {  // an explicit list of espeak-ng voices, e.g. "en-gb-scotland+m2" (one talker)
+    std::stringstream ss(set);
+    std::string v;
+    while (std::getline(ss, v, ','))
+      if (!v.empty()) out.push_back(v);
+  }
   return out;
 }
 
@@ -157,7 +165,7 @@ int main(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help") {
     std::fprintf(stderr,
                  "usage: speech_synth OUT [--layout speech-commands|fsdd] [--per-class N] "
-                 "[--voices tune|test|all] [--seed S] [--rate HZ] [--require] [--fresh]\n");
+                 "[--voices tune|test|all|V1,V2] [--seed S] [--rate HZ] [--require] [--fresh]\n");
     return argc < 2 ? 2 : 0;
   }
   const fs::path out = argv[1];
@@ -199,7 +207,7 @@ int main(int argc, char** argv) {
   }
   const auto vs = voices(voice_set);
   if (vs.empty() || per_class <= 0) {
-    std::fprintf(stderr, "speech_synth: --voices tune|test|all and --per-class > 0\n");
+    std::fprintf(stderr, "speech_synth: --voices tune|test|all|V1,V2 and --per-class > 0\n");
     return 2;
   }
   if (!have_espeak()) {

@@ -43,7 +43,8 @@ struct AnalysisOptions {
   std::string voice_method = "gmm_ubm";
   std::filesystem::path voice_model;
   // The child's calibration: a folder with face_model.yaml (the 3-D landmark shape for head pose,
-  // `dreamsense train face`) and/or gaze.yaml (gaze constants, `dreamsense train gaze`).
+  // `dreamsense train face`), gaze.yaml (gaze constants, `dreamsense train gaze`) and/or
+  // speech_model/ (an acoustic model adapted to the child's voice, `dreamsense train speech`).
   // Empty subject_dir: when subject_from_session is true and the session's metadata `subject`
   // names a folder under subjects_dir, that folder; otherwise no calibration (the generic face
   // model and the built-in gaze constants, modalities/head_pose and gaze READMEs).
@@ -53,6 +54,7 @@ struct AnalysisOptions {
   // Explicit files, overriding the subject folder's.
   std::filesystem::path face_model;
   std::filesystem::path gaze_model;
+  std::filesystem::path speech_model;  // a model folder for recognizeSpeech
   // Mutual gaze (F1). Its robot_head_m is replaced by the session's metadata `robot_head_m`
   // ("x y z" in metres, world) when the session has one and robot_head_from_session is true.
   gaze::MutualGazeOptions mutual_gaze;

@@ -72,6 +72,10 @@ struct RecognizerOptions {
   bool confidence_pass = true;
   // Score units per 10 ms frame that map to one logistic unit in the confidence.
   double confidence_scale = 10.0;
+  // When set, PocketSphinx writes the cepstra of every decode pass here as NNNNNNNNN.mfc
+  // (-mfclogdir; passes numbered from 0). Used to train on exactly what the decoder sees
+  // (acoustic_adaptation.hpp); empty = off.
+  std::filesystem::path feature_log_dir;
   Status check() const;
 };
 
