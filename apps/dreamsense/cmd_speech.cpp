@@ -49,28 +49,17 @@ std::vector<std::string> split_commas(const std::string& s) {
   return out;
 }
 
-// A list file: one utterance per line, "AUDIO WORDS..." (AUDIO relative to the list's folder,
-// any rate, mono); '#' starts a comment. Ids are the line numbers.
+// Enrolment utterances of a list file (speech_datasets.hpp), ids = line numbers.
 Result<std::vector<speech::AdaptationUtterance>> read_utterance_list(
     const std::filesystem::path& list) {
-  std::ifstream in(list);
-  if (!in) return make_error(ErrorCode::kNotFound, "train speech: cannot read {}", list.string());
+  auto listed = speech::load_utterance_list(list, false);
+  if (!listed) return tl::unexpected(listed.error());
   std::vector<speech::AdaptationUtterance> out;
-  std::string line;
-  for (int number = 1; std::getline(in, line); ++number) {
-    if (const size_t hash = line.find('#'); hash != std::string::npos) line.erase(hash);
-    std::istringstream ls(line);
-    std::string audio, word, words;
-    if (!(ls >> audio)) continue;
-    while (ls >> word) words += (words.empty() ? "" : " ") + word;
-    if (words.empty())
-      return make_error(ErrorCode::kInvalidArgument,
-                        "{}:{}: expected an audio file and the words said in it", list.string(),
-                        number);
-    auto a = speech::read_mono_wav(list.parent_path() / audio, 0, "train speech");
+  for (const auto& u : *listed) {
+    auto a = speech::read_utterance_audio(u.audio);
     if (!a)
-      return make_error(a.error().code, "{}:{}: {}", list.string(), number, a.error().message);
-    out.push_back({fmt::format("line{}", number), std::move(a->samples), a->rate_hz, words});
+      return make_error(a.error().code, "{}:{}: {}", list.string(), u.line, a.error().message);
+    out.push_back({fmt::format("line{}", u.line), std::move(a->samples), a->rate_hz, u.words});
   }
   return out;
 }
@@ -80,9 +69,11 @@ void print_summary(const nlohmann::json& r) {
   const std::string name = r["dataset"]["name"];
   std::fprintf(stderr, "speech %s: %zu items, accuracy %.3f", name.c_str(),
                r["dataset"]["items"].get<size_t>(), m["accuracy"].get<double>());
-  if (m.contains("false_accept_rate"))
+  if (m.contains("false_accept_rate") && m["false_accept_rate"].is_number())
     std::fprintf(stderr, ", false_accept_rate %.3f", m["false_accept_rate"].get<double>());
-  if (m.contains("grammar_sentence_accuracy"))
+  if (m.contains("false_reject_rate") && m["false_reject_rate"].is_number())
+    std::fprintf(stderr, ", false_reject_rate %.3f", m["false_reject_rate"].get<double>());
+  if (m.contains("grammar_sentence_accuracy") && m["grammar_sentence_accuracy"].is_number())
     std::fprintf(stderr, ", grammar_sentence_accuracy %.3f",
                  m["grammar_sentence_accuracy"].get<double>());
   if (m.contains("per_speaker"))
@@ -107,16 +98,21 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                   "NAME DIR; NAME: pocketsphinx (pocketsphinx-testdata layout, e.g. "
                   "/usr/share/pocketsphinx/test/data), fsdd (DIGIT_SPEAKER_INDEX.wav, 8 kHz, in "
                   "DIR or DIR/recordings), speech-commands (class folders yes..go, _unknown_, "
-                  "_silence_ of 16 kHz WAVs)")
+                  "_silence_ of 16 kHz WAVs), list (a text file of your own recordings, one per "
+                  "line: AUDIO WORDS... or AUDIO - for speech that must be rejected; needs "
+                  "--grammar)")
       ->expected(2)
       ->required();
   auto& r = flags->options.recognizer;
   cmd->add_option("--model", r.model_dir,
-                  "PocketSphinx acoustic model folder (pocketsphinx, speech-commands, and fsdd "
-                  "with --fsdd-model en-us)")
+                  "PocketSphinx acoustic model folder, also one adapted by train speech "
+                  "(pocketsphinx, speech-commands, list, and fsdd with --fsdd-model en-us)")
       ->default_val(r.model_dir.string());
   cmd->add_option("--dict", r.dictionary, "Pronunciation dictionary")
       ->default_val(r.dictionary.string());
+  cmd->add_option("--grammar", flags->options.grammar,
+                  "list: the grammar (JSGF, or SRGS .grxml) the utterances are decoded under")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--garbage-weight", flags->garbage_weight,
                   "Phone-loop weight of the rejection branch, (0, 1]; higher rejects more "
                   "(default per layout: pocketsphinx 1, speech-commands " +
@@ -176,9 +172,10 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
     auto& o = flags->options;
     o.dataset = flags->dataset[0];
     o.dir = flags->dataset[1];
-    if (o.dataset != "pocketsphinx" && o.dataset != "fsdd" && o.dataset != "speech-commands") {
+    if (o.dataset != "pocketsphinx" && o.dataset != "fsdd" && o.dataset != "speech-commands" &&
+        o.dataset != "list") {
       exit_code = fail("eval speech: dataset " + o.dataset +
-                       " is not supported (pocketsphinx, fsdd, speech-commands)");
+                       " is not supported (pocketsphinx, fsdd, speech-commands, list)");
       return;
     }
     auto resampler = speech::parse_resampler(flags->resampler);

@@ -487,11 +487,17 @@ TEST_F(Cli, TrainSpeechAdaptsToATalkerAndAnalyzeUsesTheModel) {
                       << (cards / "004.wav").string() << " five five\n"
                       << (cards / "005.wav").string()
                       << " eight of spades four of clubs seven of hearts\n";
+  // A wrong transcript far longer than its audio cannot be aligned: left out and reported.
+  std::string wrong;
+  for (int i = 0; i < 40; ++i) wrong += " ten of clubs";
+  std::ofstream(list, std::ios::app) << (cards / "004.wav").string() << wrong << "\n";
   RunResult r = run("train speech --dataset list " + list.string() + " --out " + model.string() +
                     " --min-utterances 3");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string provenance = slurp(model / "adaptation.yaml");
-  EXPECT_NE(provenance.find("utterances: 5"), std::string::npos) << provenance;
+  EXPECT_NE(provenance.find("utterances: 6"), std::string::npos) << provenance;
+  EXPECT_NE(provenance.find("trained_utterances: 5"), std::string::npos) << provenance;
+  EXPECT_NE(provenance.find("not_aligned: [line7]"), std::string::npos) << provenance;
   EXPECT_NE(provenance.find("rate_hz: 16000"), std::string::npos) << provenance;
   EXPECT_TRUE(fs::exists(model / "means"));
 
@@ -500,6 +506,28 @@ TEST_F(Cli, TrainSpeechAdaptsToATalkerAndAnalyzeUsesTheModel) {
           model.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("speech: acoustic model " + model.string()), std::string::npos) << r.err;
+
+  // The model measured on recordings with the grammar: the cards talker's first take is
+  // recognised, another talker's command and other speech are rejected.
+  const fs::path data = cards.parent_path(), eval_list = root() / "eval.list";
+  std::ofstream(eval_list) << (cards / "001.wav").string() << " ten of clubs\n"
+                           << (data / "goforward.raw").string() << " -\n"
+                           << (data / "numbers.raw").string() << " -\n";
+  const fs::path eval_json = root() / "eval_list.json";
+  r = run("eval speech --dataset list " + eval_list.string() + " --grammar " +
+          (cards / "cards.gram").string() + " --model " + model.string() + " --json " +
+          eval_json.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json e = json::parse(slurp(eval_json));
+  EXPECT_EQ(e["dataset"]["name"], "list");
+  EXPECT_EQ(e["metrics"]["in_grammar_items"], 1);
+  EXPECT_EQ(e["metrics"]["out_of_grammar_items"], 2);
+  EXPECT_EQ(e["metrics"]["grammar_sentence_accuracy"], 1.0) << e.dump(1);
+  EXPECT_EQ(e["metrics"]["false_accept_rate"], 0.0) << e.dump(1);
+  EXPECT_NE(e["protocol"].get<std::string>().find(model.string()), std::string::npos);
+  r = run("eval speech --dataset list " + eval_list.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--grammar"), std::string::npos) << r.err;
 
   const fs::path bad_list = root() / "bad.list";
   std::ofstream(bad_list) << (cards / "001.wav").string() << " ten of clubs\n"

@@ -3,9 +3,11 @@
 #include <sndfile.h>
 
 #include <algorithm>
+#include <fstream>
 #include <map>
 #include <regex>
 #include <set>
+#include <sstream>
 
 namespace dreamsense::speech {
 namespace {
@@ -159,6 +161,40 @@ Result<std::vector<AudioItem>> load_speech_commands(const fs::path& dir) {
   std::stable_sort(items.begin(), items.end(),
                    [](const AudioItem& a, const AudioItem& b) { return a.label < b.label; });
   return items;
+}
+
+Result<std::vector<ListedUtterance>> load_utterance_list(const std::filesystem::path& list,
+                                                         bool allow_reject) {
+  std::ifstream in(list);
+  if (!in || std::filesystem::is_directory(list))
+    return make_error(ErrorCode::kNotFound, "cannot read the utterance list {}", list.string());
+  std::vector<ListedUtterance> out;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (const size_t hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    std::istringstream ls(line);
+    std::string audio, word;
+    if (!(ls >> audio)) continue;
+    ListedUtterance u;
+    u.line = number;
+    u.audio = list.parent_path() / audio;
+    while (ls >> word) u.words += (u.words.empty() ? "" : " ") + word;
+    if (u.words == "-" && allow_reject) {
+      u.words.clear();
+      u.reject = true;
+    } else if (u.words.empty() || u.words == "-") {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "{}:{}: expected an audio file and the words said in it{}", list.string(),
+                        number, allow_reject ? " (or - for speech that must be rejected)" : "");
+    }
+    if (!std::filesystem::is_regular_file(u.audio))
+      return make_error(ErrorCode::kNotFound, "{}:{}: audio file {} not found", list.string(),
+                        number, u.audio.string());
+    out.push_back(std::move(u));
+  }
+  if (out.empty())
+    return make_error(ErrorCode::kInvalidArgument, "{}: no utterances listed", list.string());
+  return out;
 }
 
 }  // namespace dreamsense::speech

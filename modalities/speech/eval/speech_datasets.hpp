@@ -50,4 +50,18 @@ inline constexpr const char* kUnknownLabel = "_unknown_";
 inline constexpr const char* kSilenceLabel = "_silence_";
 Result<std::vector<AudioItem>> load_speech_commands(const std::filesystem::path& dir);
 
+// Utterance list (train speech, eval speech --dataset list): a text file, one utterance per line,
+// "AUDIO WORDS..." with AUDIO relative to the list's folder (WAV/FLAC/... of any rate, mono or
+// channel 0; or 16 kHz s16le .raw); '#' starts a comment, blank lines are skipped. For
+// evaluation the single word "-" marks speech that must be rejected (out of grammar, noise).
+// Missing audio, a line without words (or "-" where it is not allowed): "FILE:LINE: problem".
+struct ListedUtterance {
+  std::filesystem::path audio;
+  std::string words;    // empty for "-"
+  bool reject = false;  // "-": nothing in the grammar was said
+  int line = 0;
+};
+Result<std::vector<ListedUtterance>> load_utterance_list(const std::filesystem::path& list,
+                                                         bool allow_reject);
+
 }  // namespace dreamsense::speech

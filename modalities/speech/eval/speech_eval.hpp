@@ -41,6 +41,7 @@ struct SpeechEvalOptions {
   SpeechPresenceOptions presence;  // speech-commands: the silence check
   double trim_margin_s = -1;       // speech-commands: decode the active span +- this (<0: all)
   bool list_items = true;          // per-item records in the JSON ("items")
+  std::filesystem::path grammar;   // list: the grammar every listed utterance is decoded under
 };
 
 // FSDD protocol constants, tuned on speaker george only (leave-speaker-out; README).
@@ -69,6 +70,10 @@ Result<FsddRecognizer> fsdd_recognizer(const SpeechEvalOptions& options);
 Result<Audio> fsdd_clip(const AudioItem& item, double pad_seconds, size_t seed);
 // "0".."9" -> "zero".."nine" (empty for anything else).
 std::string fsdd_digit_word(const std::string& label);
+// Audio of a listed utterance: any libsndfile format (channel 0 of several), or a headerless
+// 16 kHz s16le mono .raw (PocketSphinx's test files).
+Result<Audio> read_utterance_audio(const std::filesystem::path& path);
+
 // FSDD items as enrolment utterances for adapt_acoustic_model (train speech): each clip as it
 // is decoded (fsdd_clip, seeded by its position), its digit word, its file name as the id.
 Result<std::vector<AdaptationUtterance>> fsdd_enrolment(const std::vector<AudioItem>& items,

@@ -344,19 +344,22 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
     return tl::unexpected(st.error());
   AdaptationReport report;
   {
+    // bw reports an utterance it cannot align ("final state ... not reached") as
+    // 'ERROR: "baum_welch.c", line N: <id> ignored', before that utterance's "utt>" line.
     std::ifstream in(work / "bw.log");
-    std::string line, current;
+    std::string line;
     std::set<std::string> skipped;
     int seen = 0;
     while (std::getline(in, line)) {
-      if (line.rfind("utt>", 0) == 0) {
-        std::istringstream ls(line);
-        std::string tag, index;
-        ls >> tag >> index >> current;
-        ++seen;
-      } else if (!current.empty() && (line.find("final state not reached") != std::string::npos ||
-                                      line.find("ignoring utterance") != std::string::npos)) {
-        skipped.insert(current);
+      if (line.rfind("utt>", 0) == 0) ++seen;
+      const std::string suffix = " ignored";
+      if (line.rfind("ERROR:", 0) == 0 && line.size() > suffix.size() &&
+          line.compare(line.size() - suffix.size(), suffix.size(), suffix) == 0) {
+        const size_t colon = line.rfind(": ");
+        if (colon != std::string::npos) {
+          const std::string id = line.substr(colon + 2, line.size() - suffix.size() - colon - 2);
+          if (ids.count(id)) skipped.insert(id);
+        }
       }
     }
     report.skipped.assign(skipped.begin(), skipped.end());
@@ -431,6 +434,7 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
     y << YAML::EndMap;
     y << YAML::Key << "utterances" << YAML::Value << report.utterances;
     y << YAML::Key << "trained_utterances" << YAML::Value << report.trained_utterances;
+    y << YAML::Key << "not_aligned" << YAML::Value << YAML::Flow << report.skipped;
     y << YAML::Key << "audio_seconds" << YAML::Value << audio_seconds;
     y << YAML::Key << "vocabulary" << YAML::Value << YAML::Flow
       << std::vector<std::string>(vocabulary.begin(), vocabulary.end());

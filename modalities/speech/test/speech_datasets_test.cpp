@@ -213,6 +213,50 @@ TEST(SpeechCommandsLoader, BadInputGivesClearMessages) {
   }
 }
 
+TEST(UtteranceList, ReadsRelativeAudioCommentsAndRejectMarks) {
+  TempDir t;
+  write_wav(t.path() / "audio" / "a.wav", 16000);
+  write_wav(t.path() / "audio" / "b.wav", 8000);
+  std::ofstream(t.path() / "list.txt") << "# enrolment\n"
+                                       << "audio/a.wav  ten of  clubs  # first take\n"
+                                       << "\n"
+                                       << "audio/b.wav -\n";
+  auto eval = load_utterance_list(t.path() / "list.txt", true);
+  ASSERT_TRUE(eval) << eval.error().to_string();
+  ASSERT_EQ(eval->size(), 2u);
+  EXPECT_EQ((*eval)[0].audio, t.path() / "audio" / "a.wav");
+  EXPECT_EQ((*eval)[0].words, "ten of clubs");
+  EXPECT_EQ((*eval)[0].line, 2);
+  EXPECT_FALSE((*eval)[0].reject);
+  EXPECT_TRUE((*eval)[1].reject);
+  EXPECT_EQ((*eval)[1].words, "");
+  EXPECT_EQ((*eval)[1].line, 4);
+  auto audio = read_utterance_audio((*eval)[1].audio);
+  ASSERT_TRUE(audio) << audio.error().to_string();
+  EXPECT_EQ(audio->rate_hz, 8000);
+
+  // Training lists need words on every line.
+  auto train = load_utterance_list(t.path() / "list.txt", false);
+  ASSERT_FALSE(train);
+  EXPECT_NE(train.error().message.find("list.txt:4"), std::string::npos) << train.error().message;
+}
+
+TEST(UtteranceList, BadListsNameFileAndLine) {
+  TempDir t;
+  write_wav(t.path() / "a.wav", 16000);
+  auto error_of = [&](const std::string& text) {
+    std::ofstream(t.path() / "l.txt") << text;
+    auto r = load_utterance_list(t.path() / "l.txt", true);
+    return r ? std::string("no error") : r.error().message;
+  };
+  EXPECT_NE(error_of("a.wav one\nmissing.wav two\n").find("l.txt:2: audio file"),
+            std::string::npos);
+  EXPECT_NE(error_of("a.wav\n").find("l.txt:1: expected"), std::string::npos);
+  EXPECT_NE(error_of("# only a comment\n").find("no utterances"), std::string::npos);
+  EXPECT_FALSE(load_utterance_list(t.path() / "nothing.txt", true));
+  EXPECT_FALSE(load_utterance_list(t.path(), true));  // a folder
+}
+
 TEST(SpeechEval, UnknownLayoutAndBadOptions) {
   SpeechEvalOptions o;
   o.dataset = "timit";
