@@ -6,13 +6,13 @@
 #include <atomic>
 #include <cerrno>
 #include <cmath>
-#include <condition_variable>
 #include <cstdarg>
 #include <cstdio>
-#include <deque>
 #include <mutex>
 #include <string>
 #include <thread>
+
+#include "capture_queue.hpp"
 
 #ifdef DREAMSENSE_HAVE_ALSA
 #include <alsa/asoundlib.h>
@@ -47,12 +47,8 @@ struct AlsaAudioSource::Impl {
 #endif
   std::thread thread;
   std::atomic<bool> stop{false};
-  mutable std::mutex mutex;
-  std::condition_variable cv;
-  std::deque<FramePtr> queue;
-  bool done = false;           // capture thread finished
-  std::optional<Error> error;  // why it finished, if not stop()
-  bool error_reported = false;
+  std::unique_ptr<detail::CaptureQueue> queue;  // made by open()
+  mutable std::mutex stats_mutex;
   AlsaCaptureStats stats;
 
   ~Impl() {
@@ -63,12 +59,7 @@ struct AlsaAudioSource::Impl {
 #endif
   }
 
-  void finish(std::optional<Error> e) {
-    std::lock_guard lock(mutex);
-    done = true;
-    error = std::move(e);
-    cv.notify_all();
-  }
+  void finish(std::optional<Error> e) { queue->finish(std::move(e)); }
 
 #ifdef DREAMSENSE_HAVE_ALSA
   void capture();
@@ -145,7 +136,7 @@ void AlsaAudioSource::Impl::capture() {
                                         snd_strerror(static_cast<int>(n)))});
       lost = true;
       have = 0;
-      std::lock_guard lock(mutex);
+      std::lock_guard lock(stats_mutex);
       ++stats.overruns;
     }
     if (stop) break;
@@ -171,16 +162,10 @@ void AlsaAudioSource::Impl::capture() {
     since_anchor += chunk_frames;
     last_end = anchor + frames_to(since_anchor, rate);
     FramePtr f = make_frame(options.sensor, stamp, sequence++, std::move(c));
-    {
-      std::lock_guard lock(mutex);
-      queue.push_back(std::move(f));
-      ++stats.chunks;
-      while (queue.size() > options.max_queued) {
-        queue.pop_front();
-        ++stats.dropped_chunks;
-      }
-    }
-    cv.notify_all();
+    const size_t dropped = queue->push(std::move(f));
+    std::lock_guard lock(stats_mutex);
+    ++stats.chunks;
+    stats.dropped_chunks += dropped;
   }
   finish(std::nullopt);
 }
@@ -202,6 +187,7 @@ Result<std::unique_ptr<AlsaAudioSource>> AlsaAudioSource::open(
   std::call_once(handler_once, [] { snd_lib_error_set_handler(alsa_error_handler); });
   auto impl = std::make_unique<Impl>();
   impl->options = options;
+  impl->queue = std::make_unique<detail::CaptureQueue>(options.max_queued);
   const std::string& dev = options.device;
   int err = snd_pcm_open(&impl->pcm, dev.c_str(), SND_PCM_STREAM_CAPTURE, 0);
   if (err < 0) {
@@ -272,19 +258,7 @@ Result<std::unique_ptr<AlsaAudioSource>> AlsaAudioSource::open(
 }
 
 Result<FramePtr> AlsaAudioSource::next() {
-  Impl& m = *impl_;
-  std::unique_lock lock(m.mutex);
-  m.cv.wait(lock, [&] { return !m.queue.empty() || m.done; });
-  if (!m.queue.empty()) {
-    FramePtr f = std::move(m.queue.front());
-    m.queue.pop_front();
-    return f;
-  }
-  if (m.error && !m.error_reported) {
-    m.error_reported = true;
-    return tl::unexpected(*m.error);
-  }
-  return make_error(ErrorCode::kEndOfStream, "audio '{}': capture stopped", m.options.sensor);
+  return impl_->queue->pop(fmt::format("audio '{}'", impl_->options.sensor));
 }
 
 SourceInfo AlsaAudioSource::info() const {
@@ -302,14 +276,10 @@ SourceInfo AlsaAudioSource::info() const {
   return i;
 }
 
-void AlsaAudioSource::stop() {
-  impl_->stop = true;
-  std::lock_guard lock(impl_->mutex);
-  impl_->cv.notify_all();
-}
+void AlsaAudioSource::stop() { impl_->stop = true; }  // the capture thread then finishes the queue
 
 AlsaCaptureStats AlsaAudioSource::stats() const {
-  std::lock_guard lock(impl_->mutex);
+  std::lock_guard lock(impl_->stats_mutex);
   return impl_->stats;
 }
 

@@ -7,12 +7,12 @@
 
 #include <algorithm>
 #include <atomic>
-#include <condition_variable>
-#include <deque>
 #include <filesystem>
 #include <mutex>
 #include <optional>
 #include <thread>
+
+#include "capture_queue.hpp"
 
 namespace dreamsense::sources {
 
@@ -45,12 +45,8 @@ struct CameraSource::Impl {
   double fps = 0;
   std::thread thread;
   std::atomic<bool> stop{false};
-  mutable std::mutex mutex;
-  std::condition_variable cv;
-  std::deque<FramePtr> queue;
-  bool done = false;
-  std::optional<Error> error;
-  bool error_reported = false;
+  std::unique_ptr<detail::CaptureQueue> queue;
+  mutable std::mutex stats_mutex;
   CameraCaptureStats stats;
 
   ~Impl() {
@@ -75,11 +71,12 @@ struct CameraSource::Impl {
         std::this_thread::sleep_until(due);
       }
       if (!capture.grab()) {
-        finish(is_file ? std::nullopt
-                       : std::optional<Error>(Error{
-                             ErrorCode::kIoError,
-                             fmt::format("camera '{}' ({}): the device stopped delivering frames",
-                                         options.sensor, options.device)}));
+        queue->finish(
+            is_file ? std::nullopt
+                    : std::optional<Error>(Error{ErrorCode::kIoError,
+                                                 fmt::format("camera '{}' ({}): the device stopped "
+                                                             "delivering frames",
+                                                             options.sensor, options.device)}));
         return;
       }
       const int64_t stamp = now_ns();
@@ -93,23 +90,12 @@ struct CameraSource::Impl {
       }
       auto frame = make_frame(options.sensor, Timestamp::from_ns(stamp), sequence++,
                               ColorImage{std::move(image)});
-      std::lock_guard lock(mutex);
+      const size_t dropped = queue->push(std::move(frame));
+      std::lock_guard lock(stats_mutex);
       ++stats.frames;
-      queue.push_back(std::move(frame));
-      while (queue.size() > options.max_queued) {
-        queue.pop_front();
-        ++stats.dropped_frames;
-      }
-      cv.notify_all();
+      stats.dropped_frames += dropped;
     }
-    finish(std::nullopt);
-  }
-
-  void finish(std::optional<Error> e) {
-    std::lock_guard lock(mutex);
-    done = true;
-    error = std::move(e);
-    cv.notify_all();
+    queue->finish(std::nullopt);
   }
 };
 
@@ -120,6 +106,7 @@ Result<std::unique_ptr<CameraSource>> CameraSource::open(const CameraSourceOptio
   if (auto st = options.check(); !st) return tl::unexpected(st.error());
   auto m = std::make_unique<Impl>();
   m->options = options;
+  m->queue = std::make_unique<detail::CaptureQueue>(options.max_queued);
   m->is_file = std::filesystem::is_regular_file(options.device);
   // A path that does not exist: say so without letting every OpenCV backend try it.
   const bool looks_like_path = options.device.find("://") == std::string::npos &&
@@ -160,19 +147,7 @@ Result<std::unique_ptr<CameraSource>> CameraSource::open(const CameraSourceOptio
 }
 
 Result<FramePtr> CameraSource::next() {
-  Impl& m = *impl_;
-  std::unique_lock lock(m.mutex);
-  m.cv.wait(lock, [&] { return !m.queue.empty() || m.done; });
-  if (!m.queue.empty()) {
-    FramePtr f = std::move(m.queue.front());
-    m.queue.pop_front();
-    return f;
-  }
-  if (m.error && !m.error_reported) {
-    m.error_reported = true;
-    return tl::unexpected(*m.error);
-  }
-  return make_error(ErrorCode::kEndOfStream, "camera '{}': capture stopped", m.options.sensor);
+  return impl_->queue->pop(fmt::format("camera '{}'", impl_->options.sensor));
 }
 
 SourceInfo CameraSource::info() const {
@@ -189,14 +164,10 @@ SourceInfo CameraSource::info() const {
   return i;
 }
 
-void CameraSource::stop() {
-  impl_->stop = true;
-  std::lock_guard lock(impl_->mutex);
-  impl_->cv.notify_all();
-}
+void CameraSource::stop() { impl_->stop = true; }  // the capture thread then finishes the queue
 
 CameraCaptureStats CameraSource::stats() const {
-  std::lock_guard lock(impl_->mutex);
+  std::lock_guard lock(impl_->stats_mutex);
   return impl_->stats;
 }
 
