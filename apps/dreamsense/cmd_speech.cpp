@@ -6,7 +6,6 @@
 #include "dreamsense/speech/acoustic_adaptation.hpp"
 
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "commands.hpp"
@@ -46,21 +45,6 @@ std::vector<std::string> split_commas(const std::string& s) {
   std::string item;
   while (std::getline(ss, item, ','))
     if (!item.empty()) out.push_back(item);
-  return out;
-}
-
-// Enrolment utterances of a list file (speech_datasets.hpp), ids = line numbers.
-Result<std::vector<speech::AdaptationUtterance>> read_utterance_list(
-    const std::filesystem::path& list) {
-  auto listed = speech::load_utterance_list(list, false);
-  if (!listed) return tl::unexpected(listed.error());
-  std::vector<speech::AdaptationUtterance> out;
-  for (const auto& u : *listed) {
-    auto a = speech::read_utterance_audio(u.audio);
-    if (!a)
-      return make_error(a.error().code, "{}:{}: {}", list.string(), u.line, a.error().message);
-    out.push_back({fmt::format("line{}", u.line), std::move(a->samples), a->rate_hz, u.words});
-  }
   return out;
 }
 
@@ -279,7 +263,7 @@ void add_train_speech(CLI::App& train, const GlobalFlags& g, int& exit_code) {
     } else if (name == "list") {
       o.recognizer.model_dir = flags->model;
       o.recognizer.dictionary = flags->dict;
-      auto list = read_utterance_list(path);
+      auto list = speech::list_enrolment(path);
       if (!list) {
         exit_code = fail(list.error());
         return;

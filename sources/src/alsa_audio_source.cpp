@@ -258,7 +258,7 @@ Result<std::unique_ptr<AlsaAudioSource>> AlsaAudioSource::open(
 }
 
 Result<FramePtr> AlsaAudioSource::next() {
-  return impl_->queue->pop(fmt::format("audio '{}'", impl_->options.sensor));
+  return impl_->queue->pop(fmt::format("audio '{}': capture stopped", impl_->options.sensor));
 }
 
 SourceInfo AlsaAudioSource::info() const {

@@ -147,7 +147,7 @@ Result<std::unique_ptr<CameraSource>> CameraSource::open(const CameraSourceOptio
 }
 
 Result<FramePtr> CameraSource::next() {
-  return impl_->queue->pop(fmt::format("camera '{}'", impl_->options.sensor));
+  return impl_->queue->pop(fmt::format("camera '{}': capture stopped", impl_->options.sensor));
 }
 
 SourceInfo CameraSource::info() const {

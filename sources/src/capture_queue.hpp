@@ -2,16 +2,19 @@
 // The hand-over between a live device's capture thread and the pipeline's next(): a bounded
 // queue that drops the oldest frame when the consumer falls behind (live data must stay current;
 // the drop is counted by the caller), and the end of capture (stopped, or an error that next()
-// reports once before end-of-stream). Used by CameraSource and AlsaAudioSource.
+// reports once before end-of-stream). Used by CameraSource, AlsaAudioSource and LiveCapture
+// (which merges all devices into one queue).
 
 #include "dreamsense/core/sensor_frame.hpp"
 #include "dreamsense/core/status.hpp"
 
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace dreamsense::sources::detail {
 
@@ -19,16 +22,19 @@ class CaptureQueue {
  public:
   explicit CaptureQueue(size_t capacity) : capacity_(capacity) {}
 
-  // Capture thread: appends a frame; returns how many old frames were dropped to make room.
-  size_t push(FramePtr frame) {
-    size_t dropped = 0;
+  // Capture thread: appends a frame; returns how many old frames were dropped to make room,
+  // each also handed to `on_drop` (after the queue's lock is released) for per-sensor counts.
+  size_t push(FramePtr frame, const std::function<void(const FramePtr&)>& on_drop = {}) {
+    std::vector<FramePtr> dropped;
     {
       std::lock_guard lock(mutex_);
       queue_.push_back(std::move(frame));
-      for (; queue_.size() > capacity_; ++dropped) queue_.pop_front();
+      for (; queue_.size() > capacity_; queue_.pop_front()) dropped.push_back(queue_.front());
     }
     cv_.notify_all();
-    return dropped;
+    if (on_drop)
+      for (const auto& f : dropped) on_drop(f);
+    return dropped.size();
   }
 
   // Capture thread: no more frames; `error` says why when capture did not simply stop.
@@ -42,8 +48,8 @@ class CaptureQueue {
   }
 
   // Consumer: the oldest frame, waiting for one. After finish() and the last frame: the error
-  // (once), then kEndOfStream "<what>: capture stopped".
-  Result<FramePtr> pop(const std::string& what) {
+  // (once), then kEndOfStream with `end_message`.
+  Result<FramePtr> pop(const std::string& end_message) {
     std::unique_lock lock(mutex_);
     cv_.wait(lock, [&] { return !queue_.empty() || done_; });
     if (!queue_.empty()) {
@@ -55,7 +61,7 @@ class CaptureQueue {
       error_reported_ = true;
       return tl::unexpected(*error_);
     }
-    return make_error(ErrorCode::kEndOfStream, "{}: capture stopped", what);
+    return make_error(ErrorCode::kEndOfStream, "{}", end_message);
   }
 
  private:

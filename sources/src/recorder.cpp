@@ -7,11 +7,11 @@
 #include <yaml-cpp/yaml.h>
 
 #include <chrono>
-#include <condition_variable>
-#include <deque>
 #include <mutex>
 #include <set>
 #include <thread>
+
+#include "capture_queue.hpp"
 
 namespace dreamsense::sources {
 
@@ -198,13 +198,12 @@ struct LiveCapture::Impl {
   std::unique_ptr<AlsaAudioSource> audio;
   std::unique_ptr<SessionWriter> writer;  // when recording
   std::vector<std::thread> pumps;
-  mutable std::mutex mutex;
-  std::condition_variable cv;
-  std::deque<FramePtr> queue;
-  size_t max_queued = 256;  // frames of all devices waiting for next()
-  int running = 0;          // pump threads still delivering
+  // Frames of all devices waiting for next(); the oldest are dropped when the consumer falls
+  // behind. Finished with the first failure when the last pump ends.
+  detail::CaptureQueue queue{256};
+  mutable std::mutex mutex;  // writer, stats, running, failure
+  int running = 0;           // pump threads still delivering
   std::optional<Error> failure;
-  bool failure_reported = false;
   bool finished = false;
   RecordStats stats;
 
@@ -235,25 +234,28 @@ struct LiveCapture::Impl {
         if (!is_end_of_stream(f.error())) fail(f.error());
         break;
       }
-      std::unique_lock lock(mutex);
-      if (writer) {
-        if (auto st = writer->write(**f); !st) {
-          lock.unlock();
-          fail(st.error());
-          break;
-        }
+      Status written = ok_status();
+      {
+        std::lock_guard lock(mutex);
+        if (writer) written = writer->write(**f);
+        if (written) ++stats.streams[id].frames_written;
       }
-      ++stats.streams[id].frames_written;
-      queue.push_back(std::move(*f));
-      while (queue.size() > max_queued) {  // the consumer fell behind: drop the oldest
-        ++stats.streams[queue.front()->sensor].frames_dropped;
-        queue.pop_front();
+      if (!written) {
+        fail(written.error());
+        break;
       }
-      cv.notify_all();
+      queue.push(std::move(*f), [this](const FramePtr& dropped) {
+        std::lock_guard lock(mutex);
+        ++stats.streams[dropped->sensor].frames_dropped;
+      });
     }
-    std::lock_guard lock(mutex);
-    --running;
-    cv.notify_all();
+    std::optional<Error> end;
+    {
+      std::lock_guard lock(mutex);
+      if (--running > 0) return;
+      end = failure;
+    }
+    queue.finish(std::move(end));
   }
 };
 
@@ -376,21 +378,7 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
   return std::unique_ptr<LiveCapture>(new LiveCapture(std::move(m)));
 }
 
-Result<FramePtr> LiveCapture::next() {
-  Impl& m = *impl_;
-  std::unique_lock lock(m.mutex);
-  m.cv.wait(lock, [&] { return !m.queue.empty() || m.running == 0; });
-  if (!m.queue.empty()) {
-    FramePtr f = std::move(m.queue.front());
-    m.queue.pop_front();
-    return f;
-  }
-  if (m.failure && !m.failure_reported) {
-    m.failure_reported = true;
-    return tl::unexpected(*m.failure);
-  }
-  return make_error(ErrorCode::kEndOfStream, "live capture stopped");
-}
+Result<FramePtr> LiveCapture::next() { return impl_->queue.pop("live capture stopped"); }
 
 SourceInfo LiveCapture::info() const {
   SourceInfo i;

@@ -20,10 +20,10 @@ TEST(CaptureQueue, DropsTheOldestWhenTheConsumerFallsBehind) {
   EXPECT_EQ(q.push(frame(0)), 0u);
   EXPECT_EQ(q.push(frame(1)), 0u);
   EXPECT_EQ(q.push(frame(2)), 1u);  // frame 0 goes
-  auto a = q.pop("mic");
+  auto a = q.pop("mic: capture stopped");
   ASSERT_TRUE(a);
   EXPECT_EQ((*a)->sequence, 1u);
-  auto b = q.pop("mic");
+  auto b = q.pop("mic: capture stopped");
   ASSERT_TRUE(b);
   EXPECT_EQ((*b)->sequence, 2u);
 }
@@ -35,15 +35,15 @@ TEST(CaptureQueue, AWaitingConsumerGetsTheFrameThenTheErrorOnceThenTheEnd) {
     q.push(frame(7));
     q.finish(Error{ErrorCode::kIoError, "device unplugged"});
   });
-  auto f = q.pop("audio 'mic'");  // blocks until the producer delivers
+  auto f = q.pop("audio 'mic': capture stopped");  // blocks until the producer delivers
   producer.join();
   ASSERT_TRUE(f);
   EXPECT_EQ((*f)->sequence, 7u);
-  auto e = q.pop("audio 'mic'");
+  auto e = q.pop("audio 'mic': capture stopped");
   ASSERT_FALSE(e);
   EXPECT_EQ(e.error().code, ErrorCode::kIoError);
   EXPECT_EQ(e.error().message, "device unplugged");
-  auto end = q.pop("audio 'mic'");
+  auto end = q.pop("audio 'mic': capture stopped");
   ASSERT_FALSE(end);
   EXPECT_EQ(end.error().code, ErrorCode::kEndOfStream);
   EXPECT_EQ(end.error().message, "audio 'mic': capture stopped");
@@ -52,7 +52,7 @@ TEST(CaptureQueue, AWaitingConsumerGetsTheFrameThenTheErrorOnceThenTheEnd) {
 TEST(CaptureQueue, StoppedWithoutErrorIsJustTheEnd) {
   CaptureQueue q(1);
   q.finish(std::nullopt);
-  auto end = q.pop("camera 'c'");
+  auto end = q.pop("camera 'c': capture stopped");
   ASSERT_FALSE(end);
   EXPECT_EQ(end.error().code, ErrorCode::kEndOfStream);
 }

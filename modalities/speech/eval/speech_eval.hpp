@@ -78,6 +78,9 @@ Result<Audio> read_utterance_audio(const std::filesystem::path& path);
 // is decoded (fsdd_clip, seeded by its position), its digit word, its file name as the id.
 Result<std::vector<AdaptationUtterance>> fsdd_enrolment(const std::vector<AudioItem>& items,
                                                         double pad_seconds = kFsddPadSeconds);
+// The utterances of a list file (load_utterance_list; every line needs words) as enrolment
+// utterances, ids "line<N>"; unreadable audio is "FILE:LINE: problem".
+Result<std::vector<AdaptationUtterance>> list_enrolment(const std::filesystem::path& list);
 
 // Speech Commands decision constants, chosen on the synthetic espeak-ng *tuning* voices plus
 // FSDD speaker george's digits (real speech, all out of the 10-word grammar); see README.md.

@@ -1,5 +1,7 @@
 #include "dreamsense/speech/acoustic_adaptation.hpp"
 
+#include "dreamsense/speech/srgs.hpp"
+
 #include <yaml-cpp/yaml.h>
 
 #include <cctype>
@@ -94,9 +96,15 @@ std::map<std::string, std::string> read_feat_params(const fs::path& path) {
   return p;
 }
 
-// bw's feature and model-type flags from the model's feat.params (the decoder's settings).
-Result<std::vector<std::string>> bw_feature_flags(const std::map<std::string, std::string>& p,
-                                                  const fs::path& model_dir) {
+// bw's feature and model-type flags from the model's feat.params (the decoder's settings), and
+// the Gaussian tying map_adapt needs as well.
+struct BwFeatures {
+  std::vector<std::string> flags;
+  std::string tying;  // -ts2cbfn: .semi. | .ptm. | .cont.
+};
+
+Result<BwFeatures> bw_features(const std::map<std::string, std::string>& p,
+                               const fs::path& model_dir) {
   auto get = [&](const std::string& k, const std::string& def) {
     auto it = p.find(k);
     return it == p.end() ? def : it->second;
@@ -105,30 +113,21 @@ Result<std::vector<std::string>> bw_feature_flags(const std::map<std::string, st
     return make_error(ErrorCode::kUnsupported,
                       "acoustic adaptation: {} uses an LDA/MLLT transform, not supported",
                       model_dir.string());
-  std::vector<std::string> f = {
-      "-feat", get("-feat", "1s_c_d_dd"), "-ceplen",  get("-ncep", "13"),
-      "-agc",  get("-agc", "none"),       "-varnorm", get("-varnorm", "no")};
+  BwFeatures b;
+  b.flags = {"-feat", get("-feat", "1s_c_d_dd"), "-ceplen",  get("-ncep", "13"),
+             "-agc",  get("-agc", "none"),       "-varnorm", get("-varnorm", "no")};
   // The decoder normalises a whole utterance at once (batch = SphinxTrain's "current"); live
   // CMN starts from a prior.
   std::string cmn = get("-cmn", "current");
   if (cmn == "batch") cmn = "current";
   if (cmn == "live") cmn = "prior";
-  f.insert(f.end(), {"-cmn", cmn});
-  if (p.count("-svspec")) f.insert(f.end(), {"-svspec", p.at("-svspec")});
+  b.flags.insert(b.flags.end(), {"-cmn", cmn});
+  if (p.count("-svspec")) b.flags.insert(b.flags.end(), {"-svspec", p.at("-svspec")});
   const std::string model = get("-model", get("-feat", "") == "s2_4x" ? "semi" : "cont");
-  if (model == "semi")
-    f.insert(f.end(), {"-ts2cbfn", ".semi.", "-topn", "4"});
-  else if (model == "ptm")
-    f.insert(f.end(), {"-ts2cbfn", ".ptm.", "-topn", "4"});
-  else
-    f.insert(f.end(), {"-ts2cbfn", ".cont."});
-  return f;
-}
-
-std::string ts2cb(const std::vector<std::string>& flags) {
-  for (size_t i = 0; i + 1 < flags.size(); ++i)
-    if (flags[i] == "-ts2cbfn") return flags[i + 1];
-  return ".cont.";
+  b.tying = model == "semi" ? ".semi." : model == "ptm" ? ".ptm." : ".cont.";
+  b.flags.insert(b.flags.end(), {"-ts2cbfn", b.tying});
+  if (model == "semi" || model == "ptm") b.flags.insert(b.flags.end(), {"-topn", "4"});
+  return b;
 }
 
 // The first pronunciation of every word of `words` from the dictionary; missing words listed.
@@ -190,6 +189,8 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
                       "acoustic adaptation needs at least {} utterances (got {})",
                       options.min_utterances, utterances.size());
   std::set<std::string> ids, vocabulary;
+  std::string fileids, transcription;  // bw's control and transcript files
+  double audio_seconds = 0;
   for (const auto& u : utterances) {
     if (!valid_id(u.id))
       return make_error(ErrorCode::kInvalidArgument,
@@ -202,13 +203,16 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
     if (u.sample_rate_hz <= 0 || u.samples.empty())
       return make_error(ErrorCode::kInvalidArgument,
                         "acoustic adaptation: utterance '{}' has no audio", u.id);
-    std::istringstream ws(u.words);
-    std::string w;
-    int n = 0;
-    while (ws >> w) vocabulary.insert(w), ++n;
-    if (n == 0)
+    const auto words = split_words(u.words);
+    if (words.empty())
       return make_error(ErrorCode::kInvalidArgument,
                         "acoustic adaptation: utterance '{}' has no words", u.id);
+    vocabulary.insert(words.begin(), words.end());
+    fileids += u.id + "\n";
+    transcription += "<s>";
+    for (const auto& w : words) transcription += " " + w;
+    transcription += fmt::format(" </s> ({})\n", u.id);
+    audio_seconds += static_cast<double>(u.samples.size()) / u.sample_rate_hz;
   }
   const fs::path bw = options.sphinxtrain_dir / "bw",
                  map_adapt = options.sphinxtrain_dir / "map_adapt";
@@ -231,8 +235,8 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
                       "acoustic adaptation: {} has neither sendump nor mixture_weights",
                       model.string());
   const auto feat_params = read_feat_params(model / "feat.params");
-  auto feature_flags = bw_feature_flags(feat_params, model);
-  if (!feature_flags) return tl::unexpected(feature_flags.error());
+  auto features = bw_features(feat_params, model);
+  if (!features) return tl::unexpected(features.error());
   auto dictionary = dictionary_subset(ro.dictionary, vocabulary);
   if (!dictionary) return tl::unexpected(dictionary.error());
   std::error_code ec;
@@ -245,9 +249,9 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
     return make_error(ErrorCode::kIoError, "cannot create {}: {}", out_dir.string(), ec.message());
   const fs::path work = out_dir / "work", feat = work / "feat", base = work / "base",
                  accum = work / "accum", mapped = work / "map";
-  for (const auto& d : {feat, base, accum, mapped}) fs::create_directories(d, ec);
-  if (ec)
-    return make_error(ErrorCode::kIoError, "cannot create {}: {}", work.string(), ec.message());
+  for (const auto& d : {feat, base, accum, mapped})
+    if (fs::create_directories(d, ec); ec)
+      return make_error(ErrorCode::kIoError, "cannot create {}: {}", d.string(), ec.message());
   auto report_progress = [&](double p) {
     if (progress) progress(p);
   };
@@ -281,16 +285,6 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
       report_progress(0.6 * static_cast<double>(k + 1) / utterances.size());
     }
   }
-  double audio_seconds = 0;
-  std::string fileids, transcription;
-  for (const auto& u : utterances) {
-    audio_seconds += static_cast<double>(u.samples.size()) / u.sample_rate_hz;
-    fileids += u.id + "\n";
-    std::istringstream ws(u.words);
-    std::string w, words;
-    while (ws >> w) words += " " + w;
-    transcription += fmt::format("<s>{} </s> ({})\n", words, u.id);
-  }
   std::string fillers = "<s> SIL\n</s> SIL\n<sil> SIL\n";
   if (fs::exists(model / "noisedict")) {
     std::ifstream in(model / "noisedict");
@@ -307,17 +301,21 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
                          work / "mdef_convert.log");
       !st)
     return tl::unexpected(st.error());
-  for (const char* f : {"means", "variances", "transition_matrices", "feat.params"})
+  const bool has_mixture_weights = fs::exists(model / "mixture_weights");
+  std::vector<std::string> copied = {"means", "variances", "transition_matrices", "feat.params"};
+  if (has_mixture_weights) copied.push_back("mixture_weights");
+  for (const auto& f : copied) {
     fs::copy_file(model / f, base / f, fs::copy_options::overwrite_existing, ec);
-  if (fs::exists(model / "mixture_weights")) {
-    fs::copy_file(model / "mixture_weights", base / "mixture_weights", ec);
-  } else {
+    if (ec)
+      return make_error(ErrorCode::kIoError, "cannot copy {}: {}", (model / f).string(),
+                        ec.message());
+  }
+  if (!has_mixture_weights) {
     auto mixw = detail::read_sendump(model / "sendump");
     if (!mixw) return tl::unexpected(mixw.error());
     if (auto st = detail::write_mixture_weights(*mixw, base / "mixture_weights"); !st)
       return tl::unexpected(st.error());
   }
-  if (ec) return make_error(ErrorCode::kIoError, "cannot copy the model: {}", ec.message());
 
   // 3. Baum-Welch statistics along the transcripts.
   std::vector<std::string> bw_args = {bw.string(),
@@ -339,7 +337,7 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
                                       "mfc",
                                       "-accumdir",
                                       accum.string()};
-  bw_args.insert(bw_args.end(), feature_flags->begin(), feature_flags->end());
+  bw_args.insert(bw_args.end(), features->flags.begin(), features->flags.end());
   if (auto st = run_tool(bw_args, work / "bw.log", "Counts saved"); !st)
     return tl::unexpected(st.error());
   AdaptationReport report;
@@ -377,7 +375,7 @@ Result<AdaptationReport> adapt_into(std::span<const AdaptationUtterance> utteran
                           "-moddeffn",
                           (base / "mdef").string(),
                           "-ts2cbfn",
-                          ts2cb(*feature_flags),
+                          features->tying,
                           "-meanfn",
                           (base / "means").string(),
                           "-varfn",

@@ -11,7 +11,7 @@ namespace {
 
 class Reader {
  public:
-  explicit Reader(const std::filesystem::path& p) : in_(p, std::ios::binary), path_(p) {}
+  explicit Reader(const std::filesystem::path& p) : in_(p, std::ios::binary) {}
   bool open() const { return static_cast<bool>(in_); }
   void set_swap(bool s) { swap_ = s; }
   bool int32(int32_t& v) {
@@ -28,7 +28,6 @@ class Reader {
 
  private:
   std::ifstream in_;
-  std::filesystem::path path_;
   bool swap_ = false;
 };
 
