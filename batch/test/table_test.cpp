@@ -2,38 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include "test_util.hpp"
+
 namespace dreamsense::batch {
 namespace {
 
-// A strict RFC 4180 reader (the test's own), to check that what we write reads back.
-std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
-  std::vector<std::vector<std::string>> rows(1, std::vector<std::string>(1));
-  bool quoted = false;
-  for (size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    auto& cell = rows.back().back();
-    if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
-        cell += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        cell += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      rows.back().emplace_back();
-    } else if (c == '\n') {
-      rows.emplace_back(1);
-    } else {
-      cell += c;
-    }
-  }
-  if (rows.back().size() == 1 && rows.back()[0].empty()) rows.pop_back();
-  return rows;
-}
+using test::parse_csv;
 
 TEST(Table, Rfc4180Quoting) {
   EXPECT_EQ(csv_cell("plain text"), "plain text");
