@@ -93,8 +93,8 @@ int run_slurm(const batch::BatchOptions& o, int max_running,
     std::fprintf(stderr,
                  "batch.csv is written by job %s when the array has ended; to check before:\n"
                  "  squeue -j %s\n  %s batch collect %s\n",
-                 sub->collect_job_id.c_str(), sub->job_id.c_str(),
-                 o.executable.string().c_str(), o.out_dir.string().c_str());
+                 sub->collect_job_id.c_str(), sub->job_id.c_str(), o.executable.string().c_str(),
+                 o.out_dir.string().c_str());
   }
   return kExitOk;
 }

@@ -87,8 +87,7 @@ Result<StoredPlan> read_plan(const fs::path& out_dir) {
   const fs::path path = out_dir / kPlanFile;
   std::ifstream in(path);
   if (!in)
-    return make_error(ErrorCode::kNotFound, "{}: cannot read (not a batch folder?)",
-                      path.string());
+    return make_error(ErrorCode::kNotFound, "{}: cannot read (not a batch folder?)", path.string());
   std::stringstream text;
   text << in.rdbuf();
   auto j = nlohmann::json::parse(text.str(), nullptr, false);
@@ -186,17 +185,16 @@ bool empty_but_lock(const fs::path& dir) {
 
 Result<FolderLock> lock_batch_folder(const fs::path& out_dir) {
   const fs::path path = out_dir / kLockFile;
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd < 0)
-      return make_error(ErrorCode::kIoError, "{}: cannot open: {}", path.string(),
-                        std::strerror(errno));
-    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-      ::close(fd);
-      return make_error(ErrorCode::kFailedPrecondition,
-                        "{}: another dreamsense batch is running on this folder",
-                        out_dir.string());
-    }
-    return FolderLock(fd);
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0)
+    return make_error(ErrorCode::kIoError, "{}: cannot open: {}", path.string(),
+                      std::strerror(errno));
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    return make_error(ErrorCode::kFailedPrecondition,
+                      "{}: another dreamsense batch is running on this folder", out_dir.string());
+  }
+  return FolderLock(fd);
 }
 
 FolderLock::FolderLock(FolderLock&& o) noexcept : fd_(std::exchange(o.fd_, -1)) {}
@@ -212,6 +210,11 @@ Status BatchOptions::check() const {
                       jobs);
   if (executable.empty())
     return make_error(ErrorCode::kInvalidArgument, "batch: no dreamsense executable to run");
+  for (const auto& a : analyze_args)
+    if (a == "--out" || a.rfind("--out=", 0) == 0)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "batch: --out after -- is not an analyze flag here (each analysis writes "
+                        "into the batch folder's <name>/)");
   if (kill_grace_s < 0)
     return make_error(ErrorCode::kInvalidArgument, "batch: kill_grace_s must be >= 0");
   return input_options.check();
@@ -221,7 +224,7 @@ std::vector<std::string> analyze_command(const fs::path& executable, const fs::p
                                          const fs::path& out,
                                          const std::vector<std::string>& analyze_args) {
   std::vector<std::string> argv = {executable.string(), "analyze", input.string(), "--out",
-                                   out.string(), "-q"};
+                                   out.string(),        "-q"};
   argv.insert(argv.end(), analyze_args.begin(), analyze_args.end());
   return argv;
 }
@@ -292,8 +295,8 @@ bool record_outcome(const fs::path& out_dir, const PlannedInput& in,
     std::error_code ec;
     if (!fs::is_regular_file(dir / kSummaryFile, ec)) {
       reason = fmt::format("analyze exited with success but wrote no {}", kSummaryFile);
-    } else if (auto s = write_done_record(
-                   dir, {in.path.string(), analyze_args, o.seconds, utc_now()});
+    } else if (auto s =
+                   write_done_record(dir, {in.path.string(), analyze_args, o.seconds, utc_now()});
                !s) {
       reason = s.error().message;
     } else {
@@ -384,8 +387,8 @@ Result<BatchReport> run_batch(const BatchOptions& options, const BatchEvents& ev
         } else if (record_outcome(options.out_dir, in, options.analyze_args, o, &reason)) {
           say(fmt::format("ok {} ({:.1f} s)", in.name, o.seconds));
         } else {
-          say(fmt::format("{} {}: {}", o.interrupted ? "interrupted" : "failed", in.given,
-                          reason));
+          say(o.interrupted ? fmt::format("interrupted {}", in.name)
+                            : fmt::format("failed {}: {}", in.given, reason));
         }
         ++done;
         progress();
@@ -447,8 +450,10 @@ Result<bool> run_task(const fs::path& out_dir, size_t index,
   run_pool({{analyze_command(executable, input.path, out_dir / input.name, analyze_args),
              log_path(out_dir, input.name)}},
            po, nullptr, [&](size_t, const ChildOutcome& o) {
-             if (o.started) finished = record_outcome(out_dir, input, analyze_args, o, &reason);
-             else reason = "interrupted before it started";
+             if (o.started)
+               finished = record_outcome(out_dir, input, analyze_args, o, &reason);
+             else
+               reason = "interrupted before it started";
            });
   if (!finished) return make_error(ErrorCode::kFailedPrecondition, "{}: {}", line, reason);
   return true;

@@ -106,8 +106,8 @@ void expand_folder(const std::string& given, const fs::path& folder, const Input
       found.push_back(make(shown, e, InputKind::kSession));
       ++inputs;
     } else if (is_folder(e)) {
-      found.push_back(unusable(shown, e, PlanStatus::kSkipped,
-                               "folder without " + o.session_manifest));
+      found.push_back(
+          unusable(shown, e, PlanStatus::kSkipped, "folder without " + o.session_manifest));
     } else if (is_video_file(e, o)) {
       found.push_back(video(shown, e));
       ++inputs;
@@ -155,8 +155,7 @@ std::string output_name(const fs::path& identity, const InputOptions& options) {
   const fs::path file = identity.filename();
   std::string stem = is_video_file(file, options) ? file.stem().string() : file.string();
   for (char& c : stem)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-'))
-      c = '_';
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) c = '_';
   if (!stem.empty() && stem[0] == '.') stem[0] = '_';
   if (stem.size() > 60) stem.resize(60);
   if (stem.empty()) stem = "input";
@@ -215,8 +214,8 @@ std::vector<PlannedInput> expand_inputs(const std::vector<std::string>& argument
       // Two different paths with the same stem and the same 32-bit hash: vanishingly rare, and
       // never resolved silently (a name must not depend on the other inputs).
       in.status = PlanStatus::kFailed;
-      in.reason = fmt::format("output name {} is also that of {}; rename one of them", in.name,
-                              it->second);
+      in.reason =
+          fmt::format("output name {} is also that of {}; rename one of them", in.name, it->second);
       in.name.clear();
     }
   }

@@ -100,8 +100,8 @@ OutputCheck check_output(const fs::path& dir, const std::string& input,
   auto done = read_done_record(dir);
   if (!done) return {OutputState::kPartial, done.error().message};
   if (done->input != input)
-    return {OutputState::kPartial, fmt::format("{} names another input ({})", kDoneFile,
-                                               done->input)};
+    return {OutputState::kPartial,
+            fmt::format("{} names another input ({})", kDoneFile, done->input)};
   if (done->analyze_args != analyze_args)
     return {OutputState::kPartial, "made with other analyze flags"};
   return {OutputState::kFinished, ""};

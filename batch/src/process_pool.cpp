@@ -93,11 +93,17 @@ std::string failure_reason(std::string_view output, int exit_code, int term_sign
     if (starts_with(*it, "error:"))
       found = trim(std::string_view(*it).substr(6));
     else if (it->find("[error]") != std::string::npos ||
-             it->find("[critical]") != std::string::npos ||
-             starts_with(*it, "terminate called"))
+             it->find("[critical]") != std::string::npos || starts_with(*it, "terminate called"))
       found = *it;
   }
-  if (found.empty() && !lines.empty()) found = lines.back();
+  // Else the last line, but not CLI11's closing hint after a usage error.
+  while (found.empty() && !lines.empty()) {
+    if (starts_with(lines.back(), "Run with --help")) {
+      lines.pop_back();
+      continue;
+    }
+    found = lines.back();
+  }
   if (found.size() > 400) found = found.substr(0, 397) + "...";
   if (term_signal != 0) {
     std::string r = "killed by signal " + signal_name(term_signal);
@@ -113,9 +119,9 @@ std::string read_tail(const std::filesystem::path& path, size_t max_bytes) {
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) return {};
   const std::streamoff size = in.tellg();
-  const std::streamoff from =
-      size > static_cast<std::streamoff>(max_bytes) ? size - static_cast<std::streamoff>(max_bytes)
-                                                    : 0;
+  const std::streamoff from = size > static_cast<std::streamoff>(max_bytes)
+                                  ? size - static_cast<std::streamoff>(max_bytes)
+                                  : 0;
   in.seekg(from);
   std::string text(static_cast<size_t>(size - from), '\0');
   in.read(text.data(), static_cast<std::streamsize>(text.size()));
@@ -232,8 +238,8 @@ void run_pool(const std::vector<ChildCommand>& commands, const PoolOptions& opti
       o.interrupted = it->terminated && !o.ok;
       if (!o.ok && o.reason.empty())
         o.reason = o.interrupted ? "interrupted"
-                                 : failure_reason(read_tail(commands[it->index].log),
-                                                  o.exit_code, o.term_signal);
+                                 : failure_reason(read_tail(commands[it->index].log), o.exit_code,
+                                                  o.term_signal);
       const size_t index = it->index;
       it = running.erase(it);
       reaped = true;

@@ -69,8 +69,7 @@ Result<std::string> submit(const std::vector<std::string>& argv) {
   }
   std::string id = run->out;
   if (auto semi = id.find(';'); semi != std::string::npos) id.resize(semi);
-  while (!id.empty() && (id.back() == '\n' || id.back() == '\r' || id.back() == ' '))
-    id.pop_back();
+  while (!id.empty() && (id.back() == '\n' || id.back() == '\r' || id.back() == ' ')) id.pop_back();
   if (id.empty() || id.find_first_not_of("0123456789") != std::string::npos)
     return make_error(ErrorCode::kCorruptData, "{} printed no job id (got \"{}\")", argv[0],
                       run->out);
@@ -125,8 +124,8 @@ Result<SlurmSubmission> submit_slurm(const BatchOptions& options, const SlurmOpt
   sub.job_id = *id;
   if (slurm.collect_job) {
     const fs::path out = fs::absolute(options.out_dir).lexically_normal();
-    const std::string collect = shell_quote(options.executable.string()) + " -q batch collect " +
-                                shell_quote(out.string());
+    const std::string collect =
+        shell_quote(options.executable.string()) + " -q batch collect " + shell_quote(out.string());
     std::vector<std::string> argv = {slurm.sbatch,
                                      "--parsable",
                                      "--dependency=afterany:" + sub.job_id,

@@ -27,8 +27,8 @@ using test::write_text;
 fs::path demo(int seed) {
   static const fs::path dir = [] {
     const fs::path d = DREAMSENSE_BATCH_DEMO_DIR;
-    auto r = run_captured({"sh", DREAMSENSE_SOURCE_DIR "/batch/test/make_demos.sh",
-                           DREAMSENSE_EXE, d.string(), "3"});
+    auto r = run_captured(
+        {"sh", DREAMSENSE_SOURCE_DIR "/batch/test/make_demos.sh", DREAMSENSE_EXE, d.string(), "3"});
     EXPECT_TRUE(r && r->exit_code == 0) << (r ? r->err : r.error().message);
     return d;
   }();
@@ -59,9 +59,9 @@ TEST(BatchCli, SomeInputsFailTheOthersFinish) {
   write_text(t / "videos" / "empty.avi", "");
   write_text(t / "videos" / "notes.txt", "not a video\n");
   const fs::path out = t / "out";
-  const auto r = dreamsense({"batch", demo(1).string(), (t / "broken").string(),
-                             demo(2).string(), (t / "videos").string(), demo(3).string(),
-                             demo(1).string() + "/", "--out", out.string(), "--jobs", "2"});
+  const auto r = dreamsense({"batch", demo(1).string(), (t / "broken").string(), demo(2).string(),
+                             (t / "videos").string(), demo(3).string(), demo(1).string() + "/",
+                             "--out", out.string(), "--jobs", "2"});
   EXPECT_EQ(r.exit_code, 1) << r.err;
   // Every failure listed on stderr with its reason.
   EXPECT_NE(r.err.find("failed: " + (t / "broken").string() + ": " +
@@ -153,8 +153,8 @@ std::vector<pid_t> processes_mentioning(const std::string& text) {
 TEST(BatchCli, KilledMidwayTheRerunRedoesOnlyTheUnfinished) {
   TempDir t;
   const fs::path out = t / "out";
-  const std::vector<std::string> args = {demo(1).string(), demo(2).string(), demo(3).string(),
-                                         "--out", out.string(), "--jobs", "1"};
+  const std::vector<std::string> args = {
+      demo(1).string(), demo(2).string(), demo(3).string(), "--out", out.string(), "--jobs", "1"};
   const pid_t pid = start(args, t / "first.err");
   ASSERT_GT(pid, 0);
   // Wait for the first finished analysis, then SIGKILL the batch (no chance to clean up).

@@ -120,9 +120,9 @@ TEST(Inputs, DuplicatesAreKeptOnce) {
   TempDir t;
   make_session(t / "s1");
   fs::create_directory_symlink(t / "s1", t / "link");
-  const auto v = expand_inputs({(t / "s1").string(), (t / "s1/").string(),
-                                (t / "s1" / ".." / "s1").string(), (t / "link").string(),
-                                t.path().string()});
+  const auto v =
+      expand_inputs({(t / "s1").string(), (t / "s1/").string(), (t / "s1" / ".." / "s1").string(),
+                     (t / "link").string(), t.path().string()});
   // The folder argument expands to link and s1 again.
   ASSERT_EQ(v.size(), 6u);
   EXPECT_EQ(v[0].status, PlanStatus::kRun);

@@ -65,7 +65,8 @@ TEST(OutputState, DamagedSummaryOrDoneRecordIsPartial) {
 
 TEST(OutputState, DoneRecordRoundTrip) {
   TempDir t;
-  ASSERT_TRUE(write_done_record(t.path(), {"/a b/c", {"--x", "y z"}, 2.25, "2024-01-02T03:04:05Z"}));
+  ASSERT_TRUE(
+      write_done_record(t.path(), {"/a b/c", {"--x", "y z"}, 2.25, "2024-01-02T03:04:05Z"}));
   auto r = read_done_record(t.path());
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_EQ(r->input, "/a b/c");

@@ -22,7 +22,8 @@ TEST(FailureReason, LastErrorLineWins) {
                            "line 3: bad key\n[info] bye\n",
                            1, 0),
             "/s/session.yaml: line 3: bad key");
-  EXPECT_EQ(failure_reason("[error] decoder broke\nsomething else\n", 1, 0), "[error] decoder broke");
+  EXPECT_EQ(failure_reason("[error] decoder broke\nsomething else\n", 1, 0),
+            "[error] decoder broke");
   EXPECT_EQ(failure_reason("terminate called after throwing an instance of 'x'\n", 0, SIGABRT)
                 .rfind("killed by signal SIGABRT", 0),
             0u);
@@ -30,6 +31,10 @@ TEST(FailureReason, LastErrorLineWins) {
 
 TEST(FailureReason, FallsBackToLastLineThenExitCode) {
   EXPECT_EQ(failure_reason("one\ntwo\n\n", 2, 0), "two");
+  EXPECT_EQ(failure_reason("The following argument was not expected: --bogus\nRun with --help "
+                           "for more information.\n",
+                           106, 0),
+            "The following argument was not expected: --bogus");
   EXPECT_EQ(failure_reason("", 3, 0), "exit code 3");
   EXPECT_EQ(failure_reason("", -1, SIGSEGV).rfind("killed by signal SIGSEGV", 0), 0u);
   EXPECT_EQ(failure_reason("progress 10%\rprogress 50%\rerror: late\n", 1, 0), "late");
@@ -102,8 +107,7 @@ TEST(ProcessPool, StopTerminatesRunningAndStartsNoMore) {
   run_pool(
       cmds, o, [&](size_t i) { stop = stop || i == 1; },
       [&](size_t i, const ChildOutcome& c) { got[i] = c; });
-  const double s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_LT(s, 20.0);  // not the children's 30 s: they were terminated
   for (int i : {0, 1}) {
     EXPECT_TRUE(got[i].started);
@@ -122,9 +126,9 @@ TEST(ProcessPool, StubbornChildIsKilledAfterTheGracePeriod) {
   PoolOptions o;
   o.kill_grace_s = 0.3;
   o.stop_requested = [&] { return fs::exists(ready); };
-  run_pool({sh("trap '' TERM; touch " + ready.string() + "; while :; do sleep 0.05; done",
-               t / "log")},
-           o, nullptr, [&](size_t, const ChildOutcome& c) { got = c; });
+  run_pool(
+      {sh("trap '' TERM; touch " + ready.string() + "; while :; do sleep 0.05; done", t / "log")},
+      o, nullptr, [&](size_t, const ChildOutcome& c) { got = c; });
   EXPECT_TRUE(got.interrupted);
   EXPECT_EQ(got.term_signal, SIGKILL);
 }

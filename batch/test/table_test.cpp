@@ -51,8 +51,8 @@ TEST(Table, ColumnsAreTheUnionAndCellsReadBack) {
   const std::string text = format_table(rows);
   const auto cells = parse_csv(text);
   ASSERT_EQ(cells.size(), 4u) << text;
-  const std::vector<std::string> header = {"input", "output", "status", "reason",
-                                           "seconds", "ticks", "x.y", "z"};
+  const std::vector<std::string> header = {"input",   "output", "status", "reason",
+                                           "seconds", "ticks",  "x.y",    "z"};
   EXPECT_EQ(cells[0], header);
   EXPECT_EQ(cells[1], (std::vector<std::string>{"/in/a", "a-1", "ok", "", "1.500", "10", "1", ""}));
   EXPECT_EQ(cells[2], (std::vector<std::string>{"/in/b,with comma", "", "failed",
@@ -60,7 +60,9 @@ TEST(Table, ColumnsAreTheUnionAndCellsReadBack) {
   EXPECT_EQ(cells[3], (std::vector<std::string>{"/in/c", "c-3", "ok", "", "2.000", "20", "", "q"}));
 }
 
-TEST(Table, NoRowsStillHasTheHeader) { EXPECT_EQ(format_table({}), "input,output,status,reason,seconds\n"); }
+TEST(Table, NoRowsStillHasTheHeader) {
+  EXPECT_EQ(format_table({}), "input,output,status,reason,seconds\n");
+}
 
 }  // namespace
 }  // namespace dreamsense::batch

@@ -4,12 +4,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-#include <string>
-#include <vector>
 #include <map>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 #include <system_error>
+#include <vector>
 
 namespace dreamsense::batch::test {
 
@@ -81,8 +81,7 @@ inline std::vector<std::vector<std::string>> parse_csv(const std::string& text) 
 }
 
 // batch.csv as one map (column -> cell) per row; every row must have the header's width.
-inline std::vector<std::map<std::string, std::string>> read_table(
-    const std::filesystem::path& p) {
+inline std::vector<std::map<std::string, std::string>> read_table(const std::filesystem::path& p) {
   const auto cells = parse_csv(read_text(p));
   std::vector<std::map<std::string, std::string>> rows;
   if (cells.empty()) return rows;

@@ -46,9 +46,9 @@ struct BatchOptions {
 struct BatchReport {
   std::vector<TableRow> rows;  // batch.csv, built from the folders' state
   size_t ok = 0, failed = 0, skipped = 0;
-  size_t reused = 0;          // finished before this run and kept
-  size_t redone = 0;  // outputs removed and analysed again (partial, or finished with force)
-  size_t started = 0;         // analyses started by this run
+  size_t reused = 0;   // finished before this run and kept
+  size_t redone = 0;   // outputs removed and analysed again (partial, or finished with force)
+  size_t started = 0;  // analyses started by this run
   bool interrupted = false;
   std::filesystem::path table;  // batch.csv
   bool all_ok() const { return failed == 0 && !interrupted; }

@@ -32,9 +32,9 @@ struct PlannedInput {
 
 struct InputOptions {
   // Video files are recognised by extension (lower-cased, with the dot).
-  std::vector<std::string> video_extensions = {".mp4", ".avi", ".mov", ".mkv", ".m4v",
+  std::vector<std::string> video_extensions = {".mp4",  ".avi", ".mov",  ".mkv", ".m4v",
                                                ".webm", ".mpg", ".mpeg", ".wmv", ".ogv",
-                                               ".flv", ".3gp", ".ts", ".mts"};
+                                               ".flv",  ".3gp", ".ts",   ".mts"};
   std::string session_manifest = "session.yaml";  // marks a session folder
   Status check() const;
 };

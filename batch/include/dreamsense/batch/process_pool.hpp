@@ -34,8 +34,9 @@ struct ChildOutcome {
 };
 
 // The reason of a failed child, one line: the last line of its output that starts with "error:"
-// (or contains "[error]"/"[critical]", or "terminate called"), else its last non-empty line,
-// prefixed for a signal with "killed by signal SIGxxx"; "exit code N" when it wrote nothing.
+// (or contains "[error]"/"[critical]", or "terminate called"), else its last non-empty line (not
+// CLI11's "Run with --help ..." hint); prefixed for a signal with "killed by signal SIGxxx";
+// "exit code N" when it wrote nothing.
 std::string failure_reason(std::string_view output, int exit_code, int term_signal);
 
 // The last `max_bytes` of a file ("" when it cannot be read).
@@ -43,8 +44,8 @@ std::string read_tail(const std::filesystem::path& path, size_t max_bytes = 64 *
 
 struct PoolOptions {
   int workers = 1;
-  double kill_grace_s = 3.0;            // SIGTERM -> SIGKILL
-  double poll_s = 0.02;                 // how often children are polled
+  double kill_grace_s = 3.0;             // SIGTERM -> SIGKILL
+  double poll_s = 0.02;                  // how often children are polled
   std::function<bool()> stop_requested;  // polled; true: stop (may be empty)
 };
 

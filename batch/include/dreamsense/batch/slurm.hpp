@@ -18,18 +18,18 @@
 namespace dreamsense::batch {
 
 struct SlurmOptions {
-  std::string sbatch = "sbatch";            // program that submits (looked up in PATH)
-  int max_running = 0;                      // array throttle (%N); 0: no limit
-  std::vector<std::string> directives;      // extra "#SBATCH ..." options, e.g. --partition=x
-  bool collect_job = true;                  // also submit the collect job
+  std::string sbatch = "sbatch";        // program that submits (looked up in PATH)
+  int max_running = 0;                  // array throttle (%N); 0: no limit
+  std::vector<std::string> directives;  // extra "#SBATCH ..." options, e.g. --partition=x
+  bool collect_job = true;              // also submit the collect job
   std::string job_name = "dreamsense-batch";
   Status check() const;
 };
 
 struct SlurmSubmission {
   std::filesystem::path script, list;
-  size_t tasks = 0;                   // array size (0: nothing left to analyse, nothing submitted)
-  size_t already_finished = 0;        // inputs kept from earlier runs
+  size_t tasks = 0;                    // array size (0: nothing left to analyse, nothing submitted)
+  size_t already_finished = 0;         // inputs kept from earlier runs
   std::string job_id, collect_job_id;  // empty when not submitted
 };
 

@@ -24,11 +24,11 @@
 namespace dreamsense::batch {
 
 struct TableRow {
-  std::string input;   // the input's absolute path
-  std::string output;  // its output folder name under the batch folder (empty when none)
-  std::string status;  // ok, failed or skipped
-  std::string reason;  // failed/skipped: why
-  std::optional<double> seconds;              // analysis wall time, when it ran
+  std::string input;              // the input's absolute path
+  std::string output;             // its output folder name under the batch folder (empty when none)
+  std::string status;             // ok, failed or skipped
+  std::string reason;             // failed/skipped: why
+  std::optional<double> seconds;  // analysis wall time, when it ran
   std::map<std::string, std::string> figures;  // flattened summary.json
 };
 
