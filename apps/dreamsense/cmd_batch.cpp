@@ -171,7 +171,7 @@ int parse_and_run(std::vector<std::string> args, const GlobalFlags& g) {
   cli.add_option("--jobs", f.jobs,
                  "Analyses at a time (default: the number of cores); with --slurm: array "
                  "tasks running at a time (default: no limit)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1024));
   cli.add_flag("--force", f.force, "Redo finished analyses too");
   cli.add_flag("--slurm", f.slurm,
                "Submit a Slurm job array (sbatch --array) instead of running here; a collect "
