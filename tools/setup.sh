@@ -24,6 +24,8 @@ packages=(
   sphinxtrain pocketsphinx
   # tests: JSON-schema validation of the DREAM export; synthetic spoken words (speech tests)
   python3 python3-jsonschema espeak-ng
+  # batch --slurm: the test starts a single-node Slurm cluster on 127.0.0.1 (label slurm)
+  slurm-wlm munge
 )
 
 missing=()

@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   int exit_code = app::kExitOk;
   app::add_demo(app, g, exit_code);
   app::add_analyze(app, g, exit_code);
+  app::add_batch(app, g, exit_code);  // cmd_batch.cpp
   app::add_eval(app, g, exit_code);
   app::add_bench(app, g, exit_code);
   app::add_record(app, g, exit_code);
