@@ -136,7 +136,7 @@ struct DcfTracker::State {
   bool lost = false;
   // Scratch.
   std::vector<cv::Mat> feat, xf;
-  cv::Mat feat_storage, scale_rows, scale_cols;
+  cv::Mat feat_storage, scale_rows, scale_cols, scale_patch;
 };
 
 DcfTracker::DcfTracker(DcfTrackerOptions options) : o_(options) {}
@@ -353,8 +353,14 @@ class DcfWork {
     s_.scale_rows.create(S, dims, CV_32F);
     for (int n = 0; n < S; ++n) {
       const double f = s_.scale_factors[static_cast<size_t>(n)];
-      const cv::Size2d size(s_.scale_model.width * f, s_.scale_model.height * f);
-      const cv::Mat patch = extract_window(region, c, size, s_.scale_model);
+      // Sub-pixel resampling: at this resolution an integer crop would quantise the scales.
+      const double k = f / f_max * region.cols / (s_.scale_model.width * f_max) * f_max;
+      const double ky = f / f_max * region.rows / (s_.scale_model.height * f_max) * f_max;
+      const cv::Matx23d m(k, 0, c.x - 0.5 * s_.scale_model.width * k + 0.5 * k - 0.5,  //
+                          0, ky, c.y - 0.5 * s_.scale_model.height * ky + 0.5 * ky - 0.5);
+      cv::warpAffine(region, s_.scale_patch, m, s_.scale_model,
+                     cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+      const cv::Mat& patch = s_.scale_patch;
       float* row = s_.scale_rows.ptr<float>(n);
       compute_fhog(patch, 4, row);
       const float wn = s_.scale_window[static_cast<size_t>(n)];
@@ -497,8 +503,7 @@ Result<TrackerUpdate> DcfTracker::update(const cv::Mat& frame) {
   };
   auto confident = [&](const Response& r) {
     if (s.n_conf == 0) return true;
-    return r.peak >= o_.peak_ratio * s.sum_peak / s.n_conf &&
-           r.apce >= o_.apce_ratio * s.sum_apce / s.n_conf;
+    return r.peak >= o_.peak_ratio * s.sum_peak && r.apce >= o_.apce_ratio * s.sum_apce;
   };
   Response r = respond_at(s.pos);
   cv::Point2d centre = s.pos;
@@ -514,22 +519,34 @@ Result<TrackerUpdate> DcfTracker::update(const cv::Mat& frame) {
       }
   }
   const bool good = confident(r);
-  const double mean_peak = s.n_conf ? s.sum_peak / s.n_conf : r.peak;
-  s.sum_peak += r.peak;
-  s.sum_apce += r.apce;
-  ++s.n_conf;
+  const double mean_peak = s.n_conf ? s.sum_peak : r.peak;
+  // Baselines: running averages of the recent confident frames (rate good_rate); low frames pull
+  // them down slowly (low_rate), so a lasting change of appearance is eventually learnt.
+  {
+    const double a = s.n_conf == 0 ? 1.0 : good ? o_.baseline_rate : o_.baseline_low_rate;
+    s.sum_peak = (1 - a) * s.sum_peak + a * r.peak;
+    s.sum_apce = (1 - a) * s.sum_apce + a * r.apce;
+    ++s.n_conf;
+  }
+  // The target goes where the response peaks (LMCF: only the learning is gated), except while
+  // lost: then it stays where it was last seen until a confident peak reappears.
   if (good || !s.lost) {
     s.pos = centre + w.cell_to_image(r.peak_cells);
     s.pos.x = std::clamp(s.pos.x, 0.0, static_cast<double>(frame.cols - 1));
     s.pos.y = std::clamp(s.pos.y, 0.0, static_cast<double>(frame.rows - 1));
   }
+  cv::Mat xsf;
+  bool rescaled = false;
+  if (good) {  // the scale only changes on confident frames (an occluder has its own size)
+    xsf = w.scale_samples(frame);
+    // The samples are re-taken for learning only when the scale changed (DSST re-samples at
+    // the new scale; when it did not change they are the same samples).
+    rescaled = w.estimate_scale(xsf) != o_.scales / 2;
+  }
   if (good) {
     s.low_run = 0;
     s.lost = false;
-    cv::Mat xsf = w.scale_samples(frame);
-    // The samples are re-taken for learning only when the scale changed (DSST re-samples at the
-    // new scale; when it did not change they are the same samples).
-    if (w.estimate_scale(xsf) != o_.scales / 2) xsf = w.scale_samples(frame);
+    if (rescaled) xsf = w.scale_samples(frame);
     w.window_at(frame, s.pos, colour, grey);
     w.learn_translation(grey, colour, o_.learning_rate, o_.colour_learning_rate);
     w.learn_scale(xsf, o_.scale_learning_rate);

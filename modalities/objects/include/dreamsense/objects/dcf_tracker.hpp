@@ -46,6 +46,8 @@ struct DcfTrackerOptions {
   double scale_model_max_area = 512;  // px of the resampled target for the scale filter (Staple)
   double peak_ratio = 0.7;            // LMCF beta1: update only if peak >= this x running mean
   double apce_ratio = 0.45;           // LMCF beta2: ... and APCE >= this x running mean
+  double baseline_rate = 0.1;         // running average of peak/APCE over confident frames
+  double baseline_low_rate = 0.02;    // ... and over low frames (a lasting change is learnt)
   int lost_after = 10;                // frames below both ratios before the target is "lost"
   bool redetect = true;               // search a 3x3 grid of windows while lost
   Status check() const;
