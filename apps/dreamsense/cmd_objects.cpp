@@ -4,14 +4,15 @@
 //   dreamsense eval objects SESSION [--gallery FILE] [--identifier gallery|hog_svm] [--json FILE|-]
 //   dreamsense enroll objects (--crops DIR | --session DIR [--boxes CSV]) --out GALLERY
 
-#include <cstdio>
-
-#include "commands.hpp"
 #include "dreamsense/eval/object_enrolment.hpp"
 #include "dreamsense/eval/objects_session_eval.hpp"
 #include "dreamsense/eval/tracking_eval.hpp"
 #include "dreamsense/objects/identification.hpp"
 #include "dreamsense/objects/tracker.hpp"
+
+#include <cstdio>
+
+#include "commands.hpp"
 #include "progress.hpp"
 
 namespace dreamsense::app {
@@ -71,8 +72,8 @@ void add_eval_tracking(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                    x["sequences"].size(), r->items);
       for (const auto& w : x.value("warnings", nlohmann::json::array()))
         std::fprintf(stderr, "  warning: %s\n", w.get<std::string>().c_str());
-      std::fprintf(stderr, "  %-12s %7s %8s %8s %10s %9s\n", "tracker", "auc", "prec@20",
-                   "meanIoU", "centre_px", "fps");
+      std::fprintf(stderr, "  %-12s %7s %8s %8s %10s %9s\n", "tracker", "auc", "prec@20", "meanIoU",
+                   "centre_px", "fps");
       for (const auto& name : x["trackers"]) {
         const auto& m = r->metrics[name.get<std::string>()];
         std::fprintf(stderr, "  %-12s %7.3f %8.3f %8.3f %10.1f %9.1f\n",
@@ -123,8 +124,9 @@ void add_enroll_objects(CLI::App& enroll, const GlobalFlags& g, int& exit_code) 
   cmd->add_option("--session", flags->sessions,
                   "Recording(s) whose top camera shows the toys (repeatable); boxes from "
                   "--boxes or the session's truth.jsonl");
-  cmd->add_option("--boxes", flags->boxes,
-                  "CSV 'frame,label,x,y,w,h' (frame index of the camera, from 0) for one --session");
+  cmd->add_option(
+      "--boxes", flags->boxes,
+      "CSV 'frame,label,x,y,w,h' (frame index of the camera, from 0) for one --session");
   cmd->add_flag("--boxes-by-stamp", flags->boxes_by_stamp,
                 "The CSV's first column is the frame stamp in ns, not its index");
   cmd->add_option("--camera", flags->camera, "Stream of the recordings")->default_val("top.color");
@@ -167,7 +169,8 @@ void add_enroll_objects(CLI::App& enroll, const GlobalFlags& g, int& exit_code) 
       return;
     }
     if (!g.quiet) {
-      std::fprintf(stderr, "objects: %zu toys enrolled (%d exemplars, rejection threshold %.3f)%s\n",
+      std::fprintf(stderr,
+                   "objects: %zu toys enrolled (%d exemplars, rejection threshold %.3f)%s\n",
                    r->gallery.classes().size(), r->gallery.exemplars(), r->gallery.threshold(),
                    r->gallery.has_baseline() ? ", HOG + SVM baseline trained" : "");
       for (const auto& [label, n] : r->views_per_label)
@@ -224,8 +227,9 @@ void add_eval_objects(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                    num(m["detection_recall"]), num(r->timing["ms_per_frame_median"]),
                    num(r->timing["cpu_ms_per_frame_median"]));
       if (m.contains("unknown_reject_rate"))
-        std::fprintf(stderr, "  toy %d left out of the gallery: rejected as unknown in %.3f of its frames\n",
-                     m["unknown_toy"].get<int>(), m["unknown_reject_rate"].get<double>());
+        std::fprintf(
+            stderr, "  toy %d left out of the gallery: rejected as unknown in %.3f of its frames\n",
+            m["unknown_toy"].get<int>(), m["unknown_reject_rate"].get<double>());
     }
     if (auto s = eval::write_report(*r, flags->json); !s) exit_code = fail(s.error());
   });

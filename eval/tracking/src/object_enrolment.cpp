@@ -31,7 +31,8 @@ Result<std::vector<Box>> read_box_csv(const fs::path& file) {
   std::string line;
   for (int n = 1; std::getline(in, line); ++n) {
     if (line.empty() || line[0] == '#') continue;
-    std::replace_if(line.begin(), line.end(), [](char c) { return c == ',' || c == '\t' || c == '\r'; }, ' ');
+    std::replace_if(
+        line.begin(), line.end(), [](char c) { return c == ',' || c == '\t' || c == '\r'; }, ' ');
     std::istringstream ss(line);
     Box b;
     double x, y, w, h;
@@ -60,7 +61,8 @@ Result<objects::ObjectClass> parse_object_class(const std::string& text) {
   try {
     size_t used = 0;
     c.id = std::stoi(rest.substr(0, colon), &used);
-    if (used != (colon == std::string::npos ? rest.size() : colon) || c.id < 0) throw std::invalid_argument("id");
+    if (used != (colon == std::string::npos ? rest.size() : colon) || c.id < 0)
+      throw std::invalid_argument("id");
     if (colon != std::string::npos) {
       std::string s = rest.substr(colon + 1);
       std::replace(s.begin(), s.end(), 'x', ' ');
@@ -80,10 +82,13 @@ Result<objects::ObjectClass> parse_object_class(const std::string& text) {
 
 Status ObjectEnrolmentOptions::check() const {
   if (!crops && sessions.empty())
-    return make_error(ErrorCode::kInvalidArgument, "enroll objects: give --crops DIR or --session DIR");
+    return make_error(ErrorCode::kInvalidArgument,
+                      "enroll objects: give --crops DIR or --session DIR");
   if (boxes && sessions.size() != 1)
-    return make_error(ErrorCode::kInvalidArgument, "enroll objects: --boxes goes with exactly one --session");
-  if (frame_step < 1) return make_error(ErrorCode::kInvalidArgument, "enroll objects: --frame-step must be >= 1");
+    return make_error(ErrorCode::kInvalidArgument,
+                      "enroll objects: --boxes goes with exactly one --session");
+  if (frame_step < 1)
+    return make_error(ErrorCode::kInvalidArgument, "enroll objects: --frame-step must be >= 1");
   return gallery.check();
 }
 
@@ -102,11 +107,16 @@ Result<ObjectEnrolmentResult> enrol_objects(const ObjectEnrolmentOptions& o) {
     for (const auto& d : objects::dream_toy_classes())
       if (!base->find(d.id)) known.push_back(d);
   for (const auto& c : o.classes) {
-    auto it = std::find_if(known.begin(), known.end(), [&](const auto& k) { return k.label == c.label; });
-    if (it != known.end()) *it = c; else known.push_back(c);
+    auto it =
+        std::find_if(known.begin(), known.end(), [&](const auto& k) { return k.label == c.label; });
+    if (it != known.end())
+      *it = c;
+    else
+      known.push_back(c);
   }
   auto class_of = [&](const std::string& label) -> const objects::ObjectClass& {
-    auto it = std::find_if(known.begin(), known.end(), [&](const auto& k) { return k.label == label; });
+    auto it =
+        std::find_if(known.begin(), known.end(), [&](const auto& k) { return k.label == label; });
     if (it != known.end()) return *it;
     int next = 0;
     for (const auto& k : known) next = std::max(next, k.id + 1);
@@ -135,12 +145,14 @@ Result<ObjectEnrolmentResult> enrol_objects(const ObjectEnrolmentOptions& o) {
       for (const auto& e : fs::directory_iterator(d, ec)) {
         std::string ext = e.path().extension().string();
         std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-        if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp") files.push_back(e.path());
+        if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp")
+          files.push_back(e.path());
       }
       std::sort(files.begin(), files.end());
       for (const auto& f : files) {
         cv::Mat img = cv::imread(f.string(), cv::IMREAD_COLOR);
-        if (img.empty()) return make_error(ErrorCode::kCorruptData, "{}: cannot decode image", f.string());
+        if (img.empty())
+          return make_error(ErrorCode::kCorruptData, "{}: cannot decode image", f.string());
         auto v = objects::make_view(img, cv::Rect(0, 0, img.cols, img.rows));
         if (!v) return make_error(v.error().code, "{}: {}", f.string(), v.error().message);
         keep.push_back(img);
@@ -217,11 +229,13 @@ Result<ObjectEnrolmentResult> enrol_objects(const ObjectEnrolmentOptions& o) {
       }
     }
   }
-  if (views.empty()) return make_error(ErrorCode::kInvalidArgument, "enroll objects: no views found");
+  if (views.empty())
+    return make_error(ErrorCode::kInvalidArgument, "enroll objects: no views found");
   // Only the classes that have views (or are already in the base gallery).
   std::vector<objects::ObjectClass> classes;
   for (const auto& k : known) {
-    const bool has = std::any_of(views.begin(), views.end(), [&](const auto& v) { return v.id == k.id; });
+    const bool has =
+        std::any_of(views.begin(), views.end(), [&](const auto& v) { return v.id == k.id; });
     if (has || (base && base->find(k.id))) classes.push_back(k);
   }
   ObjectEnrolmentResult out{objects::ObjectGallery{}, {}};
@@ -234,7 +248,8 @@ Result<ObjectEnrolmentResult> enrol_objects(const ObjectEnrolmentOptions& o) {
     out.gallery = std::move(*g);
   }
   for (const auto& c : classes) {
-    const int n = static_cast<int>(std::count_if(views.begin(), views.end(), [&](const auto& v) { return v.id == c.id; }));
+    const int n = static_cast<int>(
+        std::count_if(views.begin(), views.end(), [&](const auto& v) { return v.id == c.id; }));
     out.views_per_label.emplace_back(c.label, n);
   }
   return out;

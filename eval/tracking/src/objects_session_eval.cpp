@@ -7,12 +7,11 @@
 #include "dreamsense/sources/session.hpp"
 #include "dreamsense/sources/truth.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <chrono>
 #include <map>
 #include <numeric>
+#include <time.h>
 
 namespace dreamsense::eval {
 namespace fs = std::filesystem;
@@ -34,7 +33,8 @@ Status ObjectsSessionEvalOptions::check() const {
   if (identifier != "gallery" && identifier != "hog_svm")
     return make_error(ErrorCode::kInvalidArgument,
                       "eval objects: identifier must be gallery or hog_svm (got '{}')", identifier);
-  if (max_frames < 0) return make_error(ErrorCode::kInvalidArgument, "eval objects: max_frames < 0");
+  if (max_frames < 0)
+    return make_error(ErrorCode::kInvalidArgument, "eval objects: max_frames < 0");
   return objects.check();
 }
 
@@ -67,13 +67,15 @@ Result<geometry::Plane> session_table_plane(const fs::path& session,
   auto frame = (*reader)->next();
   if (!frame) return tl::unexpected(frame.error());
   const DepthImage* d = (*frame)->as<DepthImage>();
-  if (!d) return make_error(ErrorCode::kCorruptData, "{}: {} is not depth", session.string(), depth->id);
+  if (!d)
+    return make_error(ErrorCode::kCorruptData, "{}: {} is not depth", session.string(), depth->id);
   objects::TablePlaneFitOptions fo;
   // A front sensor looks across the table: the table's normal is its "up" (-y of the camera).
   if (depth->id != "top.depth") fo.up_prior = cam->R.t() * cv::Vec3d(0, -1, 0);
   auto fit = objects::fit_table_plane_from_depth(d->depth_mm, *cam, fo);
   if (!fit)
-    return make_error(fit.error().code, "{}: {}: {}", session.string(), depth->id, fit.error().message);
+    return make_error(fit.error().code, "{}: {}: {}", session.string(), depth->id,
+                      fit.error().message);
   return fit->plane;
 }
 
@@ -84,7 +86,8 @@ Result<EvalReport> run_objects_session_eval(const ObjectsSessionEvalOptions& o,
   if (!manifest) return tl::unexpected(manifest.error());
   const sources::StreamEntry* top = manifest->find(o.camera);
   if (!top || top->kind != SensorKind::kColor)
-    return make_error(ErrorCode::kNotFound, "{}: no colour stream '{}'", o.session.string(), o.camera);
+    return make_error(ErrorCode::kNotFound, "{}: no colour stream '{}'", o.session.string(),
+                      o.camera);
   if (manifest->truth.empty())
     return make_error(ErrorCode::kNotFound, "{}: no truth.jsonl (eval objects needs ground truth)",
                       o.session.string());
@@ -135,6 +138,7 @@ Result<EvalReport> run_objects_session_eval(const ObjectsSessionEvalOptions& o,
   if (!reader) return tl::unexpected(reader.error());
   std::vector<double> ious, position_errors, ms, cpu_ms;
   size_t pairs = 0, matched = 0, correct = 0, frames = 0, unknown_pairs = 0, rejected = 0;
+  size_t truth_frames = 0, extra_objects = 0;
   std::map<int, std::pair<size_t, size_t>> per_class;  // id -> (pairs, correct)
   const double total = static_cast<double>(top->rate_hz > 0 ? top->rate_hz * 20 : 600);
   for (;;) {
@@ -149,16 +153,21 @@ Result<EvalReport> run_objects_session_eval(const ObjectsSessionEvalOptions& o,
     const double c0 = thread_cpu_ms();
     auto states = (*pipeline)->process(img->image, (*f)->stamp.ns());
     cpu_ms.push_back(thread_cpu_ms() - c0);
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     if (!states) return tl::unexpected(states.error());
     ++frames;
     if (progress) progress(std::min(1.0, static_cast<double>(frames) / total));
     const auto it = toys.find((*f)->stamp.ns());
     if (it != toys.end()) {
+      ++truth_frames;
       std::vector<char> used(states->size(), 0);
       for (const auto& t : it->second) {
         const bool is_unknown = o.unknown && t.id == *o.unknown;
-        if (is_unknown) ++unknown_pairs; else ++pairs;
+        if (is_unknown)
+          ++unknown_pairs;
+        else
+          ++pairs;
         double best = 0;
         int k_best = -1;
         for (size_t k = 0; k < states->size(); ++k) {
@@ -167,7 +176,8 @@ Result<EvalReport> run_objects_session_eval(const ObjectsSessionEvalOptions& o,
           if (v > best) best = v, k_best = static_cast<int>(k);
         }
         if (is_unknown) {
-          if (k_best < 0 || (*states)[static_cast<size_t>(k_best)].id == objects::kUnknownObject) ++rejected;
+          if (k_best < 0 || (*states)[static_cast<size_t>(k_best)].id == objects::kUnknownObject)
+            ++rejected;
           if (k_best >= 0) used[static_cast<size_t>(k_best)] = 1;
           continue;
         }
@@ -181,6 +191,7 @@ Result<EvalReport> run_objects_session_eval(const ObjectsSessionEvalOptions& o,
         if (s.id == t.id) ++correct, ++pc.second;
         if (s.position_m) position_errors.push_back(cv::norm(*s.position_m - t.position));
       }
+      extra_objects += static_cast<size_t>(std::count(used.begin(), used.end(), 0));
     }
     if (o.max_frames > 0 && static_cast<int>(frames) >= o.max_frames) break;
   }
@@ -198,27 +209,37 @@ Result<EvalReport> run_objects_session_eval(const ObjectsSessionEvalOptions& o,
       "the largest IoU is its match; mean IoU over all pairs (0 when unmatched), median 3-D "
       "error over matched pairs, identification = matched with the true id over all pairs";
   r.metrics["object_track_mean_iou"] =
-      ious.empty() ? 0.0 : std::accumulate(ious.begin(), ious.end(), 0.0) / static_cast<double>(ious.size());
+      ious.empty()
+          ? 0.0
+          : std::accumulate(ious.begin(), ious.end(), 0.0) / static_cast<double>(ious.size());
   r.metrics["object_position_median_m"] = median(position_errors);
   r.metrics["object_identification_accuracy"] = pairs ? static_cast<double>(correct) / pairs : 0.0;
   r.metrics["detection_recall"] = pairs ? static_cast<double>(matched) / pairs : 0.0;
+  // Reported objects that match no truth toy (hands taken for toys, split blobs), per frame.
+  r.metrics["false_objects_per_frame"] =
+      truth_frames ? static_cast<double>(extra_objects) / truth_frames : 0.0;
   r.metrics["identifier"] = o.identifier;
   if (o.unknown) {
     r.metrics["unknown_toy"] = *o.unknown;
-    r.metrics["unknown_reject_rate"] = unknown_pairs ? static_cast<double>(rejected) / unknown_pairs : 0.0;
+    r.metrics["unknown_reject_rate"] =
+        unknown_pairs ? static_cast<double>(rejected) / unknown_pairs : 0.0;
   }
   r.timing["ms_per_frame_median"] = median(ms);
   r.timing["ms_per_frame_mean"] =
-      ms.empty() ? 0.0 : std::accumulate(ms.begin(), ms.end(), 0.0) / static_cast<double>(ms.size());
+      ms.empty() ? 0.0
+                 : std::accumulate(ms.begin(), ms.end(), 0.0) / static_cast<double>(ms.size());
   r.timing["cpu_ms_per_frame_median"] = median(cpu_ms);
   r.timing["cpu_ms_per_frame_mean"] =
-      cpu_ms.empty() ? 0.0 : std::accumulate(cpu_ms.begin(), cpu_ms.end(), 0.0) / static_cast<double>(cpu_ms.size());
+      cpu_ms.empty()
+          ? 0.0
+          : std::accumulate(cpu_ms.begin(), cpu_ms.end(), 0.0) / static_cast<double>(cpu_ms.size());
   r.timing["frames"] = frames;
   for (const auto& [id, pc] : per_class) {
     std::string name = std::to_string(id);
     if (const auto* c = shared->find(id)) name = c->label;
-    r.per_class[name] = {{"pairs", pc.first},
-                         {"identification_accuracy", pc.first ? static_cast<double>(pc.second) / pc.first : 0.0}};
+    r.per_class[name] = {
+        {"pairs", pc.first},
+        {"identification_accuracy", pc.first ? static_cast<double>(pc.second) / pc.first : 0.0}};
   }
   r.extra["session"] = o.session.string();
   r.extra["table_plane"] = {{"normal", {plane->normal[0], plane->normal[1], plane->normal[2]}},

@@ -63,8 +63,8 @@ int known_otb_start(const std::string& name) {
 
 bool is_otb_dir(const fs::path& d) {
   std::error_code ec;
-  return fs::is_directory(d / "img", ec) &&
-         (fs::exists(d / "groundtruth_rect.txt", ec) || fs::exists(d / "groundtruth_rect.1.txt", ec));
+  return fs::is_directory(d / "img", ec) && (fs::exists(d / "groundtruth_rect.txt", ec) ||
+                                             fs::exists(d / "groundtruth_rect.1.txt", ec));
 }
 
 std::optional<fs::path> mil_gt_file(const fs::path& d, std::string* error = nullptr) {
@@ -147,14 +147,17 @@ Result<TrackingSequence> read_otb_sequence(const fs::path& dir, int start_frame)
   TrackingSequence seq;
   seq.dir = dir;
   seq.name = fs::absolute(dir).lexically_normal().filename().string();
-  if (seq.name.empty()) seq.name = fs::absolute(dir).lexically_normal().parent_path().filename().string();
+  if (seq.name.empty())
+    seq.name = fs::absolute(dir).lexically_normal().parent_path().filename().string();
   fs::path gt = dir / "groundtruth_rect.txt";
   std::error_code ec;
   if (!fs::exists(gt, ec)) {
     gt = dir / "groundtruth_rect.1.txt";
     if (!fs::exists(gt, ec))
-      return make_error(ErrorCode::kNotFound, "{}: no groundtruth_rect.txt (OTB layout: img/ + "
-                        "groundtruth_rect.txt)", dir.string());
+      return make_error(ErrorCode::kNotFound,
+                        "{}: no groundtruth_rect.txt (OTB layout: img/ + "
+                        "groundtruth_rect.txt)",
+                        dir.string());
     seq.warnings.push_back(seq.name + ": several targets; using groundtruth_rect.1.txt");
   }
   auto images = numbered_images(dir / "img");
@@ -169,10 +172,10 @@ Result<TrackingSequence> read_otb_sequence(const fs::path& dir, int start_frame)
   for (size_t i = 0; i < boxes->size(); ++i) {
     const auto it = images->find(start + static_cast<long>(i));
     if (it == images->end()) {
-      seq.warnings.push_back(fmt::format("{}: {} boxes but no image for frame {}; the rest of "
-                                         "the ground truth is ignored",
-                                         gt.filename().string(), boxes->size(),
-                                         start + static_cast<long>(i)));
+      seq.warnings.push_back(
+          fmt::format("{}: {} boxes but no image for frame {}; the rest of "
+                      "the ground truth is ignored",
+                      gt.filename().string(), boxes->size(), start + static_cast<long>(i)));
       break;
     }
     seq.frames.push_back(it->second);
@@ -180,8 +183,8 @@ Result<TrackingSequence> read_otb_sequence(const fs::path& dir, int start_frame)
   }
   if (seq.frames.size() < images->size() && seq.warnings.empty())
     seq.warnings.push_back(fmt::format("{}: {} boxes for {} images; frames {}..{} evaluated",
-                                       gt.filename().string(), boxes->size(), images->size(),
-                                       start, start + static_cast<long>(seq.frames.size()) - 1));
+                                       gt.filename().string(), boxes->size(), images->size(), start,
+                                       start + static_cast<long>(seq.frames.size()) - 1));
   if (seq.frames.empty())
     return make_error(ErrorCode::kCorruptData, "{}: no image matches the first box (frame {})",
                       gt.string(), start);
@@ -208,13 +211,14 @@ Result<TrackingSequence> read_mil_sequence(const fs::path& dir) {
   long first = 0, last = 0;
   {
     std::string t = line;
-    std::replace_if(t.begin(), t.end(), [](char c) { return c == ',' || c == '\t' || c == '\r'; }, ' ');
+    std::replace_if(
+        t.begin(), t.end(), [](char c) { return c == ',' || c == '\t' || c == '\r'; }, ' ');
     std::istringstream ss(t);
     std::string extra;
     if (!(ss >> first >> last) || (ss >> extra) || first < 0 || last < first)
       return make_error(ErrorCode::kCorruptData,
-                        "{}:1: expected 'first,last' frame numbers, got '{}'",
-                        frames_file.string(), shorten(line));
+                        "{}:1: expected 'first,last' frame numbers, got '{}'", frames_file.string(),
+                        shorten(line));
   }
   auto images = numbered_images(dir / "imgs");
   if (!images) return tl::unexpected(images.error());
@@ -247,7 +251,8 @@ Result<std::vector<TrackingSequence>> read_tracking_dataset(std::string_view dat
   if (!fs::is_directory(dir, ec))
     return make_error(ErrorCode::kNotFound, "{}: no such directory", dir.string());
   auto is_seq = [&](const fs::path& d) {
-    return dataset == "otb" ? is_otb_dir(d) : mil_gt_file(d).has_value() || fs::is_directory(d / "imgs", ec);
+    return dataset == "otb" ? is_otb_dir(d)
+                            : mil_gt_file(d).has_value() || fs::is_directory(d / "imgs", ec);
   };
   auto read = [&](const fs::path& d) {
     return dataset == "otb" ? read_otb_sequence(d, start_frame) : read_mil_sequence(d);
@@ -269,9 +274,9 @@ Result<std::vector<TrackingSequence>> read_tracking_dataset(std::string_view dat
     out.push_back(std::move(*s));
   }
   if (out.empty())
-    return make_error(ErrorCode::kNotFound, "{}: no {} sequence ({})", dir.string(), dataset,
-                      dataset == "otb" ? "img/ + groundtruth_rect.txt"
-                                       : "imgs/ + NAME_gt.txt + NAME_frames.txt");
+    return make_error(
+        ErrorCode::kNotFound, "{}: no {} sequence ({})", dir.string(), dataset,
+        dataset == "otb" ? "img/ + groundtruth_rect.txt" : "imgs/ + NAME_gt.txt + NAME_frames.txt");
   return out;
 }
 

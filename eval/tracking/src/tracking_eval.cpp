@@ -43,7 +43,8 @@ nlohmann::json scores_json(const TrackScores& s) {
 Status TrackingEvalOptions::check() const {
   if (dataset != "otb" && dataset != "mil")
     return make_error(ErrorCode::kInvalidArgument,
-                      "eval tracking: dataset '{}' is not supported (supported: otb, mil)", dataset);
+                      "eval tracking: dataset '{}' is not supported (supported: otb, mil)",
+                      dataset);
   if (trackers.empty())
     return make_error(ErrorCode::kInvalidArgument, "eval tracking: no tracker given");
   for (const auto& n : trackers) {
@@ -145,12 +146,14 @@ Result<EvalReport> run_tracking_eval(const TrackingEvalOptions& o,
     size_t n = seq.frames.size();
     if (o.max_frames > 0) n = std::min(n, static_cast<size_t>(o.max_frames));
     std::vector<cv::Mat> frames;
-    std::vector<std::optional<cv::Rect2d>> truth(seq.truth.begin(), seq.truth.begin() + static_cast<long>(n));
+    std::vector<std::optional<cv::Rect2d>> truth(seq.truth.begin(),
+                                                 seq.truth.begin() + static_cast<long>(n));
     frames.reserve(n);
     for (size_t i = 0; i < n; ++i) {
       cv::Mat img = cv::imread(seq.frames[i].string(), cv::IMREAD_COLOR);
       if (img.empty())
-        return make_error(ErrorCode::kCorruptData, "{}: cannot decode image", seq.frames[i].string());
+        return make_error(ErrorCode::kCorruptData, "{}: cannot decode image",
+                          seq.frames[i].string());
       if (!frames.empty() && img.size() != frames.front().size())
         return make_error(ErrorCode::kCorruptData, "{}: size {}x{} differs from the first frame's",
                           seq.frames[i].string(), img.cols, img.rows);
@@ -161,8 +164,10 @@ Result<EvalReport> run_tracking_eval(const TrackingEvalOptions& o,
     size_t scored = 0;
     for (size_t i = first + 1; i < n; ++i) scored += truth[i] ? 1 : 0;
     report.items += scored;
-    nlohmann::json js = {{"frames", n}, {"scored_frames", scored},
-                         {"image_size", {frames.empty() ? 0 : frames[0].cols, frames.empty() ? 0 : frames[0].rows}}};
+    nlohmann::json js = {
+        {"frames", n},
+        {"scored_frames", scored},
+        {"image_size", {frames.empty() ? 0 : frames[0].cols, frames.empty() ? 0 : frames[0].rows}}};
     for (const auto& name : names) {
       auto run = run_tracker(name, frames, truth);
       if (!run)
@@ -191,13 +196,15 @@ Result<EvalReport> run_tracking_eval(const TrackingEvalOptions& o,
       for (size_t k = 0; k < m.success.size(); ++k)
         m.success[k] += s.success[k] / static_cast<double>(v.size());
     }
-    m.fps = speed[name].second > 0 ? static_cast<double>(speed[name].first) / speed[name].second : 0;
+    m.fps =
+        speed[name].second > 0 ? static_cast<double>(speed[name].first) / speed[name].second : 0;
     report.metrics[name] = scores_json(m);
-    report.timing[name] = {{"frames", speed[name].first},
-                           {"seconds", speed[name].second},
-                           {"ms_per_frame", speed[name].first ? 1000.0 * speed[name].second /
-                                                                    static_cast<double>(speed[name].first)
-                                                              : 0.0}};
+    report.timing[name] = {
+        {"frames", speed[name].first},
+        {"seconds", speed[name].second},
+        {"ms_per_frame", speed[name].first
+                             ? 1000.0 * speed[name].second / static_cast<double>(speed[name].first)
+                             : 0.0}};
     curves[name] = m.success;
   }
   report.extra["trackers"] = names;

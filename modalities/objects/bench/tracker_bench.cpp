@@ -3,9 +3,9 @@
 // iteration is one update().
 //   build/modalities/objects/objects_bench --benchmark_filter=Tracker
 
-#include <benchmark/benchmark.h>
-
 #include "dreamsense/objects/tracker.hpp"
+
+#include <benchmark/benchmark.h>
 
 #include "../test/synthetic_sequence.hpp"
 

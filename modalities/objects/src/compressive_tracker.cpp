@@ -55,8 +55,7 @@ Status CompressiveTrackerOptions::check() const {
   return ok_status();
 }
 
-void naive_bayes_update(double& mu, double& sigma, double mu_new, double sigma_new,
-                        double lambda) {
+void naive_bayes_update(double& mu, double& sigma, double mu_new, double sigma_new, double lambda) {
   const double d = mu - mu_new;
   sigma = std::sqrt(lambda * sigma * sigma + (1 - lambda) * sigma_new * sigma_new +
                     lambda * (1 - lambda) * d * d);
@@ -179,9 +178,9 @@ Status CompressiveTracker::init(const cv::Mat& frame, const cv::Rect2d& box) {
   // CT samples whole boxes inside the frame: clamp the box into it.
   box_size_ = cv::Size(std::clamp(static_cast<int>(std::lround(box.width)), 4, frame.cols),
                        std::clamp(static_cast<int>(std::lround(box.height)), 4, frame.rows));
-  position_ = cv::Point(
-      std::clamp(static_cast<int>(std::lround(box.x)), 0, frame.cols - box_size_.width),
-      std::clamp(static_cast<int>(std::lround(box.y)), 0, frame.rows - box_size_.height));
+  position_ =
+      cv::Point(std::clamp(static_cast<int>(std::lround(box.x)), 0, frame.cols - box_size_.width),
+                std::clamp(static_cast<int>(std::lround(box.y)), 0, frame.rows - box_size_.height));
   // The random measurement matrix (§2.2, §3.1), drawn once per sequence.
   rng_.seed(o_.seed);
   features_.assign(static_cast<size_t>(o_.features), {});
@@ -209,7 +208,8 @@ Status CompressiveTracker::init(const cv::Mat& frame, const cv::Rect2d& box) {
 Result<TrackerUpdate> CompressiveTracker::update(const cv::Mat& frame) {
   if (!initialised_)
     return make_error(ErrorCode::kFailedPrecondition, "ct: update() before init()");
-  if (auto s = check_update_frame(frame, frame_size_, frame_type_); !s) return tl::unexpected(s.error());
+  if (auto s = check_update_frame(frame, frame_size_, frame_type_); !s)
+    return tl::unexpected(s.error());
   const cv::Mat grey = to_grey(frame);
   const int radius = static_cast<int>(std::ceil(o_.search_radius)) + 1;
   cv::Point origin;

@@ -38,8 +38,9 @@ cv::Mat extract_window(const cv::Mat& img, const cv::Point2d& centre, const cv::
   // arbitrary factor and several times cheaper.
   while (patch.cols >= 2 * out.width && patch.rows >= 2 * out.height) {
     cv::Mat half;
-    cv::resize(patch(cv::Rect(patch.cols % 2, patch.rows % 2, patch.cols / 2 * 2, patch.rows / 2 * 2)),
-               half, cv::Size(patch.cols / 2, patch.rows / 2), 0, 0, cv::INTER_AREA);
+    cv::resize(
+        patch(cv::Rect(patch.cols % 2, patch.rows % 2, patch.cols / 2 * 2, patch.rows / 2 * 2)),
+        half, cv::Size(patch.cols / 2, patch.rows / 2), 0, 0, cv::INTER_AREA);
     patch = half;
   }
   cv::Mat resized;
@@ -50,7 +51,8 @@ cv::Mat extract_window(const cv::Mat& img, const cv::Point2d& centre, const cv::
 cv::Mat hann(int n) {
   cv::Mat w(1, n, CV_32F);
   for (int i = 0; i < n; ++i)
-    w.at<float>(i) = n > 1 ? static_cast<float>(0.5 * (1 - std::cos(2 * CV_PI * i / (n - 1)))) : 1.f;
+    w.at<float>(i) =
+        n > 1 ? static_cast<float>(0.5 * (1 - std::cos(2 * CV_PI * i / (n - 1)))) : 1.f;
   return w;
 }
 
@@ -145,7 +147,7 @@ DcfTracker::~DcfTracker() = default;
 namespace {
 
 struct Response {
-  cv::Mat map;  // merged response, centred layout (index h/2, w/2 = no displacement)
+  cv::Mat map;             // merged response, centred layout (index h/2, w/2 = no displacement)
   cv::Point2d peak_cells;  // displacement of the peak, cells (subpixel)
   double peak = 0, apce = 0;
 };
@@ -311,8 +313,10 @@ class DcfWork {
     r.peak = mx;
     const cv::Scalar m = cv::mean((r.map - mn).mul(r.map - mn));
     r.apce = m[0] > 0 ? (mx - mn) * (mx - mn) / m[0] : 0;
-    const double sx = parabola(r.map.at<float>(at.y, at.x - 1), mx, r.map.at<float>(at.y, at.x + 1));
-    const double sy = parabola(r.map.at<float>(at.y - 1, at.x), mx, r.map.at<float>(at.y + 1, at.x));
+    const double sx =
+        parabola(r.map.at<float>(at.y, at.x - 1), mx, r.map.at<float>(at.y, at.x + 1));
+    const double sy =
+        parabola(r.map.at<float>(at.y - 1, at.x), mx, r.map.at<float>(at.y + 1, at.x));
     r.peak_cells = cv::Point2d(at.x - wc / 2 + sx, at.y - hc / 2 + sy);
     return r;
   }
@@ -382,7 +386,8 @@ class DcfWork {
       float* d = den.ptr<float>(0);
       for (int c = 0; c < xsf.cols; ++c) {
         // Y conj(X)
-        o[c] = cv::Vec2f(y[c][0] * x[c][0] + y[c][1] * x[c][1], y[c][1] * x[c][0] - y[c][0] * x[c][1]);
+        o[c] =
+            cv::Vec2f(y[c][0] * x[c][0] + y[c][1] * x[c][1], y[c][1] * x[c][0] - y[c][0] * x[c][1]);
         d[c] += x[c][0] * x[c][0] + x[c][1] * x[c][1];
       }
     }
@@ -404,7 +409,8 @@ class DcfWork {
       const cv::Vec2f* x = xsf.ptr<cv::Vec2f>(r);
       const cv::Vec2f* n = s_.sf_num.ptr<cv::Vec2f>(r);
       for (int c = 0; c < xsf.cols; ++c)
-        a[c] += cv::Vec2f(n[c][0] * x[c][0] - n[c][1] * x[c][1], n[c][0] * x[c][1] + n[c][1] * x[c][0]);
+        a[c] +=
+            cv::Vec2f(n[c][0] * x[c][0] - n[c][1] * x[c][1], n[c][0] * x[c][1] + n[c][1] * x[c][0]);
     }
     divide_by_real(acc, s_.sf_den, static_cast<float>(o_.lambda));
     cv::Mat resp;
@@ -436,8 +442,10 @@ Status DcfTracker::init(const cv::Mat& frame, const cv::Rect2d& box) {
   const double k = o_.template_side / std::sqrt(s.window.area());
   const int cell = o_.cell_size;
   // Cell counts with small prime factors only (fast DFTs), at least 8.
-  s.cells = cv::Size(cv::getOptimalDFTSize(std::max(8, static_cast<int>(std::lround(s.window.width * k / cell)))),
-                     cv::getOptimalDFTSize(std::max(8, static_cast<int>(std::lround(s.window.height * k / cell)))));
+  s.cells = cv::Size(
+      cv::getOptimalDFTSize(std::max(8, static_cast<int>(std::lround(s.window.width * k / cell)))),
+      cv::getOptimalDFTSize(
+          std::max(8, static_cast<int>(std::lround(s.window.height * k / cell)))));
   s.norm = s.cells * cell;
   s.norm_target = cv::Size2d(s.base_target.width * s.norm.width / s.window.width,
                              s.base_target.height * s.norm.height / s.window.height);
@@ -449,7 +457,8 @@ Status DcfTracker::init(const cv::Mat& frame, const cv::Rect2d& box) {
     for (int j = 0; j < s.cells.width; ++j) {
       const int di = i < (s.cells.height + 1) / 2 ? i : i - s.cells.height;
       const int dj = j < (s.cells.width + 1) / 2 ? j : j - s.cells.width;
-      y.at<float>(i, j) = static_cast<float>(std::exp(-0.5 * (di * di + dj * dj) / (sigma * sigma)));
+      y.at<float>(i, j) =
+          static_cast<float>(std::exp(-0.5 * (di * di + dj * dj) / (sigma * sigma)));
     }
   cv::dft(y, s.yf, cv::DFT_COMPLEX_OUTPUT);
   // Colour model.
@@ -479,8 +488,8 @@ Status DcfTracker::init(const cv::Mat& frame, const cv::Rect2d& box) {
   s.scale_model = cv::Size(std::max(8, static_cast<int>(s.base_target.width * f)),
                            std::max(8, static_cast<int>(s.base_target.height * f)));
   s.min_scale = std::min(1.0, 6.0 / std::min(s.base_target.width, s.base_target.height));
-  s.max_scale = std::max(1.0, std::min(frame.cols / s.base_target.width,
-                                       frame.rows / s.base_target.height));
+  s.max_scale =
+      std::max(1.0, std::min(frame.cols / s.base_target.width, frame.rows / s.base_target.height));
   // First frame: the models are the first frame's.
   DcfWork w(o_, s);
   cv::Mat colour, grey;
@@ -491,7 +500,8 @@ Status DcfTracker::init(const cv::Mat& frame, const cv::Rect2d& box) {
 }
 
 Result<TrackerUpdate> DcfTracker::update(const cv::Mat& frame) {
-  if (!s_) return make_error(ErrorCode::kFailedPrecondition, "dreamsense tracker: update() before init()");
+  if (!s_)
+    return make_error(ErrorCode::kFailedPrecondition, "dreamsense tracker: update() before init()");
   State& s = *s_;
   if (auto st = check_update_frame(frame, s.frame_size, s.frame_type); !st)
     return tl::unexpected(st.error());

@@ -27,7 +27,8 @@ void gradients_row(const cv::Mat& img, int y, float* gx, float* gy) {
     gx[0] = 0;
   } else {
     gx[0] = static_cast<float>(p[1]) - static_cast<float>(p[0]);
-    for (int x = 1; x < w - 1; ++x) gx[x] = static_cast<float>(p[x + 1]) - static_cast<float>(p[x - 1]);
+    for (int x = 1; x < w - 1; ++x)
+      gx[x] = static_cast<float>(p[x + 1]) - static_cast<float>(p[x - 1]);
     gx[w - 1] = static_cast<float>(p[w - 1]) - static_cast<float>(p[w - 2]);
   }
   for (int x = 0; x < w; ++x) gy[x] = static_cast<float>(dn[x]) - static_cast<float>(up[x]);
@@ -162,12 +163,12 @@ void compute_fhog(const cv::Mat& grey, int cell, float* out) {
     }
 }
 
-void compute_fhog(const cv::Mat& grey, int cell, std::vector<cv::Mat>& channels,
-                  cv::Mat& storage) {
+void compute_fhog(const cv::Mat& grey, int cell, std::vector<cv::Mat>& channels, cv::Mat& storage) {
   const cv::Size c = fhog_cells(grey.size(), cell);
   channels.resize(kFhogChannels);
   if (c.width < 1 || c.height < 1) {
-    for (auto& m : channels) m = cv::Mat::zeros(std::max(c.height, 0), std::max(c.width, 0), CV_32F);
+    for (auto& m : channels)
+      m = cv::Mat::zeros(std::max(c.height, 0), std::max(c.width, 0), CV_32F);
     return;
   }
   storage.create(kFhogChannels * c.height, c.width, CV_32F);

@@ -16,7 +16,7 @@
 namespace dreamsense::objects {
 namespace {
 
-constexpr int kColourBins = 42;                  // 12 hues x 3 saturations + 6 grey levels
+constexpr int kColourBins = 42;  // 12 hues x 3 saturations + 6 grey levels
 constexpr int kHogW = 48, kHogH = 32, kHogCell = 8;
 constexpr int kHogDims = kFhogChannels * (kHogW / kHogCell) * (kHogH / kHogCell);
 constexpr int kFeatureDims = kColourBins + kHogDims;
@@ -41,7 +41,8 @@ cv::Mat colour_histogram(const ObjectView& v) {
     }
   }
   cv::Mat out(1, kColourBins, CV_32F);
-  for (int i = 0; i < kColourBins; ++i) out.at<float>(i) = n > 0 ? std::sqrt(h[static_cast<size_t>(i)] / n) : 0.f;
+  for (int i = 0; i < kColourBins; ++i)
+    out.at<float>(i) = n > 0 ? std::sqrt(h[static_cast<size_t>(i)] / n) : 0.f;
   return out;
 }
 
@@ -124,7 +125,8 @@ Result<ObjectView> make_view(const cv::Mat& frame, const cv::Rect& box_in, const
       const cv::Vec3b* p = v.crop.ptr<cv::Vec3b>(y);
       uchar* o = m.ptr<uchar>(y);
       for (int x = 0; x < v.crop.cols; ++x)
-        o[x] = std::abs(p[x][0] - mb) + std::abs(p[x][1] - mg) + std::abs(p[x][2] - mr) > 60 ? 255 : 0;
+        o[x] =
+            std::abs(p[x][0] - mb) + std::abs(p[x][1] - mg) + std::abs(p[x][2] - mr) > 60 ? 255 : 0;
     }
     cv::morphologyEx(m, m, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
     std::vector<cv::Point> pts;
@@ -146,8 +148,9 @@ Result<ObjectView> make_view(const cv::Mat& frame, const cv::Rect& box_in, const
   std::vector<cv::Point> pts;
   cv::findNonZero(v.mask, pts);
   if (pts.size() < 3)
-    v.footprint = cv::RotatedRect(cv::Point2f(v.crop.cols / 2.f, v.crop.rows / 2.f),
-                                  cv::Size2f(static_cast<float>(v.crop.cols), static_cast<float>(v.crop.rows)), 0);
+    v.footprint = cv::RotatedRect(
+        cv::Point2f(v.crop.cols / 2.f, v.crop.rows / 2.f),
+        cv::Size2f(static_cast<float>(v.crop.cols), static_cast<float>(v.crop.rows)), 0);
   else
     v.footprint = cv::minAreaRect(pts);
   return v;
@@ -213,7 +216,8 @@ Status ObjectGallery::append(const std::vector<LabelledView>& views) {
   }
   int next_view = feature_views_.empty() ? 0 : feature_views_.back() + 1;
   for (auto& [id, list] : by_class) {
-    const size_t keep = std::min(list.size(), static_cast<size_t>(options_.max_exemplars_per_class));
+    const size_t keep =
+        std::min(list.size(), static_cast<size_t>(options_.max_exemplars_per_class));
     for (size_t k = 0; k < keep; ++k) {
       const LabelledView& v = *list[k * list.size() / keep];
       const cv::Mat f = gallery_features(v.view);
@@ -244,7 +248,8 @@ Status ObjectGallery::finish() {
     threshold_ = 0.6;  // a single view per class: a conservative default
   } else {
     std::sort(within.begin(), within.end());
-    threshold_ = options_.rejection_factor * within[std::min(within.size() - 1, within.size() * 95 / 100)];
+    threshold_ =
+        options_.rejection_factor * within[std::min(within.size() - 1, within.size() * 95 / 100)];
   }
   svm_.release();
   std::set<int> ids(baseline_ids_.begin(), baseline_ids_.end());
@@ -332,7 +337,8 @@ Result<ObjectGallery> ObjectGallery::without(int id) const {
   g.options_ = options_;
   for (const auto& c : classes_)
     if (c.id != id) g.classes_.push_back(c);
-  if (g.classes_.empty()) return make_error(ErrorCode::kInvalidArgument, "object gallery: no class left");
+  if (g.classes_.empty())
+    return make_error(ErrorCode::kInvalidArgument, "object gallery: no class left");
   for (int r = 0; r < features_.rows; ++r)
     if (feature_ids_[static_cast<size_t>(r)] != id) {
       g.features_.push_back(features_.row(r));
@@ -370,16 +376,19 @@ Status ObjectGallery::save(const std::filesystem::path& path) const {
     fs << "hog_weight" << options_.hog_weight << "rejection_factor" << options_.rejection_factor;
     fs << "max_exemplars_per_class" << options_.max_exemplars_per_class;
     fs << "threshold" << threshold_;
-    fs << "classes" << "[";
+    fs << "classes"
+       << "[";
     for (const auto& c : classes_)
-      fs << "{" << "id" << c.id << "label" << c.label << "length_m" << c.size_m[0] << "width_m"
+      fs << "{"
+         << "id" << c.id << "label" << c.label << "length_m" << c.size_m[0] << "width_m"
          << c.size_m[1] << "height_m" << c.size_m[2] << "}";
     fs << "]";
     fs << "features" << features_;
     fs << "feature_ids" << feature_ids_ << "feature_views" << feature_views_;
     fs << "baseline_samples" << baseline_samples_ << "baseline_ids" << baseline_ids_;
     if (has_baseline()) {
-      fs << "baseline_svm" << "{";
+      fs << "baseline_svm"
+         << "{";
       svm_->write(fs);
       fs << "}";
     }
@@ -389,7 +398,8 @@ Status ObjectGallery::save(const std::filesystem::path& path) const {
   }
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
-  if (ec) return make_error(ErrorCode::kIoError, "{}: cannot write: {}", path.string(), ec.message());
+  if (ec)
+    return make_error(ErrorCode::kIoError, "{}: cannot write: {}", path.string(), ec.message());
   return ok_status();
 }
 
@@ -405,8 +415,9 @@ Result<ObjectGallery> ObjectGallery::load(const std::filesystem::path& path) {
       return make_error(ErrorCode::kCorruptData, "{}: not an object gallery (format '{}')", p,
                         static_cast<std::string>(fs["format"]));
     if (static_cast<int>(fs["format_version"]) != kFormatVersion)
-      return make_error(ErrorCode::kUnsupported, "{}: object gallery version {} (this build reads {})",
-                        p, static_cast<int>(fs["format_version"]), kFormatVersion);
+      return make_error(ErrorCode::kUnsupported,
+                        "{}: object gallery version {} (this build reads {})", p,
+                        static_cast<int>(fs["format_version"]), kFormatVersion);
     ObjectGallery g;
     g.options_.hog_weight = static_cast<double>(fs["hog_weight"]);
     g.options_.rejection_factor = static_cast<double>(fs["rejection_factor"]);
@@ -431,8 +442,9 @@ Result<ObjectGallery> ObjectGallery::load(const std::filesystem::path& path) {
     if (g.classes_.empty() || g.features_.empty() || g.features_.cols != kFeatureDims ||
         g.feature_ids_.size() != static_cast<size_t>(g.features_.rows) ||
         g.feature_views_.size() != g.feature_ids_.size() || !(g.threshold_ > 0))
-      return make_error(ErrorCode::kCorruptData, "{}: inconsistent object gallery (features {}x{}, {} ids)",
-                        p, g.features_.rows, g.features_.cols, g.feature_ids_.size());
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: inconsistent object gallery (features {}x{}, {} ids)", p,
+                        g.features_.rows, g.features_.cols, g.feature_ids_.size());
     if (!fs["baseline_svm"].empty()) {
       g.svm_ = cv::ml::SVM::create();
       g.svm_->read(fs["baseline_svm"]);

@@ -24,7 +24,8 @@ cv::Mat l1_to_colour(const cv::Mat& bgr, const cv::Vec3f& c) {
 }
 
 cv::Mat ellipse(int size) {
-  return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(std::max(1, size), std::max(1, size)));
+  return cv::getStructuringElement(cv::MORPH_ELLIPSE,
+                                   cv::Size(std::max(1, size), std::max(1, size)));
 }
 
 }  // namespace
@@ -122,8 +123,11 @@ Status TableTopDetector::initialise(const cv::Mat& bgr, const std::vector<cv::Po
     table_ = cv::Mat::zeros(small.size(), CV_8U);
     cv::fillConvexPoly(table_, hull, cv::Scalar(255));
   }
-  const int margin = std::max(1, static_cast<int>(std::lround(static_cast<double>(o_.edge_margin_px) / ds)));
-  cv::erode(table_, inner_, ellipse(2 * margin + 1));
+  const int margin =
+      std::max(1, static_cast<int>(std::lround(static_cast<double>(o_.edge_margin_px) / ds)));
+  // The image border counts as the table's edge too (a table that fills the view).
+  cv::erode(table_, inner_, ellipse(2 * margin + 1), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
+            cv::Scalar(0));
   // Background: table-coloured pixels, holes filled from their neighbourhood.
   cv::Mat known = coloured & table_;
   cv::Mat img, w;
@@ -150,8 +154,8 @@ Status TableTopDetector::initialise(const cv::Mat& bgr, const std::vector<cv::Po
   return ok_status();
 }
 
-Result<std::vector<ObjectCandidate>> TableTopDetector::detect(const cv::Mat& bgr,
-                                                              const std::vector<cv::Rect>& occupied) {
+Result<std::vector<ObjectCandidate>> TableTopDetector::detect(
+    const cv::Mat& bgr, const std::vector<cv::Rect>& occupied) {
   if (bgr.empty() || bgr.type() != CV_8UC3)
     return make_error(ErrorCode::kInvalidArgument, "table-top detector: need a BGR frame");
   if (!initialised()) {
@@ -172,8 +176,8 @@ Result<std::vector<ObjectCandidate>> TableTopDetector::detect(const cv::Mat& bgr
     const uchar* t = table_.ptr<uchar>(y);
     uchar* f = fg_.ptr<uchar>(y);
     for (int x = 0; x < small_.cols; ++x) {
-      const float d = std::abs(p[x][0] - b[x][0]) + std::abs(p[x][1] - b[x][1]) +
-                      std::abs(p[x][2] - b[x][2]);
+      const float d =
+          std::abs(p[x][0] - b[x][0]) + std::abs(p[x][1] - b[x][1]) + std::abs(p[x][2] - b[x][2]);
       f[x] = t[x] && d > thr ? 255 : 0;
     }
   }
@@ -209,7 +213,8 @@ Result<std::vector<ObjectCandidate>> TableTopDetector::detect(const cv::Mat& bgr
     std::vector<cv::Point> pts;
     for (const auto& k : contours) pts.insert(pts.end(), k.begin(), k.end());
     cv::RotatedRect r = cv::minAreaRect(pts);
-    r.center = cv::Point2f((r.center.x + sb.x + 0.5f) * ds - 0.5f, (r.center.y + sb.y + 0.5f) * ds - 0.5f);
+    r.center =
+        cv::Point2f((r.center.x + sb.x + 0.5f) * ds - 0.5f, (r.center.y + sb.y + 0.5f) * ds - 0.5f);
     r.size = cv::Size2f((r.size.width + 1) * ds, (r.size.height + 1) * ds);
     c.footprint = r;
     out.push_back(std::move(c));
@@ -223,7 +228,8 @@ Result<std::vector<ObjectCandidate>> TableTopDetector::detect(const cv::Mat& bgr
     const cv::Rect s(r.x / ds - 2, r.y / ds - 2, r.width / ds + 5, r.height / ds + 5);
     learn_(s & cv::Rect(0, 0, learn_.cols, learn_.rows)).setTo(0);
   }
-  if (o_.background_rate > 0) cv::accumulateWeighted(small_, background_, o_.background_rate, learn_);
+  if (o_.background_rate > 0)
+    cv::accumulateWeighted(small_, background_, o_.background_rate, learn_);
   return out;
 }
 

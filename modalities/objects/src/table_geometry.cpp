@@ -56,8 +56,8 @@ Result<TablePlaneFit> fit_table_plane_from_depth(const cv::Mat& depth_mm, const 
   if (pts.size() < static_cast<size_t>(o.min_inliers))
     return make_error(ErrorCode::kNotFound, "table plane fit: only {} valid depth pixels",
                       pts.size());
-  const cv::Vec3d up = o.up_prior ? cv::normalize(*o.up_prior)
-                                  : cv::normalize(cam.R.t() * cv::Vec3d(0, 0, -1));
+  const cv::Vec3d up =
+      o.up_prior ? cv::normalize(*o.up_prior) : cv::normalize(cam.R.t() * cv::Vec3d(0, 0, -1));
   const double min_cos = std::cos(o.max_normal_angle_deg * CV_PI / 180.0);
   std::mt19937_64 rng(o.seed);
   std::uniform_int_distribution<size_t> pick(0, pts.size() - 1);
@@ -95,7 +95,8 @@ Result<TablePlaneFit> fit_table_plane_from_depth(const cv::Mat& depth_mm, const 
     fit.inlier_points = std::move(in);
   }
   double ss = 0;
-  for (const auto& q : fit.inlier_points) ss += fit.plane.signed_distance(q) * fit.plane.signed_distance(q);
+  for (const auto& q : fit.inlier_points)
+    ss += fit.plane.signed_distance(q) * fit.plane.signed_distance(q);
   fit.inliers = static_cast<int>(fit.inlier_points.size());
   fit.rms_m = std::sqrt(ss / std::max(1, fit.inliers));
   return fit;

@@ -184,13 +184,40 @@ Result<std::vector<ObjectState>> TableTopObjects::process(const cv::Mat& bgr, in
   std::vector<int> cand_track(cands->size(), -1);
   std::vector<char> track_taken(tracks_.size(), 0);
   for (const auto& p : pairs)
-    if (cand_track[p.c] < 0 && !track_taken[p.t]) cand_track[p.c] = static_cast<int>(p.t), track_taken[p.t] = 1;
+    if (cand_track[p.c] < 0 && !track_taken[p.t])
+      cand_track[p.c] = static_cast<int>(p.t), track_taken[p.t] = 1;
+
+  // Pieces of a toy: a small blob touching the box of a bigger blob that a known toy's track
+  // claims (a picture with table-coloured parts falls apart) is merged into it.
+  std::vector<char> absorbed(cands->size(), 0);
+  for (size_t c = 0; c < cands->size(); ++c) {
+    if (cand_track[c] < 0 ||
+        tracks_[static_cast<size_t>(cand_track[c])]->best_id() == kUnknownObject)
+      continue;
+    ObjectCandidate& main = (*cands)[c];
+    for (size_t k = 0; k < cands->size(); ++k) {
+      if (k == c || absorbed[k] || cand_track[k] >= 0) continue;
+      const ObjectCandidate& piece = (*cands)[k];
+      const cv::Rect grown(main.box.x - 4, main.box.y - 4, main.box.width + 8, main.box.height + 8);
+      if (piece.area_px >= main.area_px || (grown & piece.box).empty()) continue;
+      const cv::Rect u = main.box | piece.box;
+      cv::Mat mask = cv::Mat::zeros(u.size(), CV_8U);
+      main.mask.copyTo(mask(main.box - u.tl()));
+      cv::Mat part = mask(piece.box - u.tl());
+      cv::bitwise_or(part, piece.mask, part);
+      main.box = u;
+      main.mask = mask;
+      main.area_px += piece.area_px;
+      absorbed[k] = 1;
+    }
+  }
 
   auto identify = [&](const ObjectCandidate& c) -> std::optional<Identification> {
     if (!gallery_) return Identification{};
     auto view = make_view(bgr, c.box, c.mask, c.footprint);
     if (!view) return std::nullopt;
-    return o_.identifier == "hog_svm" ? gallery_->identify_baseline(*view) : gallery_->identify(*view);
+    return o_.identifier == "hog_svm" ? gallery_->identify_baseline(*view)
+                                      : gallery_->identify(*view);
   };
   auto accept = [&](Track& t, const ObjectCandidate& c, const std::optional<Identification>& idn) {
     const cv::Point2d prev = centre_of(t.box), now = centre_of(cv::Rect2d(c.box));
@@ -215,20 +242,22 @@ Result<std::vector<ObjectState>> TableTopObjects::process(const cv::Mat& bgr, in
   };
 
   for (size_t c = 0; c < cands->size(); ++c) {
+    if (absorbed[c]) continue;
     const ObjectCandidate& cand = (*cands)[c];
     Track* t = cand_track[c] >= 0 ? tracks_[static_cast<size_t>(cand_track[c])].get() : nullptr;
     // Identify new blobs, young tracks, and every reidentify_every frames; a blob at the edge
     // that no track claims (a resting hand, most often) only every reidentify_every frames.
     const bool periodic = frame_ % static_cast<uint64_t>(o_.reidentify_every) == 0;
-    const bool need_id = t ? t->identifications < 3 ||
-                                 frame_ - t->last_identified >= static_cast<uint64_t>(o_.reidentify_every)
-                           : !cand.touches_edge || periodic;
+    const bool need_id =
+        t ? t->identifications < 3 ||
+                frame_ - t->last_identified >= static_cast<uint64_t>(o_.reidentify_every)
+          : !cand.touches_edge || periodic;
     std::optional<Identification> idn;
     if (need_id) idn = identify(cand);
     if (t) {
       // A blob that reaches the table's edge and grew is a hand holding the toy: not its box.
-      if (cand.touches_edge && (cand.area_px > 1.5 * t->area_px ||
-                                (idn && idn->id != t->best_id()))) {
+      if (cand.touches_edge &&
+          (cand.area_px > 1.5 * t->area_px || (idn && idn->id != t->best_id()))) {
         track_taken[static_cast<size_t>(cand_track[c])] = 0;
         continue;
       }
@@ -239,7 +268,8 @@ Result<std::vector<ObjectState>> TableTopObjects::process(const cv::Mat& bgr, in
     if (idn->id != kUnknownObject) {
       // A known toy that nobody claimed: the track it had before (re-detection), if any.
       for (size_t k = 0; k < tracks_.size() && !t; ++k)
-        if (!track_taken[k] && tracks_[k]->best_id() == idn->id) t = tracks_[k].get(), track_taken[k] = 1;
+        if (!track_taken[k] && tracks_[k]->best_id() == idn->id)
+          t = tracks_[k].get(), track_taken[k] = 1;
     } else if (cand.touches_edge) {
       continue;  // an arm or hand coming in over the edge
     }
@@ -258,6 +288,7 @@ Result<std::vector<ObjectState>> TableTopObjects::process(const cv::Mat& bgr, in
     Track& t = *tracks_[k];
     if (t.updated) continue;
     ++t.missing;
+    if (t.best_id() == kUnknownObject) continue;  // unknown blobs are not carried
     cv::Rect2d next = k < predicted.size() ? predicted[k] : t.box;
     if (o_.visual_tracker && t.confirmed && !previous_.empty()) {
       if (!t.visual) {
@@ -271,9 +302,14 @@ Result<std::vector<ObjectState>> TableTopObjects::process(const cv::Mat& bgr, in
     }
     t.box = next;
   }
+  const cv::Rect2d image(0, 0, bgr.cols, bgr.rows);
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
                                [&](const auto& t) {
-                                 if (t->missing <= o_.max_missing_frames) return false;
+                                 const bool unknown = t->best_id() == kUnknownObject;
+                                 const bool gone = (t->box & image).area() < 0.5 * t->box.area();
+                                 const int limit =
+                                     unknown ? o_.confirm_frames : o_.max_missing_frames;
+                                 if (t->missing <= limit && !gone) return false;
                                  histories_.erase(t->track_id);
                                  return true;
                                }),
@@ -282,7 +318,9 @@ Result<std::vector<ObjectState>> TableTopObjects::process(const cv::Mat& bgr, in
   std::vector<ObjectState> out;
   for (auto& t : tracks_) {
     finish_state(*t, stamp_ns);
-    if (t->confirmed) out.push_back(t->state);
+    // Known toys are reported while occluded (detected = false); unknown blobs only when seen.
+    if (t->confirmed && (t->missing == 0 || t->best_id() != kUnknownObject))
+      out.push_back(t->state);
   }
   bgr.copyTo(previous_);
   previous_stamp_ = stamp_ns;
@@ -303,7 +341,8 @@ std::optional<TableDistance> table_distance(const ObjectState& o, const geometry
 
 Status GripOptions::check() const {
   if (!(max_opening_m > 0) || !(clearance_m >= 0))
-    return make_error(ErrorCode::kInvalidArgument, "grip: need max_opening_m > 0, clearance_m >= 0");
+    return make_error(ErrorCode::kInvalidArgument,
+                      "grip: need max_opening_m > 0, clearance_m >= 0");
   return ok_status();
 }
 
@@ -377,7 +416,8 @@ std::vector<ObjectState> objects_in_circle(const std::vector<ObjectState>& objec
     const double d = cv::norm(table.project(*o.position_m) - c);
     if (d <= radius) in.emplace_back(d, o);
   }
-  std::stable_sort(in.begin(), in.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(in.begin(), in.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<ObjectState> out;
   for (auto& p : in) out.push_back(std::move(p.second));
   return out;

@@ -32,12 +32,10 @@ class OpenCvTracker : public Tracker {
       if (t_) {
         t_->init(frame, cv::Rect(box));
       } else if (!legacy_->init(frame, box)) {
-        return make_error(ErrorCode::kInvalidArgument, "{}: OpenCV refused the initial box",
-                          name_);
+        return make_error(ErrorCode::kInvalidArgument, "{}: OpenCV refused the initial box", name_);
       }
     } catch (const cv::Exception& e) {
-      return make_error(ErrorCode::kInvalidArgument, "{}: OpenCV init failed: {}", name_,
-                        e.what());
+      return make_error(ErrorCode::kInvalidArgument, "{}: OpenCV init failed: {}", name_, e.what());
     }
     initialised_ = true;
     return ok_status();
@@ -88,9 +86,12 @@ const std::vector<std::string>& tracker_names() {
 Result<std::unique_ptr<Tracker>> make_tracker(std::string_view name) {
   if (name == "ct") return std::make_unique<CompressiveTracker>();
   if (name == "dreamsense") return std::make_unique<DcfTracker>();
-  if (name == "kcf") return std::make_unique<OpenCvTracker>("kcf", cv::Ptr<cv::Tracker>(cv::TrackerKCF::create()));
-  if (name == "csrt") return std::make_unique<OpenCvTracker>("csrt", cv::Ptr<cv::Tracker>(cv::TrackerCSRT::create()));
-  if (name == "mil") return std::make_unique<OpenCvTracker>("mil", cv::Ptr<cv::Tracker>(cv::TrackerMIL::create()));
+  if (name == "kcf")
+    return std::make_unique<OpenCvTracker>("kcf", cv::Ptr<cv::Tracker>(cv::TrackerKCF::create()));
+  if (name == "csrt")
+    return std::make_unique<OpenCvTracker>("csrt", cv::Ptr<cv::Tracker>(cv::TrackerCSRT::create()));
+  if (name == "mil")
+    return std::make_unique<OpenCvTracker>("mil", cv::Ptr<cv::Tracker>(cv::TrackerMIL::create()));
   if (name == "mosse")
     return std::make_unique<OpenCvTracker>(
         "mosse", cv::Ptr<cv::legacy::Tracker>(cv::legacy::TrackerMOSSE::create()));
@@ -124,8 +125,7 @@ Status check_init_box(const cv::Mat& frame, const cv::Rect2d& box) {
 }
 
 Status check_update_frame(const cv::Mat& frame, const cv::Size& init_size, int init_type) {
-  if (frame.empty())
-    return make_error(ErrorCode::kInvalidArgument, "tracker update: empty frame");
+  if (frame.empty()) return make_error(ErrorCode::kInvalidArgument, "tracker update: empty frame");
   if (frame.size() != init_size || frame.type() != init_type)
     return make_error(ErrorCode::kInvalidArgument,
                       "tracker update: frame {}x{} type {} differs from the initial {}x{} type {}",

@@ -20,8 +20,8 @@ struct SyntheticOptions {
   cv::Size frame_size{640, 480};
   cv::Size target_size{60, 80};
   int frames = 60;
-  double speed_px = 3;          // per frame, along a Lissajous path
-  double scale_per_frame = 1;   // multiplicative size change per frame
+  double speed_px = 3;                     // per frame, along a Lissajous path
+  double scale_per_frame = 1;              // multiplicative size change per frame
   int occlude_from = -1, occlude_to = -1;  // frames fully covering the target
   bool colour = true;
   uint64_t seed = 7;

@@ -26,9 +26,9 @@ struct ObjectEnrolmentOptions {
   std::optional<std::filesystem::path> boxes;   // CSV for the (single) session; else truth.jsonl
   bool boxes_by_stamp = false;                  // CSV first column is stamp_ns, not frame index
   std::string camera = "top.color";
-  int frame_step = 10;                          // every n-th frame of a recording
-  std::vector<objects::ObjectClass> classes;    // extra / overriding classes (id, label, size)
-  std::optional<std::filesystem::path> base;    // add to this gallery instead of a new one
+  int frame_step = 10;                        // every n-th frame of a recording
+  std::vector<objects::ObjectClass> classes;  // extra / overriding classes (id, label, size)
+  std::optional<std::filesystem::path> base;  // add to this gallery instead of a new one
   objects::GalleryOptions gallery;
   Status check() const;
 };

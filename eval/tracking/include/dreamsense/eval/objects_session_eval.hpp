@@ -11,8 +11,8 @@
 // all pairs whose match carries the true id (no match = wrong); detection_recall = fraction of
 // pairs with a match. With `unknown` = a toy id, that toy is removed from the gallery and
 // unknown_reject_rate = fraction of its pairs not reported as any known toy (unknown or not at
-// all); the accuracy then covers the other toys. Timing: milliseconds per top frame in TableTopObjects::process (decoding
-// excluded), median and mean.
+// all); the accuracy then covers the other toys. Timing: milliseconds per top frame in
+// TableTopObjects::process (decoding excluded), median and mean.
 //
 // The table plane: a table calibration file when given (`calibrate desk`), else fitted to the
 // first frame of the session's depth stream (top.depth if present, else front.depth) with its
@@ -34,7 +34,7 @@ struct ObjectsSessionEvalOptions {
   std::string identifier = "gallery";  // or "hog_svm" (the seed's baseline, same gallery file)
   std::optional<std::filesystem::path> table;  // table calibration (geometry::TableFrame YAML)
   std::string camera = "top.color";
-  int max_frames = 0;                  // > 0: only the first N top frames
+  int max_frames = 0;  // > 0: only the first N top frames
   // A toy id left out of the gallery: the session's copies of it must come out `unknown`
   // (unknown_reject_rate); the other toys are scored as usual.
   std::optional<int> unknown;

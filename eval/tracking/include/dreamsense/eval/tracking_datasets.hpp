@@ -27,9 +27,9 @@ namespace dreamsense::eval {
 struct TrackingSequence {
   std::string name;
   std::filesystem::path dir;
-  std::vector<std::filesystem::path> frames;       // image files in frame order
-  std::vector<std::optional<cv::Rect2d>> truth;    // one per frame; nullopt = unlabelled
-  std::vector<std::string> warnings;               // count mismatches etc. (one line each)
+  std::vector<std::filesystem::path> frames;     // image files in frame order
+  std::vector<std::optional<cv::Rect2d>> truth;  // one per frame; nullopt = unlabelled
+  std::vector<std::string> warnings;             // count mismatches etc. (one line each)
   size_t labelled() const;
 };
 

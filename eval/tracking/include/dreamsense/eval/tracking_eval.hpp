@@ -21,7 +21,7 @@
 namespace dreamsense::eval {
 
 struct TrackingEvalOptions {
-  std::string dataset;                          // "otb" | "mil"
+  std::string dataset;  // "otb" | "mil"
   std::filesystem::path dir;
   std::vector<std::string> trackers = {"all"};  // names of objects::make_tracker, or "all"
   int start_frame = 0;                          // otb: frame number of the first box (0 = auto)
@@ -31,10 +31,10 @@ struct TrackingEvalOptions {
 
 // Per-frame results of one tracker on one sequence.
 struct TrackRun {
-  std::vector<double> iou;            // scored frames
-  std::vector<double> centre_error;   // scored frames, px
-  size_t frames = 0;                  // processed (init + updates)
-  size_t lost = 0;                    // frames the tracker reported lost
+  std::vector<double> iou;           // scored frames
+  std::vector<double> centre_error;  // scored frames, px
+  size_t frames = 0;                 // processed (init + updates)
+  size_t lost = 0;                   // frames the tracker reported lost
   double seconds = 0;
 };
 

@@ -38,16 +38,16 @@
 namespace dreamsense::objects {
 
 struct CompressiveTrackerOptions {
-  int features = 50;               // n, dimension of the compressed space (§4)
-  int min_rects_per_feature = 2;   // non-zeros per row of R: uniformly 2..4, c <= 4 (§2.2)
+  int features = 50;              // n, dimension of the compressed space (§4)
+  int min_rects_per_feature = 2;  // non-zeros per row of R: uniformly 2..4, c <= 4 (§2.2)
   int max_rects_per_feature = 4;
-  double learning_rate = 0.85;     // lambda of eq. (6) (§3.2, §4)
-  double positive_radius = 4;      // alpha: positives at distance < alpha (§4: 45 samples)
+  double learning_rate = 0.85;        // lambda of eq. (6) (§3.2, §4)
+  double positive_radius = 4;         // alpha: positives at distance < alpha (§4: 45 samples)
   double negative_inner_radius = 8;   // zeta (§4)
   double negative_outer_radius = 30;  // beta (§4)
-  int negative_samples = 50;       // drawn at random from the ring (§4)
-  double search_radius = 20;       // gamma: candidates at distance < gamma (§4)
-  uint64_t seed = 1;               // of the random matrix and the negative sampling
+  int negative_samples = 50;          // drawn at random from the ring (§4)
+  double search_radius = 20;          // gamma: candidates at distance < gamma (§4)
+  uint64_t seed = 1;                  // of the random matrix and the negative sampling
   Status check() const;
 };
 
@@ -79,8 +79,7 @@ class NaiveBayesModel {
 };
 
 // The update of eq. (6) for one Gaussian (exposed for the unit test of the rule).
-void naive_bayes_update(double& mu, double& sigma, double mu_new, double sigma_new,
-                        double lambda);
+void naive_bayes_update(double& mu, double& sigma, double mu_new, double sigma_new, double lambda);
 
 class CompressiveTracker : public Tracker {
  public:

@@ -29,20 +29,20 @@
 namespace dreamsense::objects {
 
 struct DcfTrackerOptions {
-  int cell_size = 4;                  // fHOG cell (px of the resampled window)
-  double padding = 1.5;               // window = target * (1 + padding) (KCF)
-  double template_side = 112;         // the window is resampled to about this^2 px
+  int cell_size = 4;                      // fHOG cell (px of the resampled window)
+  double padding = 1.5;                   // window = target * (1 + padding) (KCF)
+  double template_side = 112;             // the window is resampled to about this^2 px
   double output_sigma_factor = 1.0 / 16;  // Gaussian label sigma = sqrt(w h) * this (Staple)
-  double lambda = 1e-3;               // ridge regularisation (Staple)
-  double learning_rate = 0.01;        // filter (Staple learning_rate_cf)
-  int colour_bins = 32;               // per channel (Staple n_bins)
-  double colour_learning_rate = 0.04; // (Staple learning_rate_pwp)
-  double inner_padding = 0.2;         // foreground = target shrunk by this x mean side (Staple)
-  double merge_factor = 0.3;          // weight of the colour response (Staple)
-  int scales = 33;                    // DSST
-  double scale_step = 1.02;           // DSST
-  double scale_sigma_factor = 0.25;   // DSST
-  double scale_learning_rate = 0.025; // DSST
+  double lambda = 1e-3;                   // ridge regularisation (Staple)
+  double learning_rate = 0.01;            // filter (Staple learning_rate_cf)
+  int colour_bins = 32;                   // per channel (Staple n_bins)
+  double colour_learning_rate = 0.04;     // (Staple learning_rate_pwp)
+  double inner_padding = 0.2;             // foreground = target shrunk by this x mean side (Staple)
+  double merge_factor = 0.3;              // weight of the colour response (Staple)
+  int scales = 33;                        // DSST
+  double scale_step = 1.02;               // DSST
+  double scale_sigma_factor = 0.25;       // DSST
+  double scale_learning_rate = 0.025;     // DSST
   double scale_model_max_area = 512;  // px of the resampled target for the scale filter (Staple)
   double peak_ratio = 0.7;            // LMCF beta1: update only if peak >= this x running mean
   double apce_ratio = 0.45;           // LMCF beta2: ... and APCE >= this x running mean

@@ -25,8 +25,7 @@ inline cv::Size fhog_cells(cv::Size image, int cell) {
 void compute_fhog(const cv::Mat& grey, int cell, float* out);
 // The same as one CV_32F map per channel. The maps are views into `storage` (re-used between
 // calls of the same size).
-void compute_fhog(const cv::Mat& grey, int cell, std::vector<cv::Mat>& channels,
-                  cv::Mat& storage);
+void compute_fhog(const cv::Mat& grey, int cell, std::vector<cv::Mat>& channels, cv::Mat& storage);
 // Convenience form that owns its storage.
 void compute_fhog(const cv::Mat& grey, int cell, std::vector<cv::Mat>& channels);
 

@@ -79,7 +79,7 @@ cv::Mat gallery_features(const ObjectView& view);
 cv::Mat dream_hog_features(const ObjectView& view);
 
 struct GalleryOptions {
-  double hog_weight = 0.5;     // distance = colour distance + hog_weight * HOG distance
+  double hog_weight = 0.5;  // distance = colour distance + hog_weight * HOG distance
   // Rejection threshold = this x the 95th percentile of the enrolment views' leave-one-view-out
   // nearest distances within their class (set at enrolment, stored in the file).
   double rejection_factor = 1.6;
@@ -127,10 +127,10 @@ class ObjectGallery {
 
   GalleryOptions options_;
   std::vector<ObjectClass> classes_;
-  cv::Mat features_;                 // one row per exemplar (CV_32F): colour | fHOG
-  std::vector<int> feature_ids_;     // class id per row
-  std::vector<int> feature_views_;   // enrolment view per row (two rows per view)
-  cv::Mat baseline_samples_;         // the seed's HOG per view (CV_32F), kept to retrain
+  cv::Mat features_;                // one row per exemplar (CV_32F): colour | fHOG
+  std::vector<int> feature_ids_;    // class id per row
+  std::vector<int> feature_views_;  // enrolment view per row (two rows per view)
+  cv::Mat baseline_samples_;        // the seed's HOG per view (CV_32F), kept to retrain
   std::vector<int> baseline_ids_;
   double threshold_ = 0;
   cv::Ptr<cv::ml::SVM> svm_;

@@ -30,15 +30,15 @@
 namespace dreamsense::objects {
 
 struct TableTopDetectorOptions {
-  int downscale = 2;                  // work at 1/downscale resolution (1, 2 or 4)
-  double foreground_threshold = 60;   // sum of |dB| + |dG| + |dR| above which a pixel is not table
-  double table_colour_tolerance = 60; // same measure, table segmentation at initialise()
-  double background_rate = 0.05;      // running-average rate of background pixels per frame
-  double min_area_px = 150;           // blob area limits, full-resolution pixels
+  int downscale = 2;                   // work at 1/downscale resolution (1, 2 or 4)
+  double foreground_threshold = 60;    // sum of |dB| + |dG| + |dR| above which a pixel is not table
+  double table_colour_tolerance = 60;  // same measure, table segmentation at initialise()
+  double background_rate = 0.05;       // running-average rate of background pixels per frame
+  double min_area_px = 150;            // blob area limits, full-resolution pixels
   double max_area_px = 40000;
-  int edge_margin_px = 6;             // full-resolution px: a blob this close to the table border
-                                      // touches the edge
-  int open_px = 3, close_px = 5;      // morphology kernels (working resolution)
+  int edge_margin_px = 6;         // full-resolution px: a blob this close to the table border
+                                  // touches the edge
+  int open_px = 3, close_px = 5;  // morphology kernels (working resolution)
   Status check() const;
 };
 
@@ -48,7 +48,7 @@ struct ObjectCandidate {
   cv::Point2d centroid;       // of the blob pixels (full resolution)
   double area_px = 0;         // full-resolution pixels
   bool touches_edge = false;
-  cv::Mat mask;               // CV_8U, box.size(): 255 on the blob
+  cv::Mat mask;  // CV_8U, box.size(): 255 on the blob
 };
 
 class TableTopDetector {

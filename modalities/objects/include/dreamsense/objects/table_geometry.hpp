@@ -22,7 +22,7 @@
 namespace dreamsense::objects {
 
 struct TablePlaneFitOptions {
-  int pixel_step = 4;               // use every n-th pixel in x and y
+  int pixel_step = 4;  // use every n-th pixel in x and y
   double min_depth_m = 0.3, max_depth_m = 3.0;
   double inlier_distance_m = 0.01;  // RANSAC inlier band
   int iterations = 300;

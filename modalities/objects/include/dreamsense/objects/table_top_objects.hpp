@@ -38,14 +38,14 @@ struct ObjectState {
   int track_id = -1;
   int id = kUnknownObject;  // DREAM / enrolled id; -1 unknown
   std::string label = "unknown";
-  double id_score = 0;      // fraction of the track's identifications that agree
-  cv::Rect2d box;           // top camera, px
-  double image_angle_deg = 0;  // footprint's long side in the image
+  double id_score = 0;                  // fraction of the track's identifications that agree
+  cv::Rect2d box;                       // top camera, px
+  double image_angle_deg = 0;           // footprint's long side in the image
   std::optional<cv::Vec3d> position_m;  // top face centre (world); needs calibration + table
   std::optional<cv::Vec3d> axis_m;      // unit vector along the top face's long side (world)
   cv::Vec3d velocity_mps{0, 0, 0};
   cv::Vec3d size_m{0.10, 0.075, 0.03};
-  bool detected = true;    // false: carried by the visual tracker or predicted
+  bool detected = true;  // false: carried by the visual tracker or predicted
   int missing_frames = 0;
 };
 

@@ -18,9 +18,9 @@
 namespace dreamsense::objects {
 
 struct TrackerUpdate {
-  cv::Rect2d box;          // the estimate in this frame (the last one when `found` is false)
-  bool found = true;       // false: the tracker itself reports the target lost in this frame
-  double confidence = 1;   // tracker-specific, larger = surer; 0..1 for ct and dreamsense
+  cv::Rect2d box;         // the estimate in this frame (the last one when `found` is false)
+  bool found = true;      // false: the tracker itself reports the target lost in this frame
+  double confidence = 1;  // tracker-specific, larger = surer; 0..1 for ct and dreamsense
 };
 
 class Tracker {
