@@ -60,12 +60,9 @@ void register_all() {
   }
 }
 
+// Registered before main (BENCHMARK_MAIN in table_top_bench.cpp).
+const bool registered = (register_all(), true);
+
 }  // namespace
 
-int main(int argc, char** argv) {
-  register_all();
-  benchmark::Initialize(&argc, argv);
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+BENCHMARK_MAIN();
