@@ -31,6 +31,8 @@ void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   add_eval_speech(*eval, g, exit_code);
   add_eval_eyes(*eval, g, exit_code);
   add_eval_voices(*eval, g, exit_code);
+  add_eval_tracking(*eval, g, exit_code);  // cmd_objects.cpp
+  add_eval_objects(*eval, g, exit_code);   // cmd_objects.cpp
 
   auto flags = std::make_shared<EvalSessionFlags>();
   CLI::App* cmd = eval->add_subcommand(

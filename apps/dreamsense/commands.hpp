@@ -48,6 +48,10 @@ void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code);       /
 void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code);    // cmd_speech.cpp
 void add_train_speech(CLI::App& train, const GlobalFlags& g, int& exit_code);  // cmd_speech.cpp
 void add_eval_eyes(CLI::App& eval, const GlobalFlags& g, int& exit_code);      // cmd_eyes.cpp
+// cmd_objects.cpp: `eval tracking`, `eval objects` and `enroll objects` (toys on the table).
+void add_eval_tracking(CLI::App& eval, const GlobalFlags& g, int& exit_code);
+void add_enroll_objects(CLI::App& enroll, const GlobalFlags& g, int& exit_code);
+void add_eval_objects(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 
 // cmd_voices.cpp: `train voices` (under the `train` verb of main.cpp) and `eval voices`.
 void add_train_voices(CLI::App& train, const GlobalFlags& g, int& exit_code);

@@ -61,6 +61,10 @@ int main(int argc, char** argv) {
   app::add_train_face(*train, g, exit_code);
   app::add_train_gaze(*train, g, exit_code);
   app::add_train_speech(*train, g, exit_code);
+  CLI::App* enroll = app.add_subcommand(
+      "enroll", "Add known people / toys to a gallery (writes a versioned file)");
+  enroll->require_subcommand(1);
+  app::add_enroll_objects(*enroll, g, exit_code);
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug
                    : g.quiet ? log::Level::kWarn
