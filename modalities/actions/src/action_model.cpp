@@ -30,6 +30,8 @@ Status ClassifierOptions::check() const {
   if (reject_folds < 0 || reject_folds == 1 || reject_folds > 20)
     return make_error(ErrorCode::kInvalidArgument,
                       "classifier: reject_folds must be 0 (off) or in [2, 20]");
+  if (!(novelty_margin >= 1))
+    return make_error(ErrorCode::kInvalidArgument, "classifier: novelty_margin must be >= 1");
   if (!(reject_quantile >= 0 && reject_quantile < 0.5))
     return make_error(ErrorCode::kInvalidArgument,
                       "classifier: reject_quantile must be in [0, 0.5)");
@@ -42,6 +44,10 @@ Status ActionModelOptions::check() const {
   if (auto s = classifier.check(); !s) return s;
   if (!(window_s >= 0) || window_s > 60)
     return make_error(ErrorCode::kInvalidArgument, "actions: window_s must be in [0, 60]");
+  if (crops < 0 || crops > 16)
+    return make_error(ErrorCode::kInvalidArgument, "actions: crops must be in [0, 16]");
+  if (!(crop_fraction >= 0.5 && crop_fraction < 1))
+    return make_error(ErrorCode::kInvalidArgument, "actions: crop_fraction must be in [0.5, 1)");
   return ok_status();
 }
 
@@ -55,7 +61,7 @@ struct Fitted {
 Fitted fit(const cv::Mat& x, const std::vector<int>& y, int classes, const ClassifierOptions& o) {
   Fitted f;
   if (o.kind == ClassifierKind::kLinearSvm) {
-    f.linear = detail::train_linear_svm(x, y, classes, o.c);
+    f.linear = detail::train_linear_svm(x, y, classes, o.c, o.l1);
   } else {
     const double gamma = o.gamma > 0 ? o.gamma : 1.0 / std::max(x.cols, 1);
     f.rbf = detail::train_rbf_svm(x, y, classes, o.c, gamma);
@@ -160,26 +166,51 @@ Result<ActionModel> ActionModel::train(const std::vector<LabelledSequence>& exam
   const int classes = static_cast<int>(m.labels_.size());
   const int dim = feature_dimension(o.features);
 
-  std::vector<int> y;
+  std::vector<int> y, origin;
   std::vector<std::string> subjects;
   std::vector<double> durations;
   cv::Mat x(0, dim, CV_32F);
   x.reserve(examples.size());
+  auto add = [&](const NormalizedWindow& w, size_t i) {
+    std::vector<float> f = extract_features(w, o.features);
+    if (f.empty()) return;
+    x.push_back(cv::Mat(1, dim, CV_32F, f.data()));
+    y.push_back(index[examples[i].label]);
+    subjects.push_back(examples[i].subject);
+    origin.push_back(static_cast<int>(i));
+  };
   for (size_t i = 0; i < examples.size(); ++i) {
     const auto& e = examples[i];
-    const NormalizedWindow w = normalize_window(e.frames, o.body);
-    std::vector<float> f = extract_features(w, o.features);
-    if (f.empty()) {
+    NormalizedWindow w = normalize_window(e.frames, o.body);
+    if (!w.usable) {
       ++m.skipped_;
       continue;
     }
-    x.push_back(cv::Mat(1, dim, CV_32F, f.data()));
-    y.push_back(index[e.label]);
-    subjects.push_back(e.subject);
-    durations.push_back(w.t_s.empty() ? 0.0 : w.t_s.back());
+    ++m.examples_;
+    durations.push_back(w.t_s.back());
+    std::vector<NormalizedWindow> variants = {w};
+    const int n = static_cast<int>(e.frames.size());
+    for (int c = 0; c < o.crops && n >= 4; ++c) {
+      const double dur = w.t_s.back(), keep = o.crop_fraction * dur;
+      const double start = o.crops > 1 ? (dur - keep) * c / (o.crops - 1) : (dur - keep) / 2;
+      size_t a = 0, b = static_cast<size_t>(n);
+      while (a + 1 < static_cast<size_t>(n) && w.t_s[a] < start) ++a;
+      while (b > a + 2 && w.t_s[b - 1] > start + keep) --b;
+      NormalizedWindow cw =
+          normalize_window(std::span<const SkeletonFrame>(e.frames).subspan(a, b - a), o.body);
+      if (cw.usable) variants.push_back(std::move(cw));
+    }
+    if (o.augment_mirror) {
+      const size_t k = variants.size();
+      for (size_t v = 0; v < k; ++v) {
+        NormalizedWindow mw = variants[v];
+        mirror_left_right(mw);
+        variants.push_back(std::move(mw));
+      }
+    }
+    for (const auto& v : variants) add(v, i);
     if (progress && i % 64 == 0) progress(0.2 * static_cast<double>(i) / examples.size());
   }
-  m.examples_ = x.rows;
   std::set<int> present(y.begin(), y.end());
   if (present.size() < 2)
     return make_error(ErrorCode::kInvalidArgument,
@@ -196,12 +227,16 @@ Result<ActionModel> ActionModel::train(const std::vector<LabelledSequence>& exam
   cv::Mat mean, sd;
   m.mean_.create(1, dim, CV_32F);
   m.inv_std_.create(1, dim, CV_32F);
+  double mean_sd = 0;
   for (int k = 0; k < dim; ++k) {
     cv::meanStdDev(x.col(k), mean, sd);
     m.mean_.at<float>(0, k) = static_cast<float>(mean.at<double>(0));
     const double s = sd.at<double>(0);
+    mean_sd += s / dim;
     m.inv_std_.at<float>(0, k) = s > 1e-6 ? static_cast<float>(1.0 / s) : 0.f;
   }
+  if (!o.classifier.standardize_each)  // one scale for all: the descriptor's geometry is kept
+    m.inv_std_.setTo(mean_sd > 1e-12 ? 1.0 / mean_sd : 1.0);
   cv::Mat xs(x.rows, dim, CV_32F);
   for (int i = 0; i < x.rows; ++i) {
     const float* a = x.ptr<float>(i);
@@ -223,12 +258,20 @@ Result<ActionModel> ActionModel::train(const std::vector<LabelledSequence>& exam
       int i = 0;
       for (const auto& s : subject_set) sf[s] = i++ % k;
       for (int r = 0; r < xs.rows; ++r)
-        fold[static_cast<size_t>(r)] =
-            subjects[static_cast<size_t>(r)].empty() ? r % k : sf[subjects[static_cast<size_t>(r)]];
-    } else {  // stratified round robin
+        fold[static_cast<size_t>(r)] = subjects[static_cast<size_t>(r)].empty()
+                                           ? origin[static_cast<size_t>(r)] % k
+                                           : sf[subjects[static_cast<size_t>(r)]];
+    } else {  // stratified round robin over the original examples (copies follow them)
       std::vector<int> seen(static_cast<size_t>(classes), 0);
-      for (int r = 0; r < xs.rows; ++r)
-        fold[static_cast<size_t>(r)] = seen[static_cast<size_t>(y[static_cast<size_t>(r)])]++ % k;
+      std::map<int, int> of_origin;
+      for (int r = 0; r < xs.rows; ++r) {
+        const int og = origin[static_cast<size_t>(r)];
+        auto it = of_origin.find(og);
+        if (it == of_origin.end())
+          it = of_origin.emplace(og, seen[static_cast<size_t>(y[static_cast<size_t>(r)])]++ % k)
+                   .first;
+        fold[static_cast<size_t>(r)] = it->second;
+      }
     }
     std::vector<double> held(static_cast<size_t>(xs.rows) * classes);
     std::vector<int> predicted(static_cast<size_t>(xs.rows), -1);
@@ -278,8 +321,11 @@ Result<ActionModel> ActionModel::train(const std::vector<LabelledSequence>& exam
         distances.push_back(novelty[static_cast<size_t>(r)]);
       }
     }
-    m.reject_threshold_ = quantile(winners, co.reject_quantile);
-    if (!distances.empty()) m.novelty_threshold_ = quantile(distances, 1.0 - co.reject_quantile);
+    // A window that no one-vs-rest classifier claims (decision < 0) is never accepted; held-out
+    // margins of easy training data can be far above 0, so the quantile only lowers the bar.
+    m.reject_threshold_ = std::min(quantile(winners, co.reject_quantile), 0.0);
+    if (!distances.empty())
+      m.novelty_threshold_ = co.novelty_margin * quantile(distances, 1.0 - co.reject_quantile);
   }
   const Fitted fitted = fit(xs, y, classes, co);
   class_centroids(xs, y, classes, m.centroids_, m.radii_);
@@ -382,8 +428,9 @@ Status ActionModel::save(const fs::path& path) const {
       << "{"
       << "kind" << std::string(to_string(o.classifier.kind)) << "c" << o.classifier.c << "gamma"
       << o.classifier.gamma << "reject_folds" << o.classifier.reject_folds << "reject_quantile"
-      << o.classifier.reject_quantile << "reject_threshold" << reject_threshold_
-      << "novelty_threshold" << novelty_threshold_ << "score_temperature" << temperature_ << "}";
+      << o.classifier.reject_quantile << "novelty_margin" << o.classifier.novelty_margin
+      << "reject_threshold" << reject_threshold_ << "novelty_threshold" << novelty_threshold_
+      << "score_temperature" << temperature_ << "}";
     f << "training"
       << "{"
       << "examples" << examples_ << "skipped" << skipped_ << "}";
@@ -481,6 +528,7 @@ Result<ActionModel> ActionModel::load(const fs::path& path) {
     o.classifier.reject_folds = static_cast<int>(need(cl, "reject_folds", "classifier."));
     o.classifier.reject_quantile = static_cast<double>(need(cl, "reject_quantile", "classifier."));
     m.reject_threshold_ = static_cast<double>(need(cl, "reject_threshold", "classifier."));
+    o.classifier.novelty_margin = static_cast<double>(need(cl, "novelty_margin", "classifier."));
     m.novelty_threshold_ = static_cast<double>(need(cl, "novelty_threshold", "classifier."));
     m.temperature_ = static_cast<double>(need(cl, "score_temperature", "classifier."));
     if (const cv::FileNode tr = f["training"]; tr.isMap()) {

@@ -57,15 +57,27 @@ std::vector<float> extract_features(const NormalizedWindow& w, const FeatureOpti
   std::vector<float> out;
   out.reserve(static_cast<size_t>(feature_dimension(o)));
   if (o.method == FeatureMethod::kRelativePositions) {
-    const std::vector<cv::Vec3f> r = resample_positions(w, o.rjp_frames);
+    // Instants (the seed), or cell means of the densely resampled window (rjp_average).
+    const int per_cell = o.rjp_average ? std::max(o.samples / o.rjp_frames, 1) : 1;
+    const std::vector<cv::Vec3f> r = resample_positions(w, o.rjp_frames * per_cell);
     for (int k = 0; k < o.rjp_frames; ++k) {
-      const cv::Vec3f* frame = &r[static_cast<size_t>(k) * kJointCount];
-      for (int a = 0; a < nj; ++a)
-        for (int b = a + 1; b < nj; ++b) {
-          const cv::Vec3f d =
-              frame[joints[static_cast<size_t>(a)]] - frame[joints[static_cast<size_t>(b)]];
-          out.insert(out.end(), {d[0], d[1], d[2]});
-        }
+      const size_t first = out.size();
+      for (int i = 0; i < per_cell; ++i) {
+        const cv::Vec3f* frame = &r[static_cast<size_t>(k * per_cell + i) * kJointCount];
+        size_t at = first;
+        for (int a = 0; a < nj; ++a)
+          for (int b = a + 1; b < nj; ++b) {
+            const cv::Vec3f d =
+                (frame[joints[static_cast<size_t>(a)]] - frame[joints[static_cast<size_t>(b)]]) /
+                static_cast<float>(per_cell);
+            if (i == 0) {
+              out.insert(out.end(), {d[0], d[1], d[2]});
+            } else {
+              for (int c = 0; c < 3; ++c) out[at + static_cast<size_t>(c)] += d[c];
+            }
+            at += 3;
+          }
+      }
     }
     return out;
   }
@@ -74,12 +86,15 @@ std::vector<float> extract_features(const NormalizedWindow& w, const FeatureOpti
   // Series per coordinate: x[c][t], c = joint * 3 + axis.
   const int nc = nj * 3;
   std::vector<float> x(static_cast<size_t>(nc * s)), v(static_cast<size_t>(nc * s));
-  for (int t = 0; t < s; ++t)
-    for (int a = 0; a < nj; ++a)
-      for (int k = 0; k < 3; ++k)
-        x[static_cast<size_t>((a * 3 + k) * s + t)] =
-            r[static_cast<size_t>(t) * kJointCount +
-              static_cast<size_t>(joints[static_cast<size_t>(a)])][k];
+  const int root = static_cast<int>(JointId::kHipCenter);
+  for (int t = 0; t < s; ++t) {
+    const cv::Vec3f* frame = &r[static_cast<size_t>(t) * kJointCount];
+    for (int a = 0; a < nj; ++a) {
+      const int j = joints[static_cast<size_t>(a)];
+      const cv::Vec3f p = o.pose_relative && j != root ? frame[j] - frame[root] : frame[j];
+      for (int k = 0; k < 3; ++k) x[static_cast<size_t>((a * 3 + k) * s + t)] = p[k];
+    }
+  }
   // Velocity per window duration (central differences), so a window's speed is comparable
   // across window lengths and frame rates.
   const float per_window = static_cast<float>(s - 1);
@@ -104,16 +119,28 @@ std::vector<float> extract_features(const NormalizedWindow& w, const FeatureOpti
       }
     }
   }
-  for (int c = 0; c < nc; ++c)
-    for (int f = 1; f <= o.fourier; ++f) {
-      double re = 0, im = 0;
+  if (o.fourier > 0) {
+    std::vector<double> cosine(static_cast<size_t>(o.fourier * s)), sine(cosine.size());
+    for (int f = 1; f <= o.fourier; ++f)
       for (int t = 0; t < s; ++t) {
         const double a = 2 * CV_PI * f * t / s;
-        re += x[static_cast<size_t>(c * s + t)] * std::cos(a);
-        im -= x[static_cast<size_t>(c * s + t)] * std::sin(a);
+        cosine[static_cast<size_t>((f - 1) * s + t)] = std::cos(a);
+        sine[static_cast<size_t>((f - 1) * s + t)] = std::sin(a);
       }
-      out.push_back(static_cast<float>(std::hypot(re, im) / s));
+    for (int c = 0; c < nc; ++c) {
+      const float* series = &x[static_cast<size_t>(c * s)];
+      for (int f = 0; f < o.fourier; ++f) {
+        double re = 0, im = 0;
+        const double* cs = &cosine[static_cast<size_t>(f * s)];
+        const double* sn = &sine[static_cast<size_t>(f * s)];
+        for (int t = 0; t < s; ++t) {
+          re += series[t] * cs[t];
+          im -= series[t] * sn[t];
+        }
+        out.push_back(static_cast<float>(std::hypot(re, im) / s));
+      }
     }
+  }
   return out;
 }
 

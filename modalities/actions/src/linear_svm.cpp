@@ -10,7 +10,8 @@ namespace {
 void quiet(const char*) {}
 }  // namespace
 
-LinearSvm train_linear_svm(const cv::Mat& x, const std::vector<int>& y, int classes, double c) {
+LinearSvm train_linear_svm(const cv::Mat& x, const std::vector<int>& y, int classes, double c,
+                           bool l1) {
   CV_Assert(x.type() == CV_32F && x.rows == static_cast<int>(y.size()) && classes >= 2);
   const int n = x.rows, d = x.cols;
   // Dense rows as liblinear nodes: d values, the bias node, the terminator.
@@ -33,8 +34,8 @@ LinearSvm train_linear_svm(const cv::Mat& x, const std::vector<int>& y, int clas
   prob.x = rows.data();
   prob.bias = 1.0;
   parameter param{};
-  param.solver_type = L2R_L2LOSS_SVC_DUAL;
-  param.eps = 0.1;
+  param.solver_type = l1 ? L1R_L2LOSS_SVC : L2R_L2LOSS_SVC_DUAL;
+  param.eps = l1 ? 0.01 : 0.1;
   param.C = c;
   set_print_string_function(&quiet);
   std::srand(1);  // the dual solver shuffles with rand(): same data, same model

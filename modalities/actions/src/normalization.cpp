@@ -33,6 +33,35 @@ constexpr std::array<std::pair<JointId, JointId>, 19> kBones = {{
     {JointId::kAnkleRight, JointId::kFootRight},
 }};
 
+// Reference bone lengths (parent, child, length in body units = torso + shoulder width), in an
+// order where every parent comes before its children (from the hip centre). Adult proportions
+// (e.g. upper arm 0.28, forearm 0.25 of a unit of about 0.7 m).
+struct RefBone {
+  JointId parent, child;
+  float length;
+};
+constexpr std::array<RefBone, 19> kReference = {{
+    {JointId::kHipCenter, JointId::kSpine, 0.30f},
+    {JointId::kSpine, JointId::kShoulderCenter, 0.30f},
+    {JointId::kShoulderCenter, JointId::kHead, 0.22f},
+    {JointId::kShoulderCenter, JointId::kShoulderLeft, 0.20f},
+    {JointId::kShoulderLeft, JointId::kElbowLeft, 0.38f},
+    {JointId::kElbowLeft, JointId::kWristLeft, 0.34f},
+    {JointId::kWristLeft, JointId::kHandLeft, 0.10f},
+    {JointId::kShoulderCenter, JointId::kShoulderRight, 0.20f},
+    {JointId::kShoulderRight, JointId::kElbowRight, 0.38f},
+    {JointId::kElbowRight, JointId::kWristRight, 0.34f},
+    {JointId::kWristRight, JointId::kHandRight, 0.10f},
+    {JointId::kHipCenter, JointId::kHipLeft, 0.13f},
+    {JointId::kHipLeft, JointId::kKneeLeft, 0.55f},
+    {JointId::kKneeLeft, JointId::kAnkleLeft, 0.52f},
+    {JointId::kAnkleLeft, JointId::kFootLeft, 0.12f},
+    {JointId::kHipCenter, JointId::kHipRight, 0.13f},
+    {JointId::kHipRight, JointId::kKneeRight, 0.55f},
+    {JointId::kKneeRight, JointId::kAnkleRight, 0.52f},
+    {JointId::kAnkleRight, JointId::kFootRight, 0.12f},
+}};
+
 constexpr std::array<JointId, 7> kTorso = {
     JointId::kShoulderCenter, JointId::kSpine,   JointId::kHipCenter, JointId::kShoulderLeft,
     JointId::kShoulderRight,  JointId::kHipLeft, JointId::kHipRight};
@@ -192,8 +221,45 @@ NormalizedWindow normalize_window(std::span<const SkeletonFrame> frames,
     w.positions[i] =
         cv::Vec3f(static_cast<float>(q[0]), static_cast<float>(q[1]), static_cast<float>(q[2]));
   }
+  if (o.normalize_bones && o.normalize_scale) {
+    for (int f = 0; f < n; ++f) {
+      cv::Vec3f* q = &w.positions[static_cast<size_t>(f) * kJointCount];
+      std::array<cv::Vec3f, kJointCount> out{};
+      out[static_cast<size_t>(J(JointId::kHipCenter))] = q[J(JointId::kHipCenter)];
+      for (const RefBone& b : kReference) {
+        const cv::Vec3f d = q[J(b.child)] - q[J(b.parent)];
+        const float len = static_cast<float>(cv::norm(d));
+        out[static_cast<size_t>(J(b.child))] =
+            out[static_cast<size_t>(J(b.parent))] + (len > 1e-6f ? d * (b.length / len) : d);
+      }
+      std::copy(out.begin(), out.end(), q);
+    }
+  }
   w.usable = true;
   return w;
+}
+
+void mirror_left_right(NormalizedWindow& w) {
+  static constexpr std::array<std::pair<JointId, JointId>, 8> kPairs = {{
+      {JointId::kShoulderLeft, JointId::kShoulderRight},
+      {JointId::kElbowLeft, JointId::kElbowRight},
+      {JointId::kWristLeft, JointId::kWristRight},
+      {JointId::kHandLeft, JointId::kHandRight},
+      {JointId::kHipLeft, JointId::kHipRight},
+      {JointId::kKneeLeft, JointId::kKneeRight},
+      {JointId::kAnkleLeft, JointId::kAnkleRight},
+      {JointId::kFootLeft, JointId::kFootRight},
+  }};
+  for (int f = 0; f < w.frames; ++f) {
+    const size_t base = static_cast<size_t>(f) * kJointCount;
+    for (int j = 0; j < kJointCount; ++j) w.positions[base + static_cast<size_t>(j)][0] *= -1.f;
+    for (const auto& [l, r] : kPairs) {
+      std::swap(w.positions[base + static_cast<size_t>(l)],
+                w.positions[base + static_cast<size_t>(r)]);
+      std::swap(w.observed[base + static_cast<size_t>(l)],
+                w.observed[base + static_cast<size_t>(r)]);
+    }
+  }
 }
 
 std::vector<cv::Vec3f> resample_positions(const NormalizedWindow& w, int n) {

@@ -15,7 +15,8 @@ struct LinearSvm {
   cv::Mat bias;     // classes x 1, CV_32F
 };
 // L2-regularised L2-loss SVM (dual), one-vs-rest, bias term.
-LinearSvm train_linear_svm(const cv::Mat& x, const std::vector<int>& y, int classes, double c);
+LinearSvm train_linear_svm(const cv::Mat& x, const std::vector<int>& y, int classes, double c,
+                           bool l1 = false);
 void linear_decision(const LinearSvm& m, const float* x, double* out);
 
 struct RbfSvm {

@@ -30,6 +30,7 @@ TEST(Features, DimensionsMatchForEveryMethodAndJointSet) {
     }
   FeatureOptions rjp;
   rjp.method = FeatureMethod::kRelativePositions;
+  rjp.joints = JointSet::kAll;
   EXPECT_EQ(feature_dimension(rjp), 4 * 190 * 3);  // 20 joints: 190 pairs
   EXPECT_EQ(joint_indices(JointSet::kUpperBody).size(), 12u);
 }

@@ -47,6 +47,7 @@ TEST(Online, AnswersNoneUntilTheWindowFillsThenTheAction) {
     if (f.stamp_ns >= 1'000'000'000) {
       ++after;
       waves += r.label == "wave";
+
       EXPECT_TRUE(r.ready);
       EXPECT_EQ(r.scores.size(), 3u);
       if (r.label == "wave") {

@@ -28,16 +28,22 @@ struct ClassifierOptions {
   ClassifierKind kind = ClassifierKind::kLinearSvm;
   double c = 1.0;      // SVM cost
   double gamma = 0.0;  // RBF kernel width on standardised features; 0 = 1 / dimension
-  // Open set: held-out windows of the training set (reject_folds-fold cross-validation) that are
-  // classified correctly give the distribution of the winning decision value; its
-  // reject_quantile quantile is the threshold below which a window is "none". A second test
-  // catches windows far from everything seen in training (a linear SVM can score them high):
-  // the distance of the standardised descriptor to the winning class's centroid, in units of
-  // that class's RMS radius, above its held-out (1 - reject_quantile) quantile is also "none".
+  // Scale each feature to unit variance (true), or all features by one common factor (false:
+  // keeps the descriptor's geometry, so dimensions that barely vary stay small).
+  bool standardize_each = true;
+  bool l1 = false;  // linear: L1-regularised (sparse weights) instead of L2
+  // Open set (README.md "Rejection"): cross-validation on the training windows
+  // (reject_folds folds) gives held-out decision values; a window is "none" when
+  // - its best one-vs-rest decision is below min(0, the reject_quantile quantile of the winning
+  //   decisions of correctly classified held-out windows): no class claims it; or
+  // - its standardised descriptor is far from everything seen in training (a linear SVM can
+  //   score such windows high): the distance to the winning class's centroid, in units of that
+  //   class's RMS radius, exceeds novelty_margin x the held-out (1 - reject_quantile) quantile.
   // The same cross-validation fits the score temperature. reject_folds = 0: no rejection,
   // scores with temperature 1.
   int reject_folds = 3;
   double reject_quantile = 0.02;
+  double novelty_margin = 1.5;
   Status check() const;
 };
 
@@ -48,6 +54,12 @@ struct ActionModelOptions {
   // The window of the online classifier (seconds). 0 = the median duration of the training
   // examples (for models trained on whole dataset segments).
   double window_s = 0;
+  // Training augmentation (README.md): the mirror image of every example (left/right swapped),
+  // and `crops` temporally cropped copies keeping crop_fraction of the example's duration
+  // (offsets spread evenly from start to end: label boundaries are never exact).
+  bool augment_mirror = false;
+  int crops = 0;
+  double crop_fraction = 0.85;
   Status check() const;
 };
 

@@ -31,12 +31,19 @@ std::vector<int> joint_indices(JointSet s);
 
 struct FeatureOptions {
   FeatureMethod method = FeatureMethod::kPyramid;
-  JointSet joints = JointSet::kAll;
-  int samples = 32;        // resampled instants per window (pyramid), >= 4
-  int rjp_frames = 4;      // instants per window (relative positions), >= 1
-  int pyramid_levels = 3;  // 1 + 2 + 4 cells, 1..5
+  JointSet joints = JointSet::kUpperBody;
+  int samples = 32;    // resampled instants per window (pyramid), >= 4
+  int rjp_frames = 4;  // instants per window (relative positions), >= 1
+  // relative positions: means over rjp_frames equal cells of the window resampled at `samples`
+  // instants, instead of single instants.
+  bool rjp_average = false;
+  int pyramid_levels = 2;  // 1 + 2 + 4 cells, 1..5
   bool velocities = true;  // pyramid: also the velocity means
   int fourier = 4;         // pyramid: Fourier magnitudes 1..fourier per coordinate (0 = none)
+  // pyramid: joints relative to the same frame's hip centre (the pose), with the hip centre's
+  // own path relative to the window origin (the body's displacement) kept separately, so that
+  // walking a metre does not drown the arms' posture. Off: all joints relative to the origin.
+  bool pose_relative = true;
   Status check() const;
 };
 

@@ -34,6 +34,11 @@ struct BodyFrameOptions {
   bool normalize_facing = true;
   // Divide by the body's size (see above). Off: metres.
   bool normalize_scale = true;
+  // Rebuild every frame from the hip centre outwards with each bone's direction kept and its
+  // length set to a reference skeleton's (in body units): removes the remaining differences of
+  // proportions between people (a child's arms vs an adult's) and bone-length jitter of the
+  // tracker. Needs normalize_scale.
+  bool normalize_bones = true;
   // Joints below this confidence are missing. 0.5 (Kinect "inferred") is kept by default.
   float min_confidence = 0.25f;
   // Unit length when the window shows no torso length or shoulder width (metres).
@@ -60,6 +65,10 @@ struct NormalizedWindow {
 
 NormalizedWindow normalize_window(std::span<const SkeletonFrame> frames,
                                   const BodyFrameOptions& options);
+
+// The mirror image of a normalised window: the body's left and right swapped (x -> -x and the
+// left/right joints exchanged). Training augmentation: a wave of the left hand teaches the right.
+void mirror_left_right(NormalizedWindow& window);
 
 // Linear resampling of the window's positions at n instants evenly spaced over its duration
 // (n x kJointCount, row-major). A window of one frame repeats it.
