@@ -439,7 +439,7 @@ class Generator {
   Generator(const DemoOptions& o, Media media)
       : o_(o),
         media_(std::move(media)),
-        script_(o.seed, o.duration_s),
+        script_(o.seed, o.duration_s, DemoGeometry{}, o.script),
         cameras_(make_demo_cameras()) {
     const auto statics = static_scene(script_.geometry(), media_);
     for (const auto& cam : cameras_) {
@@ -678,6 +678,7 @@ Status DemoOptions::check() const {
     bad += " image_noise_sigma must be in [0, 40];";
   if (jpeg_quality < 1 || jpeg_quality > 100) bad += " jpeg_quality must be in [1, 100];";
   if (threads < 1 || threads > 64) bad += " threads must be in [1, 64];";
+  if (auto s = script.check(); !s) bad += " script: " + s.error().message + ";";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "DemoOptions:{}", bad);
   return ok_status();
 }
@@ -1032,8 +1033,8 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       r["type"] = "action";
       r["start_ns"] = static_cast<int64_t>(std::llround(a.start_s * 1e9));
       r["end_ns"] = static_cast<int64_t>(std::llround(a.end_s * 1e9));
-      r["label"] = std::string(action_label(a.action));
-      r["id"] = action_dream_id(a.action);
+      r["label"] = script.segment_label(a);
+      r["id"] = script.segment_dream_id(a);
       truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});
     }
     for (auto& r : speech_truth) truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});

@@ -43,6 +43,9 @@ struct DemoOptions {
   // (painted eyes: the truth eye gaze is then the head gaze).
   enum class FaceModel { kMesh, kPlanar };  // kMesh: session metadata subject = kDemoSubject
   FaceModel face_model = FaceModel::kMesh;
+  // The child's gestures: by default the original three (wave, fly, hands_on_head); kDream adds
+  // cover_eyes, drive_car and drink; custom gestures and a fixed schedule for tests.
+  DemoScriptOptions script;
   // Media shipped by Debian packages.
   std::filesystem::path portrait =
       "/usr/lib/python3/dist-packages/skimage/data/astronaut.png";  // python3-skimage
