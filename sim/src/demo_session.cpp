@@ -718,6 +718,28 @@ std::vector<CameraModel> make_demo_cameras(const DemoGeometry& g) {
   return out;
 }
 
+SkeletonBody demo_skeleton_body(const DemoScript& script, uint64_t seed, const std::string& stream,
+                                uint64_t sequence, int64_t stamp, double joint_noise_m) {
+  std::mt19937_64 rng(sub_seed(seed, stream, sequence));
+  const auto j = script.joints(static_cast<double>(stamp) * 1e-9);
+  SkeletonBody body;
+  body.body_id = 0;
+  for (int i = 0; i < kJointCount; ++i) {
+    auto& o = body.joints[static_cast<size_t>(i)];
+    for (int k = 0; k < 3; ++k)
+      o.position_m[k] = j[static_cast<size_t>(i)][k] + joint_noise_m * gaussian(rng);
+    const auto id = static_cast<JointId>(i);
+    // Legs are under the table: reported as "inferred", like a Kinect would.
+    o.confidence = (id >= JointId::kKneeLeft && id <= JointId::kFootLeft) ||
+                           (id >= JointId::kKneeRight && id <= JointId::kFootRight)
+                       ? 0.5f
+                       : 1.0f;
+  }
+  return body;
+}
+
+int64_t demo_stamp_ns(int64_t index, double rate_hz) { return stamp_ns(index, rate_hz); }
+
 FaceState demo_face_state(const DemoScript& script, double t) {
   const HeadPose hp = script.head_pose(t);
   const GazeState gs = script.gaze(t);
@@ -1083,23 +1105,9 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
         return make_frame(p.id, ts, seq, DepthImage{depth, true});
       }
       case SensorKind::kSkeleton: {
-        std::mt19937_64 rng(sub_seed(options.seed, p.id, seq));
-        const auto j = script.joints(static_cast<double>(job.stamp) * 1e-9);
         Skeleton sk;
-        SkeletonBody body;
-        body.body_id = 0;
-        for (int i = 0; i < kJointCount; ++i) {
-          auto& o = body.joints[static_cast<size_t>(i)];
-          for (int k = 0; k < 3; ++k)
-            o.position_m[k] = j[static_cast<size_t>(i)][k] + options.joint_noise_m * gaussian(rng);
-          const auto id = static_cast<JointId>(i);
-          // Legs are under the table: reported as "inferred", like a Kinect would.
-          o.confidence = (id >= JointId::kKneeLeft && id <= JointId::kFootLeft) ||
-                                 (id >= JointId::kKneeRight && id <= JointId::kFootRight)
-                             ? 0.5f
-                             : 1.0f;
-        }
-        sk.bodies.push_back(body);
+        sk.bodies.push_back(
+            demo_skeleton_body(script, options.seed, p.id, seq, job.stamp, options.joint_noise_m));
         return make_frame(p.id, ts, seq, std::move(sk));
       }
       case SensorKind::kAudio: {

@@ -149,7 +149,16 @@ Error corrupt(const fs::path& path, const std::string& what) {
 
 }  // namespace
 
-Result<ActionModel> ActionModel::train(const std::vector<LabelledSequence>& examples,
+Result<ActionModel> ActionModel::train(const std::vector<LabelledSequence>& sequences,
+                                       const ActionModelOptions& o,
+                                       const std::function<void(double)>& progress) {
+  std::vector<WindowRef> windows;
+  windows.reserve(sequences.size());
+  for (const auto& e : sequences) windows.push_back({e.frames, e.label, e.subject});
+  return train(windows, o, progress);
+}
+
+Result<ActionModel> ActionModel::train(const std::vector<WindowRef>& examples,
                                        const ActionModelOptions& o,
                                        const std::function<void(double)>& progress) {
   if (auto s = o.check(); !s) return tl::unexpected(s.error());
@@ -197,7 +206,7 @@ Result<ActionModel> ActionModel::train(const std::vector<LabelledSequence>& exam
       while (a + 1 < static_cast<size_t>(n) && w.t_s[a] < start) ++a;
       while (b > a + 2 && w.t_s[b - 1] > start + keep) --b;
       NormalizedWindow cw =
-          normalize_window(std::span<const SkeletonFrame>(e.frames).subspan(a, b - a), o.body);
+          normalize_window(e.frames.subspan(a, b - a), o.body);
       if (cw.usable) variants.push_back(std::move(cw));
     }
     if (o.augment_mirror) {

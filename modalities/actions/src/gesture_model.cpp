@@ -32,12 +32,13 @@ Status GestureOptions::check() const {
     return make_error(ErrorCode::kInvalidArgument, "gestures: samples must be in [4, 256]");
   if (!(band > 0 && band <= 1))
     return make_error(ErrorCode::kInvalidArgument, "gestures: band must be in (0, 1]");
-  if (time_scales.empty())
-    return make_error(ErrorCode::kInvalidArgument, "gestures: time_scales must not be empty");
-  for (double s : time_scales)
-    if (!(s >= 0.25 && s <= 4))
-      return make_error(ErrorCode::kInvalidArgument,
-                        "gestures: time scales must be in [0.25, 4] (got {})", s);
+  if (!(history_factor >= 1 && history_factor <= 4))
+    return make_error(ErrorCode::kInvalidArgument, "gestures: history_factor must be in [1, 4]");
+  if (!(end_slack >= 0 && end_slack < 1))
+    return make_error(ErrorCode::kInvalidArgument, "gestures: end_slack must be in [0, 1)");
+  if (!(min_speed > 0 && min_speed <= 1 && max_speed >= 1 && max_speed <= 4))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "gestures: need 0 < min_speed <= 1 <= max_speed <= 4");
   if (!(threshold_factor > 0) || !(min_threshold > 0))
     return make_error(ErrorCode::kInvalidArgument,
                       "gestures: threshold_factor and min_threshold must be > 0");
@@ -48,9 +49,13 @@ Status GestureOptions::check() const {
 }
 
 std::vector<float> GestureModel::trajectory(std::span<const SkeletonFrame> frames) const {
+  return resampled_trajectory(frames, options_.samples);
+}
+
+std::vector<float> GestureModel::resampled_trajectory(std::span<const SkeletonFrame> frames,
+                                                      int n) const {
   const NormalizedWindow w = normalize_window(frames, options_.body);
   if (!w.usable) return {};
-  const int n = options_.samples;
   const std::vector<cv::Vec3f> r = resample_positions(w, n);
   std::vector<float> out(static_cast<size_t>(n) * kGestureDims);
   for (int t = 0; t < n; ++t) {
@@ -158,14 +163,70 @@ Result<GestureModel> GestureModel::train(const std::vector<LabelledSequence>& de
 double GestureModel::history_s() const {
   double longest = 0;
   for (const auto& t : templates_) longest = std::max(longest, t.duration_s);
-  double scale = 1;
-  for (double s : options_.time_scales) scale = std::max(scale, s);
-  return longest * scale;
+  return longest * options_.history_factor;
 }
 
 double GestureModel::distance(std::span<const SkeletonFrame> window,
                               const GestureTemplate& t) const {
   return dtw(trajectory(window), t.trajectory);
+}
+
+// Open-begin subsequence DTW of template t (m samples) in history h (n samples at the same
+// rate): the mean local cost along the cheapest path that ends in the last end_slack of the
+// history and spans min_speed..max_speed times the template.
+double GestureModel::subsequence_dtw(const std::vector<float>& h,
+                                     const std::vector<float>& t) const {
+  const int m = static_cast<int>(t.size() / kGestureDims);
+  const int n = static_cast<int>(h.size() / kGestureDims);
+  if (m == 0 || n == 0) return kInf;
+  const double norm = 1.0 / std::sqrt(static_cast<double>(kGestureJoints));
+  auto cost = [&](int i, int j) {
+    double s = 0;
+    const float* x = &t[static_cast<size_t>(i) * kGestureDims];
+    const float* y = &h[static_cast<size_t>(j) * kGestureDims];
+    for (int k = 0; k < kGestureDims; ++k) {
+      const double e = static_cast<double>(x[k]) - y[k];
+      s += e * e;
+    }
+    return std::sqrt(s) * norm;
+  };
+  // Step pattern with slopes 1/2..2 (Sakoe & Chiba's symmetric P = 1 without the intermediate
+  // cells): predecessors (i-1, j-1), (i-1, j-2), (i-2, j-1); so a match spans m/2..2m samples.
+  struct Cell {
+    double cost = kInf;
+    int length = 0, start = 0;
+  };
+  std::vector<Cell> d(static_cast<size_t>(m) * n);
+  auto at = [&](int i, int j) -> Cell& { return d[static_cast<size_t>(i) * n + j]; };
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double c = cost(i, j);
+      if (i == 0) {
+        at(i, j) = {c, 1, j};  // open begin: the template may start anywhere in the history
+        continue;
+      }
+      const Cell* from = nullptr;
+      auto consider = [&](int pi, int pj) {
+        if (pi < 0 || pj < 0) return;
+        const Cell& p = at(pi, pj);
+        if (std::isfinite(p.cost) && (!from || p.cost / p.length < from->cost / from->length))
+          from = &p;
+      };
+      consider(i - 1, j - 1);
+      consider(i - 1, j - 2);
+      consider(i - 2, j - 1);
+      if (from) at(i, j) = {from->cost + c, from->length + 1, from->start};
+    }
+  double out = kInf;
+  const int first_end = std::max(0, n - 1 - static_cast<int>(std::lround(options_.end_slack * m)));
+  for (int j = first_end; j < n; ++j) {
+    const Cell& c = at(m - 1, j);
+    if (c.length == 0) continue;
+    const int span = j - c.start + 1;
+    if (span < options_.min_speed * m || span > options_.max_speed * m) continue;
+    out = std::min(out, c.cost / c.length);
+  }
+  return out;
 }
 
 GestureMatch GestureModel::match(std::span<const SkeletonFrame> history) const {
@@ -176,40 +237,46 @@ GestureMatch GestureModel::match(std::span<const SkeletonFrame> history) const {
     return out;
   }
   const int64_t now = history.back().stamp_ns;
-  std::map<int64_t, std::vector<float>> cache;  // window length (ns) -> trajectory
+  std::map<int64_t, std::vector<float>> cache;  // template duration (ns) -> history trajectory
   std::vector<double> best(labels_.size(), kInf);
   for (const auto& t : templates_) {
     const size_t c =
         static_cast<size_t>(std::find(labels_.begin(), labels_.end(), t.label) - labels_.begin());
-    for (double s : options_.time_scales) {
-      const int64_t len = static_cast<int64_t>(std::llround(t.duration_s * s * 1e9));
-      auto it = cache.find(len);
-      if (it == cache.end()) {
-        size_t first = history.size() - 1;
-        while (first > 0 && history[first - 1].stamp_ns >= now - len) --first;
-        const std::span<const SkeletonFrame> w = history.subspan(first);
-        const double span_ns = static_cast<double>(now - w.front().stamp_ns);
-        std::vector<float> traj;
-        if (w.size() >= 3 && span_ns >= 0.8 * static_cast<double>(len)) traj = trajectory(w);
-        it = cache.emplace(len, std::move(traj)).first;
+    const int64_t dur = static_cast<int64_t>(std::llround(t.duration_s * 1e9));
+    auto it = cache.find(dur);
+    if (it == cache.end()) {
+      const int64_t len =
+          static_cast<int64_t>(std::llround(t.duration_s * options_.history_factor * 1e9));
+      size_t first = history.size() - 1;
+      while (first > 0 && history[first - 1].stamp_ns >= now - len) --first;
+      const std::span<const SkeletonFrame> w = history.subspan(first);
+      const double span_ns = static_cast<double>(now - w.front().stamp_ns);
+      std::vector<float> traj;
+      // At least one template length of history, resampled at the template's rate.
+      if (w.size() >= 3 && span_ns >= 0.95 * static_cast<double>(dur)) {
+        const int n = std::max(3, static_cast<int>(std::lround(options_.samples * span_ns /
+                                                               static_cast<double>(dur))));
+        traj = resampled_trajectory(w, n);
       }
-      if (it->second.empty()) continue;
-      best[c] = std::min(best[c], dtw(it->second, t.trajectory));
+      it = cache.emplace(dur, std::move(traj)).first;
     }
+    if (it->second.empty()) continue;
+    best[c] = std::min(best[c], subsequence_dtw(it->second, t.trajectory));
   }
   double best_ratio = kInf;
+  size_t best_class = 0;
   for (size_t c = 0; c < labels_.size(); ++c) {
     out.class_distance.emplace_back(labels_[c], best[c]);
     const double ratio = best[c] / thresholds_[c];
     if (ratio < best_ratio) {
       best_ratio = ratio;
+      best_class = c;
       out.distance = best[c];
       out.threshold = thresholds_[c];
-      if (ratio <= 1) out.label = labels_[c];
     }
   }
   if (!std::isfinite(best_ratio)) out.no_data = true;
-  if (best_ratio > 1) out.label = "none";
+  if (best_ratio <= 1) out.label = labels_[best_class];
   return out;
 }
 
@@ -226,10 +293,10 @@ Status GestureModel::save(const fs::path& path) const {
       << static_cast<int>(o.body.normalize_facing) << "normalize_scale"
       << static_cast<int>(o.body.normalize_scale) << "min_confidence" << o.body.min_confidence
       << "default_body_size_m" << o.body.default_body_size_m << "}";
-    f << "samples" << o.samples << "band" << o.band << "time_scales"
-      << cv::Mat(o.time_scales).reshape(1, 1) << "threshold_factor" << o.threshold_factor
-      << "min_threshold" << o.min_threshold << "min_duration_s" << o.min_duration_s
-      << "max_duration_s" << o.max_duration_s;
+    f << "samples" << o.samples << "band" << o.band << "history_factor" << o.history_factor
+      << "end_slack" << o.end_slack << "min_speed" << o.min_speed << "max_speed" << o.max_speed
+      << "threshold_factor" << o.threshold_factor << "min_threshold" << o.min_threshold
+      << "min_duration_s" << o.min_duration_s << "max_duration_s" << o.max_duration_s;
     f << "gestures"
       << "[";
     for (size_t c = 0; c < labels_.size(); ++c)
@@ -296,10 +363,10 @@ Result<GestureModel> GestureModel::load(const fs::path& path) {
     o.body.default_body_size_m = static_cast<double>(need(body, "default_body_size_m"));
     o.samples = static_cast<int>(need(f.root(), "samples"));
     o.band = static_cast<double>(need(f.root(), "band"));
-    cv::Mat scales;
-    need(f.root(), "time_scales") >> scales;
-    scales.convertTo(scales, CV_64F);
-    o.time_scales.assign(scales.begin<double>(), scales.end<double>());
+    o.history_factor = static_cast<double>(need(f.root(), "history_factor"));
+    o.end_slack = static_cast<double>(need(f.root(), "end_slack"));
+    o.min_speed = static_cast<double>(need(f.root(), "min_speed"));
+    o.max_speed = static_cast<double>(need(f.root(), "max_speed"));
     o.threshold_factor = static_cast<double>(need(f.root(), "threshold_factor"));
     o.min_threshold = static_cast<double>(need(f.root(), "min_threshold"));
     o.min_duration_s = static_cast<double>(need(f.root(), "min_duration_s"));

@@ -86,6 +86,16 @@ class ActionModel {
   static Result<ActionModel> train(const std::vector<LabelledSequence>& examples,
                                    const ActionModelOptions& options,
                                    const std::function<void(double)>& progress = nullptr);
+  // The same on windows that view frames held elsewhere (e.g. sliding windows over long
+  // recordings, without copying them).
+  struct WindowRef {
+    std::span<const SkeletonFrame> frames;
+    std::string label;
+    std::string subject;
+  };
+  static Result<ActionModel> train(const std::vector<WindowRef>& windows,
+                                   const ActionModelOptions& options,
+                                   const std::function<void(double)>& progress = nullptr);
 
   // The descriptor of a window (empty: no data).
   std::vector<float> features(std::span<const SkeletonFrame> window) const;

@@ -19,10 +19,16 @@ namespace dreamsense::actions {
 struct GestureOptions {
   BodyFrameOptions body;
   int samples = 24;  // instants per template / window (time-normalised)
-  // Sakoe-Chiba band half-width as a fraction of `samples` (rate-invariant alignment within it).
+  // Sakoe-Chiba band half-width as a fraction of `samples`, for template-to-template distances.
   double band = 0.25;
-  // The live window is matched at these multiples of each template's duration (speed changes).
-  std::vector<double> time_scales = {0.8, 1.0, 1.25};
+  // Live matching is subsequence DTW (open begin): each template is looked for inside the last
+  // history_factor x its duration, resampled at the template's rate; the match must end within
+  // the last end_slack of the template's samples (the gesture is going on now) and span between
+  // min_speed and max_speed times the template's samples... i.e. the gesture may be performed
+  // that much faster or slower, at any phase of a repeated movement.
+  double history_factor = 1.6;
+  double end_slack = 0.15;
+  double min_speed = 0.6, max_speed = 1.6;
   // Class threshold = max(min_threshold, threshold_factor x the largest leave-one-out distance
   // between the class's own examples); one example: 2 x min_threshold. Distances are in body
   // units (torso length + shoulder width) per joint.
@@ -70,7 +76,7 @@ class GestureModel {
   const std::vector<double>& thresholds() const { return thresholds_; }
   const std::vector<GestureTemplate>& templates() const { return templates_; }
   const GestureOptions& options() const { return options_; }
-  // The history match() looks at: the longest template times the largest time scale.
+  // The history match() looks at: the longest template times history_factor.
   double history_s() const;
 
   Status save(const std::filesystem::path& path) const;
@@ -83,6 +89,8 @@ class GestureModel {
   std::vector<GestureTemplate> templates_;
   std::vector<float> trajectory(std::span<const SkeletonFrame> frames) const;
   double dtw(const std::vector<float>& a, const std::vector<float>& b) const;
+  double subsequence_dtw(const std::vector<float>& history, const std::vector<float>& t) const;
+  std::vector<float> resampled_trajectory(std::span<const SkeletonFrame> frames, int n) const;
 };
 
 }  // namespace dreamsense::actions
