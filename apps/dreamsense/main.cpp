@@ -60,6 +60,8 @@ int main(int argc, char** argv) {
   app::add_train_face(*train, g, exit_code);
   app::add_train_gaze(*train, g, exit_code);
   app::add_train_speech(*train, g, exit_code);
+  app::add_train_actions(*train, g, exit_code);  // cmd_actions.cpp
+  app::add_train_gestures(*train, g, exit_code);
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug
                    : g.quiet ? log::Level::kWarn

@@ -21,8 +21,8 @@ using dreamsense::actions::SkeletonFrame;
 using dreamsense::actions::SkeletonSequence;
 
 namespace {
-const std::vector<std::string> kDreamLabels = {"none",      "wave",  "cover_eyes", "hands_on_head",
-                                               "fly",       "drive_car", "drink"};
+const std::vector<std::string> kDreamLabels = {"none", "wave",      "cover_eyes", "hands_on_head",
+                                               "fly",  "drive_car", "drink"};
 }  // namespace
 
 Result<std::vector<uint64_t>> parse_seeds(const std::string& spec) {
@@ -64,9 +64,8 @@ DemoRecording demo_recording(uint64_t seed, const DemoGestureData& data) {
   r.frames.reserve(static_cast<size_t>(n));
   for (int64_t k = 0; k < n; ++k) {
     const int64_t stamp = sim::demo_stamp_ns(k, data.rate_hz);
-    const SkeletonBody body = sim::demo_skeleton_body(script, seed, "front.skeleton",
-                                                      static_cast<uint64_t>(k), stamp,
-                                                      data.joint_noise_m);
+    const SkeletonBody body = sim::demo_skeleton_body(
+        script, seed, "front.skeleton", static_cast<uint64_t>(k), stamp, data.joint_noise_m);
     r.frames.push_back(dreamsense::actions::to_skeleton_frame(body, stamp));
   }
   for (const auto& s : script.actions())
@@ -112,8 +111,8 @@ void add_windows(const DemoRecording& r, const DreamTrainOptions& o,
     const double t = static_cast<double>(f[last - 1].stamp_ns) * 1e-9;
     const TruthSpan* s = span_at(r.truth, t);
     if (!s || t - s->start_s < o.settle_s) continue;
-    out.push_back({std::span<const SkeletonFrame>(f).subspan(first, last - first), s->label,
-                   subject});
+    out.push_back(
+        {std::span<const SkeletonFrame>(f).subspan(first, last - first), s->label, subject});
   }
 }
 
@@ -138,10 +137,11 @@ Result<ActionModel> train_dream_model(const DreamTrainOptions& o,
   if (!m) return tl::unexpected(m.error());
   m->description =
       o.description.empty()
-          ? fmt::format("DREAM gestures from the demo generator: seeds {}-{} ({} seeds, {} s each, "
-                        "{} windows of {} s every {} s), method {}",
-                        o.seeds.front(), o.seeds.back(), o.seeds.size(), o.data.duration_s,
-                        windows.size(), o.window_s, o.hop_s, o.method.name)
+          ? fmt::format(
+                "DREAM gestures from the demo generator: seeds {}-{} ({} seeds, {} s each, "
+                "{} windows of {} s every {} s), method {}",
+                o.seeds.front(), o.seeds.back(), o.seeds.size(), o.data.duration_s, windows.size(),
+                o.window_s, o.hop_s, o.method.name)
           : o.description;
   return m;
 }
@@ -288,8 +288,9 @@ Result<EvalReport> run_dream_eval(const DreamEvalOptions& o,
   if (auto ms = main.timing.median_ms()) report.timing["ms_per_window_median"] = *ms;
   report.extra["tolerance_s"] = o.tolerance_s;
   report.extra["seeds"] = o.seeds;
-  if (!o.model.empty()) report.extra["model"] = {{"file", o.model.string()},
-                                                 {"description", models[0].second->description}};
+  if (!o.model.empty())
+    report.extra["model"] = {{"file", o.model.string()},
+                             {"description", models[0].second->description}};
   return report;
 }
 
@@ -297,7 +298,8 @@ Result<EvalReport> run_dream_eval(const DreamEvalOptions& o,
 
 Result<std::vector<GestureSegment>> read_gesture_segments(const fs::path& file) {
   std::ifstream in(file);
-  if (!in) return make_error(ErrorCode::kNotFound, "{}: cannot open the segments file", file.string());
+  if (!in)
+    return make_error(ErrorCode::kNotFound, "{}: cannot open the segments file", file.string());
   static const std::regex kLine(
       R"(\s*([-+]?[0-9]*\.?[0-9]+)\s+([-+]?[0-9]*\.?[0-9]+)\s+([A-Za-z0-9_-]+)\s*)");
   std::vector<GestureSegment> out;
@@ -311,8 +313,8 @@ Result<std::vector<GestureSegment>> read_gesture_segments(const fs::path& file) 
     if (line.find_first_not_of(" \t") == std::string::npos) continue;
     std::smatch m;
     if (!std::regex_match(line, m, kLine))
-      return make_error(ErrorCode::kCorruptData,
-                        "{}:{}: expected 'start_s end_s label', got '{}'", file.string(), n, line);
+      return make_error(ErrorCode::kCorruptData, "{}:{}: expected 'start_s end_s label', got '{}'",
+                        file.string(), n, line);
     GestureSegment s{std::stod(m[1].str()), std::stod(m[2].str()), m[3].str(), n};
     if (!(s.end_s > s.start_s) || s.start_s < 0)
       return make_error(ErrorCode::kCorruptData, "{}:{}: end ({}) must be after start ({}) >= 0",
@@ -412,10 +414,9 @@ Result<GestureTrainReport> train_gestures_from_session(
   for (size_t c = 0; c < r.model.labels().size(); ++c) {
     int n = 0;
     for (const auto& t : r.model.templates()) n += t.label == r.model.labels()[c];
-    r.lines.push_back(fmt::format("{}: {} example(s), threshold {:.3f}{}", r.model.labels()[c], n,
-                                  r.model.thresholds()[c],
-                                  n < 3 ? " (fewer than 3 examples: the threshold is a guess)"
-                                        : ""));
+    r.lines.push_back(fmt::format(
+        "{}: {} example(s), threshold {:.3f}{}", r.model.labels()[c], n, r.model.thresholds()[c],
+        n < 3 ? " (fewer than 3 examples: the threshold is a guess)" : ""));
   }
   return r;
 }

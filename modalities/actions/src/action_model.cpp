@@ -205,8 +205,7 @@ Result<ActionModel> ActionModel::train(const std::vector<WindowRef>& examples,
       size_t a = 0, b = static_cast<size_t>(n);
       while (a + 1 < static_cast<size_t>(n) && w.t_s[a] < start) ++a;
       while (b > a + 2 && w.t_s[b - 1] > start + keep) --b;
-      NormalizedWindow cw =
-          normalize_window(e.frames.subspan(a, b - a), o.body);
+      NormalizedWindow cw = normalize_window(e.frames.subspan(a, b - a), o.body);
       if (cw.usable) variants.push_back(std::move(cw));
     }
     if (o.augment_mirror) {
@@ -425,24 +424,29 @@ Status ActionModel::save(const fs::path& path) const {
       << "up" << cv::Mat(o.body.up).reshape(1, 1) << "normalize_facing"
       << static_cast<int>(o.body.normalize_facing) << "normalize_scale"
       << static_cast<int>(o.body.normalize_scale) << "min_confidence" << o.body.min_confidence
-      << "default_body_size_m" << o.body.default_body_size_m << "}";
+      << "default_body_size_m" << o.body.default_body_size_m << "normalize_bones"
+      << static_cast<int>(o.body.normalize_bones) << "}";
     f << "features"
       << "{"
       << "method" << std::string(to_string(o.features.method)) << "joints"
       << std::string(to_string(o.features.joints)) << "samples" << o.features.samples
       << "rjp_frames" << o.features.rjp_frames << "pyramid_levels" << o.features.pyramid_levels
       << "velocities" << static_cast<int>(o.features.velocities) << "fourier" << o.features.fourier
-      << "}";
+      << "rjp_average" << static_cast<int>(o.features.rjp_average) << "pose_relative"
+      << static_cast<int>(o.features.pose_relative) << "}";
     f << "classifier"
       << "{"
       << "kind" << std::string(to_string(o.classifier.kind)) << "c" << o.classifier.c << "gamma"
-      << o.classifier.gamma << "reject_folds" << o.classifier.reject_folds << "reject_quantile"
-      << o.classifier.reject_quantile << "novelty_margin" << o.classifier.novelty_margin
-      << "reject_threshold" << reject_threshold_ << "novelty_threshold" << novelty_threshold_
-      << "score_temperature" << temperature_ << "}";
+      << o.classifier.gamma << "standardize_each" << static_cast<int>(o.classifier.standardize_each)
+      << "l1" << static_cast<int>(o.classifier.l1) << "reject_folds" << o.classifier.reject_folds
+      << "reject_quantile" << o.classifier.reject_quantile << "novelty_margin"
+      << o.classifier.novelty_margin << "reject_threshold" << reject_threshold_
+      << "novelty_threshold" << novelty_threshold_ << "score_temperature" << temperature_ << "}";
     f << "training"
       << "{"
-      << "examples" << examples_ << "skipped" << skipped_ << "}";
+      << "examples" << examples_ << "skipped" << skipped_ << "augment_mirror"
+      << static_cast<int>(o.augment_mirror) << "crops" << o.crops << "crop_fraction"
+      << o.crop_fraction << "}";
     f << "standardize"
       << "{"
       << "mean" << mean_ << "inv_std" << inv_std_ << "}";
@@ -514,6 +518,7 @@ Result<ActionModel> ActionModel::load(const fs::path& path) {
     o.body.normalize_scale = static_cast<int>(need(body, "normalize_scale", "body.")) != 0;
     o.body.min_confidence = static_cast<float>(need(body, "min_confidence", "body."));
     o.body.default_body_size_m = static_cast<double>(need(body, "default_body_size_m", "body."));
+    o.body.normalize_bones = static_cast<int>(need(body, "normalize_bones", "body.")) != 0;
     const cv::FileNode fe = need(f.root(), "features", "");
     auto method =
         feature_method_from_string(static_cast<std::string>(need(fe, "method", "features.")));
@@ -527,6 +532,8 @@ Result<ActionModel> ActionModel::load(const fs::path& path) {
     o.features.pyramid_levels = static_cast<int>(need(fe, "pyramid_levels", "features."));
     o.features.velocities = static_cast<int>(need(fe, "velocities", "features.")) != 0;
     o.features.fourier = static_cast<int>(need(fe, "fourier", "features."));
+    o.features.rjp_average = static_cast<int>(need(fe, "rjp_average", "features.")) != 0;
+    o.features.pose_relative = static_cast<int>(need(fe, "pose_relative", "features.")) != 0;
     const cv::FileNode cl = need(f.root(), "classifier", "");
     auto kind =
         classifier_kind_from_string(static_cast<std::string>(need(cl, "kind", "classifier.")));
@@ -535,6 +542,9 @@ Result<ActionModel> ActionModel::load(const fs::path& path) {
     o.classifier.c = static_cast<double>(need(cl, "c", "classifier."));
     o.classifier.gamma = static_cast<double>(need(cl, "gamma", "classifier."));
     o.classifier.reject_folds = static_cast<int>(need(cl, "reject_folds", "classifier."));
+    o.classifier.standardize_each =
+        static_cast<int>(need(cl, "standardize_each", "classifier.")) != 0;
+    o.classifier.l1 = static_cast<int>(need(cl, "l1", "classifier.")) != 0;
     o.classifier.reject_quantile = static_cast<double>(need(cl, "reject_quantile", "classifier."));
     m.reject_threshold_ = static_cast<double>(need(cl, "reject_threshold", "classifier."));
     o.classifier.novelty_margin = static_cast<double>(need(cl, "novelty_margin", "classifier."));
@@ -543,6 +553,10 @@ Result<ActionModel> ActionModel::load(const fs::path& path) {
     if (const cv::FileNode tr = f["training"]; tr.isMap()) {
       if (!tr["examples"].empty()) tr["examples"] >> m.examples_;
       if (!tr["skipped"].empty()) tr["skipped"] >> m.skipped_;
+      if (!tr["augment_mirror"].empty())
+        o.augment_mirror = static_cast<int>(tr["augment_mirror"]) != 0;
+      if (!tr["crops"].empty()) tr["crops"] >> o.crops;
+      if (!tr["crop_fraction"].empty()) tr["crop_fraction"] >> o.crop_fraction;
     }
     if (auto s = o.check(); !s) return tl::unexpected(corrupt(path, s.error().message));
     const cv::FileNode st = need(f.root(), "standardize", "");

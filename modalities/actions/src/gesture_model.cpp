@@ -292,7 +292,8 @@ Status GestureModel::save(const fs::path& path) const {
       << "up" << cv::Mat(o.body.up).reshape(1, 1) << "normalize_facing"
       << static_cast<int>(o.body.normalize_facing) << "normalize_scale"
       << static_cast<int>(o.body.normalize_scale) << "min_confidence" << o.body.min_confidence
-      << "default_body_size_m" << o.body.default_body_size_m << "}";
+      << "default_body_size_m" << o.body.default_body_size_m << "normalize_bones"
+      << static_cast<int>(o.body.normalize_bones) << "}";
     f << "samples" << o.samples << "band" << o.band << "history_factor" << o.history_factor
       << "end_slack" << o.end_slack << "min_speed" << o.min_speed << "max_speed" << o.max_speed
       << "threshold_factor" << o.threshold_factor << "min_threshold" << o.min_threshold
@@ -361,6 +362,7 @@ Result<GestureModel> GestureModel::load(const fs::path& path) {
     o.body.normalize_scale = static_cast<int>(need(body, "normalize_scale")) != 0;
     o.body.min_confidence = static_cast<float>(need(body, "min_confidence"));
     o.body.default_body_size_m = static_cast<double>(need(body, "default_body_size_m"));
+    o.body.normalize_bones = static_cast<int>(need(body, "normalize_bones")) != 0;
     o.samples = static_cast<int>(need(f.root(), "samples"));
     o.band = static_cast<double>(need(f.root(), "band"));
     o.history_factor = static_cast<double>(need(f.root(), "history_factor"));

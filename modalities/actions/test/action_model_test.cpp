@@ -54,6 +54,13 @@ TEST_P(ActionModelTest, LearnsSyntheticClassesAndRoundTripsThroughItsFile) {
   o.features.method = GetParam().first;
   o.classifier.kind = GetParam().second;
   o.classifier.c = o.classifier.kind == ClassifierKind::kRbfSvm ? 10 : 1;
+  if (o.classifier.kind == ClassifierKind::kRbfSvm) {  // non-default options must survive the file
+    o.body.normalize_bones = false;
+    o.features.joints = JointSet::kAll;
+    o.features.rjp_average = true;
+    o.features.pose_relative = false;
+    o.classifier.standardize_each = false;
+  }
   auto m = ActionModel::train(examples(6, 1), o);
   ASSERT_TRUE(m) << m.error().message;
   EXPECT_EQ(m->labels().size(), 4u);
@@ -71,6 +78,15 @@ TEST_P(ActionModelTest, LearnsSyntheticClassesAndRoundTripsThroughItsFile) {
   ASSERT_TRUE(back) << back.error().message;
   EXPECT_EQ(back->labels(), m->labels());
   EXPECT_EQ(back->description, "unit test");
+  const ActionModelOptions& b = back->options();
+  EXPECT_EQ(b.body.normalize_bones, o.body.normalize_bones);
+  EXPECT_EQ(b.body.normalize_facing, o.body.normalize_facing);
+  EXPECT_EQ(b.features.joints, o.features.joints);
+  EXPECT_EQ(b.features.method, o.features.method);
+  EXPECT_EQ(b.features.rjp_average, o.features.rjp_average);
+  EXPECT_EQ(b.features.pose_relative, o.features.pose_relative);
+  EXPECT_EQ(b.classifier.standardize_each, o.classifier.standardize_each);
+  EXPECT_EQ(b.classifier.kind, o.classifier.kind);
   EXPECT_DOUBLE_EQ(back->reject_threshold(), m->reject_threshold());
   for (const auto& e : tests) {
     const ActionScores a = m->classify(e.frames), b = back->classify(e.frames);
