@@ -36,7 +36,8 @@ struct EvalActionsFlags {
   std::string model, json, train_seeds = "300-399";
   int splits = 10;
   uint64_t seed = 1;
-  double tolerance_s = 0.4;
+  double tolerance_s = 0.3;
+  double train_hop_s = 0.2;
 };
 
 struct TrainGesturesFlags {
@@ -133,6 +134,9 @@ void add_eval_actions(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--train-seeds", flags->train_seeds,
                   "demo-gestures without --model: seeds the compared methods train on")
       ->default_val(flags->train_seeds);
+  cmd->add_option("--train-hop", flags->train_hop_s,
+                  "demo-gestures without --model: seconds between training windows")
+      ->default_val(flags->train_hop_s);
   cmd->add_option("--tolerance", flags->tolerance_s,
                   "demo-gestures: seconds around a segment boundary where either label counts")
       ->default_val(flags->tolerance_s);
@@ -155,6 +159,7 @@ void add_eval_actions(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
           return;
         }
         o.train_seeds = *train;
+        o.train_hop_s = flags->train_hop_s;
       }
       r = with_progress("eval actions", g.quiet,
                         [&](const auto& progress) { return ea::run_dream_eval(o, progress); });

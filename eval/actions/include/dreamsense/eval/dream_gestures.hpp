@@ -66,7 +66,7 @@ Result<dreamsense::actions::ActionModel> train_dream_model(
 struct DreamEvalOptions {
   std::vector<uint64_t> seeds;  // fresh seeds (never the training ones)
   DemoGestureData data;
-  double tolerance_s = 0.4;
+  double tolerance_s = 0.3;
   dreamsense::actions::OnlineOptions online;
   // Without a model: these methods are trained on train_seeds first (baseline and ours, same
   // run); training and test seeds must not overlap.
