@@ -50,7 +50,8 @@ Result<ActionMethod> method_by_name(const std::string& name) {
 Status ActionEvalOptions::check() const {
   if (dataset != "utkinect" && dataset != "msr-action3d")
     return make_error(ErrorCode::kInvalidArgument,
-                      "eval actions: unknown dataset '{}' (utkinect, msr-action3d)", dataset);
+                      "eval actions: unknown dataset '{}' (utkinect, msr-action3d, demo-gestures)",
+                      dataset);
   if (splits < 1 || splits > 1000)
     return make_error(ErrorCode::kInvalidArgument, "eval actions: --splits must be in [1, 1000]");
   if (methods.empty() && model.empty())

@@ -599,7 +599,8 @@ Result<ActionModel> ActionModel::load(const fs::path& path) {
         return tl::unexpected(corrupt(path, "rbf: inconsistent sizes"));
     }
   } catch (const cv::Exception& e) {
-    return tl::unexpected(corrupt(path, e.err.empty() ? std::string("YAML parse error") : e.err));
+    return tl::unexpected(corrupt(path, "unreadable YAML, truncated or corrupt: " +
+                                            (e.err.empty() ? std::string("parse error") : e.err)));
   } catch (const std::exception& e) {
     return tl::unexpected(corrupt(path, e.what()));
   }

@@ -403,7 +403,8 @@ Result<GestureModel> GestureModel::load(const fs::path& path) {
       g.templates_.push_back(std::move(t));
     }
   } catch (const cv::Exception& e) {
-    return tl::unexpected(corrupt(path, e.err.empty() ? std::string("YAML parse error") : e.err));
+    return tl::unexpected(corrupt(path, "unreadable YAML, truncated or corrupt: " +
+                                            (e.err.empty() ? std::string("parse error") : e.err)));
   } catch (const std::exception& e) {
     return tl::unexpected(corrupt(path, e.what()));
   }
