@@ -33,6 +33,7 @@ void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   add_eval_voices(*eval, g, exit_code);
   add_eval_tracking(*eval, g, exit_code);  // cmd_objects.cpp
   add_eval_objects(*eval, g, exit_code);   // cmd_objects.cpp
+  add_eval_actions(*eval, g, exit_code);   // cmd_actions.cpp
 
   auto flags = std::make_shared<EvalSessionFlags>();
   CLI::App* cmd = eval->add_subcommand(

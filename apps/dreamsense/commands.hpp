@@ -57,6 +57,11 @@ void add_eval_objects(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 void add_train_voices(CLI::App& train, const GlobalFlags& g, int& exit_code);
 void add_eval_voices(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 
+// cmd_actions.cpp: `train actions`, `train gestures` (under `train`) and `eval actions`.
+void add_train_actions(CLI::App& train, const GlobalFlags& g, int& exit_code);
+void add_train_gestures(CLI::App& train, const GlobalFlags& g, int& exit_code);
+void add_eval_actions(CLI::App& eval, const GlobalFlags& g, int& exit_code);
+
 // The child's calibration for analyses (cmd_analyze.cpp): --subject DIR|none, --face-model,
 // --gaze-model, --speech-model.
 struct SubjectFlags {
