@@ -6,7 +6,7 @@
 
 #include "dreamsense/actions/online.hpp"
 #include "dreamsense/core/analyzer.hpp"
-#include "dreamsense/core/perception.hpp"
+#include "dreamsense/perception/body.hpp"
 
 #include <filesystem>
 #include <memory>
