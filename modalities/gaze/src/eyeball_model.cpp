@@ -17,6 +17,19 @@ Status EyeballModel::check() const {
   return ok_status();
 }
 
+Status AnatomicalEyeOptions::check() const {
+  if (!(centre_depth_m > 0 && centre_depth_m < 0.03 && radius_m > 0.003 && radius_m < 0.025))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "AnatomicalEyeOptions: centre_depth_m must be in (0, 30) mm and radius_m in "
+                      "(3, 25) mm");
+  return ok_status();
+}
+
+EyeballModel anatomical_eyeball(const cv::Vec3d& opening_centroid_head_m,
+                                const AnatomicalEyeOptions& options) {
+  return {opening_centroid_head_m + cv::Vec3d(0, 0, options.centre_depth_m), options.radius_m};
+}
+
 HeadRay pixel_ray_head(const cv::Point2d& px, const CameraModel& camera,
                        const cv::Matx33d& camera_from_head,
                        const cv::Vec3d& head_position_camera_m) {
