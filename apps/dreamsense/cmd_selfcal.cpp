@@ -54,6 +54,16 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
   if (c.face.converged()) {
     o.plan.face_model = dir / "face_model.yaml";
     o.plan.gaze_model = dir / "gaze.yaml";
+    // The planner would otherwise log that the subject's missing folder means a generic model.
+    if (o.plan.subject_from_session) {
+      if (auto manifest = sources::read_manifest(o.session_dir)) {
+        const auto it = manifest->metadata.find("subject");
+        if (it != manifest->metadata.end())
+          log::info("no calibration for subject '{}' in {}: self-calibrated from the session",
+                    it->second, o.plan.subjects_dir.string());
+      }
+      o.plan.subject_from_session = false;
+    }
     j["face_model"] = "self-calibrated";
     j["files"] = dir.string();
     if (!quiet)
