@@ -57,7 +57,10 @@ nlohmann::json SessionSelfCalibration::to_json() const {
   j["seconds_searched"] = seconds_searched;
   j["ticks_searched"] = ticks_searched;
   j["views_with_landmarks"] = views_with_landmarks;
+  j["ticks_multi_view"] = face.frames_multi_view;
   j["ticks_triangulated"] = face.frames_triangulated;
+  j["views_dropped"] = face.views_dropped;
+  j["camera_pair_scale_spread"] = face.median_pair_scale_spread;
   j["ticks_used"] = face.frames_used;
   j["points"] = face.model.points_m.size();
   j["residual_rms_mm"] = 1000 * face.median_rms_m;

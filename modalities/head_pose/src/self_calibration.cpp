@@ -211,6 +211,36 @@ std::optional<TriangulatedFace> triangulate_face(const MultiViewLandmarks& frame
   const double min_cos = std::cos(options.min_ray_angle_deg * kDegToRad);
   std::vector<size_t> kept(views.size());
   for (size_t a = 0; a < kept.size(); ++a) kept[a] = a;
+  // With three or more cameras, every pair triangulates the eyes on its own: a calibration that
+  // disagrees along a baseline changes the pair's scale without any reprojection error, so the
+  // pairs' eye distances are compared (relative spread, (max - min) / median) before any camera
+  // is dropped.
+  double pair_scale_spread = 0;
+  if (kept.size() >= 3) {
+    std::vector<size_t> eye_k[2];
+    for (size_t k = 0; k < n_points; ++k) {
+      const int i = options.landmark_index[k];
+      if (i >= 36 && i <= 41) eye_k[0].push_back(k);
+      if (i >= 42 && i <= 47) eye_k[1].push_back(k);
+    }
+    std::vector<double> iod;
+    for (size_t a = 0; a < kept.size() && eye_k[0].size() == 6 && eye_k[1].size() == 6; ++a)
+      for (size_t b = a + 1; b < kept.size(); ++b) {
+        const Solution p = solve(views, {kept[a], kept[b]}, n_points, min_cos);
+        cv::Vec3d c[2] = {{0, 0, 0}, {0, 0, 0}};
+        bool ok = true;
+        for (int e = 0; e < 2; ++e)
+          for (size_t k : eye_k[e]) {
+            ok = ok && finite(p.points[k]);
+            c[e] += p.points[k] * (1.0 / 6);
+          }
+        if (ok) iod.push_back(cv::norm(c[1] - c[0]));
+      }
+    if (iod.size() >= 2) {
+      const auto [lo, hi] = std::minmax_element(iod.begin(), iod.end());
+      pair_scale_spread = (*hi - *lo) / median(iod);
+    }
+  }
   Solution s = solve(views, kept, n_points, min_cos);
   while (kept.size() >= 3) {
     size_t worst = 0;
@@ -226,8 +256,16 @@ std::optional<TriangulatedFace> triangulate_face(const MultiViewLandmarks& frame
     kept.erase(kept.begin() + static_cast<std::ptrdiff_t>(worst));
     s = solve(views, kept, n_points, min_cos);
   }
+  // A tick whose cameras still disagree (two cameras left, or a calibration that does not fit
+  // the others) is not used: two-view triangulation absorbs much of an error into a wrong shape.
+  for (size_t a = 0; a < kept.size(); ++a)
+    if (!(s.view_rms_px[a] <=
+          options.max_reprojection_per_interocular * views[kept[a]].interocular_px))
+      return std::nullopt;
   // Points that still reproject badly in a kept camera are left out.
   TriangulatedFace out;
+  out.cameras_dropped = static_cast<int>(views.size() - kept.size());
+  out.pair_scale_spread = pair_scale_spread;
   out.points_world = s.points;
   out.cameras = static_cast<int>(kept.size());
   double ss = 0;
@@ -270,7 +308,8 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   }
   const std::vector<int>& index = options.triangulation.landmark_index;
   const size_t n_points = index.size();
-  int multi_view = 0;
+  int multi_view = 0, views_dropped = 0;
+  std::vector<double> spreads;
   std::vector<TriangulatedFace> shapes;
   for (const MultiViewLandmarks& f : frames) {
     int with_landmarks = 0;
@@ -278,14 +317,20 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
       if (v.camera != nullptr && v.landmarks_px.size() == 68) ++with_landmarks;
     if (with_landmarks >= 2) ++multi_view;
     auto t = triangulate_face(f, options.triangulation);
-    if (t && t->points >= options.min_points_per_frame) shapes.push_back(std::move(*t));
+    if (t && t->points >= options.min_points_per_frame) {
+      views_dropped += t->cameras_dropped;
+      if (t->pair_scale_spread > 0) spreads.push_back(t->pair_scale_spread);
+      shapes.push_back(std::move(*t));
+    }
   }
   out.frames_triangulated = static_cast<int>(shapes.size());
+  out.frames_multi_view = multi_view;
+  out.views_dropped = views_dropped;
   if (multi_view == 0) {
     out.status = SelfCalibrationStatus::kNoMultiView;
     out.reason = fmt::format(
         "no tick where two calibrated cameras both fitted the face ({} ticks searched): one "
-        "camera only, or the child never faced two cameras",
+        "camera only, a face too small for landmarks, or the child never faced two cameras",
         frames.size());
     return out;
   }
@@ -306,6 +351,15 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
     return out;
   }
 
+  out.median_pair_scale_spread = spreads.empty() ? 0.0 : median(spreads);
+  if (out.median_pair_scale_spread > options.max_pair_scale_spread) {
+    out.status = SelfCalibrationStatus::kInconsistent;
+    out.reason = fmt::format(
+        "the camera pairs disagree on the size of the face by {:.0f}% (median over {} ticks, "
+        "limit {:.0f}%): camera calibrations that disagree",
+        100 * out.median_pair_scale_spread, spreads.size(), 100 * options.max_pair_scale_spread);
+    return out;
+  }
   // Generalised Procrustes: reference = the tick with the most points.
   size_t ref = 0;
   for (size_t f = 1; f < shapes.size(); ++f)
@@ -500,10 +554,16 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   }
   out.status = SelfCalibrationStatus::kConverged;
   out.reason = fmt::format(
-      "{} of {} ticks used ({} triangulated), {} points, residual {:.2f} mm RMS, reprojection "
-      "{:.2f} px, eyes {:.1f} mm apart",
-      out.frames_used, out.frames_offered, out.frames_triangulated, out.model.points_m.size(),
-      1000 * out.median_rms_m, out.median_reprojection_px, 1000 * out.interocular_m);
+      "{} of {} ticks used ({} with two or more cameras, {} triangulated consistently), {} "
+      "points, residual {:.2f} mm RMS, reprojection {:.2f} px, eyes {:.1f} mm apart",
+      out.frames_used, out.frames_offered, out.frames_multi_view, out.frames_triangulated,
+      out.model.points_m.size(), 1000 * out.median_rms_m, out.median_reprojection_px,
+      1000 * out.interocular_m);
+  if (out.views_dropped > 0)
+    out.reason += fmt::format(
+        "; {} camera views dropped as disagreeing with the others (a failed landmark fit or a "
+        "calibration that does not fit)",
+        out.views_dropped);
   return out;
 }
 

@@ -206,5 +206,23 @@ TEST(SelfCalibration, SaysWhyItDidNotConverge) {
   EXPECT_NE(cal.reason.find("two"), std::string::npos);
 }
 
+// One of three calibrations is 8 cm off along its baseline: two-view triangulation turns that
+// into a wrong scale with no reprojection error, but the camera pairs disagree on the face's
+// size, so the calibration is refused. (With only that pair of cameras it cannot be seen.)
+TEST(SelfCalibration, RefusesCamerasThatDisagreeOnTheFacesSize) {
+  std::mt19937 rng(9);
+  const auto face = subject_face();
+  Scene s = scene(50, rng);
+  auto good = self_calibrate_face(frames_of(face, s, 0.7, rng));
+  ASSERT_TRUE(good.converged()) << good.reason;
+  EXPECT_LT(good.median_pair_scale_spread, 0.04);
+  std::vector<CameraModel> wrong = s.cams;
+  wrong[2].t += cv::Vec3d(0.08, 0, 0);
+  auto cal = self_calibrate_face(frames_of(face, s, 0.7, rng, &wrong));
+  EXPECT_FALSE(cal.converged()) << cal.reason;
+  EXPECT_EQ(cal.status, SelfCalibrationStatus::kInconsistent);
+  EXPECT_NE(cal.reason.find("disagree"), std::string::npos) << cal.reason;
+}
+
 }  // namespace
 }  // namespace dreamsense::head_pose

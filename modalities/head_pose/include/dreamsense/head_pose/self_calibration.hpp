@@ -57,11 +57,16 @@ struct FaceTriangulationOptions {
 struct TriangulatedFace {
   std::vector<cv::Vec3d> points_world;  // per landmark_index entry; NaN = missing
   int cameras = 0;                      // cameras kept
-  int points = 0;                       // finite points
-  double rms_px = 0;                    // RMS reprojection error over kept cameras and points
+  int cameras_dropped = 0;              // cameras dropped as disagreeing with the others
+  // With >= 3 cameras kept: relative spread of the eye distance triangulated by each camera pair
+  // ((max - min) / median); 0 otherwise.
+  double pair_scale_spread = 0;
+  int points = 0;     // finite points
+  double rms_px = 0;  // RMS reprojection error over kept cameras and points
 };
 
-// nullopt when fewer than 2 cameras have landmarks or fewer than 4 points triangulate. Views
+// nullopt when fewer than 2 cameras have landmarks, the cameras left still disagree (a camera's
+// RMS reprojection beyond the limit), or fewer than 4 points triangulate. Views
 // without a camera or with a landmark count other than 68 are ignored.
 std::optional<TriangulatedFace> triangulate_face(const MultiViewLandmarks& frame,
                                                  const FaceTriangulationOptions& options = {});
@@ -96,17 +101,25 @@ struct SelfCalibrationOptions {
   // Plausible inter-ocular distances (eye-opening centroids) of a child or an adult; outside:
   // inconsistent (a calibration in other units, a wrong baseline).
   double min_interocular_m = 0.040, max_interocular_m = 0.080;
+  // Ticks with three or more cameras: when the camera pairs' eye distances disagree by more than
+  // this (median relative spread), a calibration is off along a baseline (which two-view
+  // triangulation turns into a wrong scale with no reprojection error): inconsistent. With only
+  // two cameras such an error cannot be seen.
+  double max_pair_scale_spread = 0.08;
   Status check() const;
 };
 
 struct SelfCalibration {
   SelfCalibrationStatus status = SelfCalibrationStatus::kNoMultiView;
-  std::string reason;      // one line: what was found, and why it did not converge
-  FaceModel3d model;       // head frame; empty points unless converged
-  int frames_offered = 0;  // ticks given
-  int frames_triangulated = 0;
-  int frames_used = 0;      // after outlier rejection
-  double median_rms_m = 0;  // median per-tick residual after alignment
+  std::string reason;                   // one line: what was found, and why it did not converge
+  FaceModel3d model;                    // head frame; empty points unless converged
+  int frames_offered = 0;               // ticks given
+  int frames_multi_view = 0;            // ticks with landmarks in two or more cameras
+  int frames_triangulated = 0;          // of them, triangulated consistently
+  int views_dropped = 0;                // camera views dropped in triangulated ticks
+  double median_pair_scale_spread = 0;  // TriangulatedFace::pair_scale_spread, median
+  int frames_used = 0;                  // after outlier rejection
+  double median_rms_m = 0;              // median per-tick residual after alignment
   double median_reprojection_px = 0;
   double interocular_m = 0;  // between the eye-opening centroids
   bool converged() const { return status == SelfCalibrationStatus::kConverged; }
