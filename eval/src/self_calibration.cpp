@@ -117,7 +117,10 @@ Result<SessionSelfCalibration> self_calibrate_session(
   int64_t first_ns = 0, group_ns = 0;
   bool started = false;
   int tick_index = -1;
-  int triangulated = 0;
+  int triangulated = 0, multi_view = 0;
+  // Enough searching: this many ticks seen by two or more cameras (triangulated or not: when
+  // they do not, cameras that disagree, the reason is clear by then).
+  auto enough = [&] { return multi_view >= options.enough_frames; };
   auto flush = [&]() -> Status {
     if (group.empty()) return ok_status();
     ++tick_index;
@@ -139,8 +142,10 @@ Result<SessionSelfCalibration> self_calibrate_session(
       ++out.views_with_landmarks;
       mv.views.push_back({&cameras.at(f->sensor), std::move(**pts)});
     }
-    if (mv.views.size() >= 2 && head_pose::triangulate_face(mv, options.face.triangulation))
-      ++triangulated;
+    if (mv.views.size() >= 2) {
+      ++multi_view;
+      if (head_pose::triangulate_face(mv, options.face.triangulation)) ++triangulated;
+    }
     ticks.push_back(std::move(mv));
     group.clear();
     return ok_status();
@@ -161,12 +166,12 @@ Result<SessionSelfCalibration> self_calibrate_session(
     if (ns - group_ns > kSameTickNs) {
       DS_RETURN_IF_ERROR(flush());
       group_ns = ns;
-      if (triangulated >= options.enough_frames) break;
+      if (enough()) break;
     }
     out.seconds_searched = static_cast<double>(ns - first_ns) * 1e-9;
     group.push_back(f);
   }
-  if (triangulated < options.enough_frames) DS_RETURN_IF_ERROR(flush());
+  if (!enough()) DS_RETURN_IF_ERROR(flush());
   out.face = head_pose::self_calibrate_face(ticks, options.face);
   if (out.face.converged()) {
     const auto r = model_centroid(out.face.model, 36, 41),

@@ -25,7 +25,7 @@ namespace dreamsense::eval {
 struct SessionSelfCalibrationOptions {
   double max_seconds = 10;  // of session time searched from the first frame
   int tick_step = 2;        // every n-th tick
-  int enough_frames = 60;   // stop early once this many ticks triangulated
+  int enough_frames = 60;   // stop once this many ticks had the face in two or more cameras
   // Colour streams used; empty = every calibrated colour stream with the role child_camera.
   std::vector<std::string> cameras;
   head_pose::SelfCalibrationOptions face;
