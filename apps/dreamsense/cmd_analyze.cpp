@@ -38,6 +38,7 @@ struct AnalyzeFlags {
   std::vector<std::string> set;  // ANALYSER.KEY=VALUE
   std::vector<std::string> enable, disable;
   bool print_pipeline = false;  // analyze: show the graph and stop
+  bool save_subject = false;    // analyze: keep a converged self-calibration as the subject's
 };
 
 void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path& out) {
@@ -139,16 +140,32 @@ Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& 
 
 Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o,
                                                            bool quiet) {
-  return with_progress("analyse", quiet,
-                       [&](const auto& progress) { return runner::analyze_session(o, progress); });
+  return run_analysis_with_progress(o, quiet, SelfCalibrationMode::kWhenNoSubject);
+}
+
+Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o_in,
+                                                           bool quiet, SelfCalibrationMode mode,
+                                                           bool save_subject) {
+  runner::AnalysisOptions o = o_in;
+  std::optional<nlohmann::json> self_calibration;
+  if (!o.out_dir.empty() && needs_self_calibration(o, mode)) {
+    DS_ASSIGN_OR_RETURN(self_calibration,
+                        self_calibrate_for_analysis(o, mode, quiet, save_subject));
+  }
+  auto r = with_progress(
+      "analyse", quiet, [&](const auto& progress) { return runner::analyze_session(o, progress); });
+  if (r && self_calibration)
+    DS_RETURN_IF_ERROR(add_self_calibration_to_summary(o.out_dir, *self_calibration));
+  return r;
 }
 
 void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
   cmd.add_option("--subject", flags.subject,
-                 "The child's calibration folder (face_model.yaml, gaze.yaml, speech_model/), or "
-                 "'none'; "
-                 "default: data/subjects/<the session's metadata subject>, if it exists")
-      ->check(CLI::ExistingDirectory | CLI::IsMember({"none"}));
+                 "The child's calibration folder (face_model.yaml, gaze.yaml, speech_model/), "
+                 "'none' (generic face model, built-in gaze constants) or 'auto' (self-calibrate "
+                 "from the session itself); default: data/subjects/<the session's metadata "
+                 "subject> if it exists, else auto")
+      ->check(CLI::ExistingDirectory | CLI::IsMember({"none", "auto"}));
   cmd.add_option("--face-model", flags.face_model,
                  "3-D face model from `dreamsense train face` (overrides the subject's)")
       ->check(CLI::ExistingFile);
@@ -163,7 +180,7 @@ void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
 }
 
 void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o) {
-  if (flags.subject == "none")
+  if (flags.subject == "none" || flags.subject == "auto")
     o.plan.subject_from_session = false;
   else
     o.plan.subject_dir = flags.subject;
@@ -187,6 +204,9 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                 "Print the analysis graph this session gets (streams and roles, analysers in "
                 "order with their inputs, reads, writes and options) and stop");
   add_analysis_flags(*cmd, *flags);
+  cmd->add_flag("--save-subject", flags->save_subject,
+                "When the self-calibration converges, also save it as the session's subject "
+                "folder (data/subjects/<metadata subject>, must not exist) for the next session");
   cmd->callback([flags, &g, &exit_code] {
     runner::AnalysisOptions o;
     o.session_dir = flags->session;
@@ -208,7 +228,8 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       exit_code = fail("analyze: --out DIR is required");
       return;
     }
-    auto r = run_analysis_with_progress(o, g.quiet);
+    auto r = run_analysis_with_progress(o, g.quiet, self_calibration_mode(flags->subject),
+                                        flags->save_subject);
     if (!r) {
       exit_code = fail(r.error());
       return;

@@ -470,6 +470,20 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   r = run("-v analyze " + unknown.string() + " --out " + (root() / "y").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("no calibration for subject 'nobody_known'"), std::string::npos) << r.err;
+  // Issue 15: with no subject folder the analysis self-calibrates from the session (the demo's
+  // three calibrated cameras), uses the result and reports it in summary.json.
+  const json summary = json::parse(slurp(root() / "y" / "summary.json"));
+  ASSERT_TRUE(summary.contains("self_calibration")) << summary.dump();
+  const json& sc = summary["self_calibration"];
+  EXPECT_EQ(sc["status"], "converged") << sc.dump();
+  EXPECT_GE(sc["ticks_used"].get<int>(), 12);
+  EXPECT_LT(sc["residual_rms_mm"].get<double>(), 3.0);
+  EXPECT_TRUE(fs::exists(root() / "y" / "self_calibration" / "face_model.yaml"));
+  EXPECT_NE(r.err.find("self_calibration/face_model.yaml"), std::string::npos) << r.err;
+  // `--subject none` keeps the generic model and does not self-calibrate.
+  r = run("analyze " + unknown.string() + " --subject none --out " + (root() / "z").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(json::parse(slurp(root() / "z" / "summary.json")).contains("self_calibration"));
 }
 
 // `train speech --dataset list` adapts the en-us model to a talker (the five cards utterances of
