@@ -1022,6 +1022,10 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       r["type"] = "skeleton";
       r["stamp_ns"] = s;
       r["joints"] = skeleton_json(script.joints(static_cast<double>(s) * 1e-9));
+      // The gesture the child performs in this skeleton frame (F20 label and id, per frame).
+      const ActionSegment& seg = script.segment_at(static_cast<double>(s) * 1e-9);
+      r["action"] = script.segment_label(seg);
+      r["action_id"] = script.segment_dream_id(seg);
       truth.push_back({{s, 2}, r});
     }
     const CameraModel& top = gen.cameras()[5];

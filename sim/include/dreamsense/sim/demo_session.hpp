@@ -43,9 +43,10 @@ struct DemoOptions {
   // (painted eyes: the truth eye gaze is then the head gaze).
   enum class FaceModel { kMesh, kPlanar };  // kMesh: session metadata subject = kDemoSubject
   FaceModel face_model = FaceModel::kMesh;
-  // The child's gestures: by default the original three (wave, fly, hands_on_head); kDream adds
-  // cover_eyes, drive_car and drink; custom gestures and a fixed schedule for tests.
-  DemoScriptOptions script;
+  // The child's gestures: by default DREAM's six (wave, fly, hands_on_head, cover_eyes,
+  // drive_car, drink: F20 is checkable on every demo); GestureSet::kClassic keeps the original
+  // three (the demo before issue 13); custom gestures and a fixed schedule for tests.
+  DemoScriptOptions script{.gestures = DemoScriptOptions::GestureSet::kDream};
   // Media shipped by Debian packages.
   std::filesystem::path portrait =
       "/usr/lib/python3/dist-packages/skimage/data/astronaut.png";  // python3-skimage
