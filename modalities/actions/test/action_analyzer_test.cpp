@@ -4,16 +4,20 @@
 
 #include "dreamsense/actions/action_analyzer.hpp"
 
+#include "dreamsense/perception/analyzer_registry.hpp"
 #include "dreamsense/testing/analyzer_runner.hpp"
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 
 #include "synthetic_body.hpp"
 
 namespace dreamsense::actions {
+void register_analyzers(AnalyzerRegistry& registry);  // src/register.cpp
 namespace {
 
 using test::BodyParams;
@@ -196,6 +200,72 @@ TEST(ActionAnalyzer, BadModelFilesFail) {
   o.model = default_action_model_path();
   auto shipped = make_action_analyzer(o);
   ASSERT_TRUE(shipped) << shipped.error().message;
+}
+
+// The declared pipeline's factory: the shipped model by default, custom gestures from the
+// subject folder or the `gestures` option, `none` to switch a model off, one-line errors.
+TEST(ActionsFactory, ShippedModelByDefaultGesturesFromTheSubjectFolder) {
+  AnalyzerRegistry registry;
+  register_analyzers(registry);
+  const AnalyzerFactory* f = registry.find("actions");
+  ASSERT_NE(f, nullptr);
+  PlanContext ctx;
+  OptionsNode no_options;
+  auto skipped = f->plan(ctx, no_options);
+  ASSERT_TRUE(skipped);
+  EXPECT_FALSE(skipped->skipped.empty()) << "no skeleton stream: not planned";
+
+  StreamDescription body;
+  body.id = "front.skeleton";
+  body.kind = SensorKind::kSkeleton;
+  body.roles = {roles::kBody};
+  ctx.streams.push_back(body);
+  OptionsNode defaults;
+  auto p = f->plan(ctx, defaults);
+  ASSERT_TRUE(p) << p.error().message;
+  ASSERT_EQ(p->analyzers.size(), 1u);
+  ASSERT_EQ(p->notes.size(), 2u);
+  EXPECT_NE(p->notes[0].find("dream_gestures.yaml"), std::string::npos) << p->notes[0];
+  EXPECT_EQ(p->notes[1], "custom gestures none");
+
+  // A subject folder with gestures.yaml (from `train gestures`).
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "dreamsense_actions_factory_test";
+  std::filesystem::create_directories(dir);
+  std::vector<LabelledSequence> demos;
+  for (int k = 0; k < 3; ++k) {
+    BodyParams bp;
+    bp.seed = 50 + static_cast<uint64_t>(k);
+    demos.push_back({"circle", "demo" + std::to_string(k), "",
+                     test::sequence(Motion::kCircleRight, 0.2 * k, 1.5, bp)});
+  }
+  auto g = GestureModel::train(demos, GestureOptions{});
+  ASSERT_TRUE(g) << g.error().message;
+  ASSERT_TRUE(g->save(dir / "gestures.yaml"));
+  ctx.subject.folder = dir;
+  OptionsNode subject_defaults;
+  p = f->plan(ctx, subject_defaults);
+  ASSERT_TRUE(p) << p.error().message;
+  EXPECT_NE(p->notes[1].find("gestures.yaml"), std::string::npos) << p->notes[1];
+
+  OptionsNode off;
+  ASSERT_TRUE(off.set("gestures", "none"));
+  ASSERT_TRUE(off.set("model", "none"));
+  auto nothing = f->plan(ctx, off);
+  ASSERT_FALSE(nothing) << "neither model: an error, not a silent analyser";
+
+  OptionsNode gestures_only;
+  ASSERT_TRUE(gestures_only.set("model", "none"));
+  p = f->plan(ctx, gestures_only);
+  ASSERT_TRUE(p) << p.error().message;
+  EXPECT_EQ(p->notes[0], "action model none");
+
+  std::ofstream(dir / "broken.yaml") << "format: something_else\n";
+  OptionsNode broken;
+  ASSERT_TRUE(broken.set("model", (dir / "broken.yaml").string()));
+  auto bad = f->plan(ctx, broken);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("broken.yaml"), std::string::npos) << bad.error().message;
 }
 
 }  // namespace
