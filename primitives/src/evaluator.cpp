@@ -1,5 +1,6 @@
 #include "dreamsense/primitives/evaluator.hpp"
 
+#include "dreamsense/primitives/actions.hpp"
 #include "dreamsense/primitives/audio.hpp"
 #include "dreamsense/primitives/body.hpp"
 #include "dreamsense/primitives/face.hpp"
@@ -59,7 +60,10 @@ const std::vector<PrimitiveSpec>& table() {
       {P::kIdentifyFace, {"face.identity"}, nullptr},
       {P::kIdentifyFaceExpression, {"face.expression"}, nullptr},
       {P::kIdentifyObject, {"objects.detections"}, nullptr},
-      {P::kIdentifyTrajectory, {"body.action"}, nullptr},
+      {P::kIdentifyTrajectory,
+       {"body.action"},
+       answer(P::kIdentifyTrajectory,
+              [](const PrimitiveContext& c) { return identify_trajectory(c); })},
       {P::kIdentifyVoice, {"audio.speaker"}, answer(P::kIdentifyVoice, identify_voice)},
       {P::kRecognizeSpeech, {"audio.speech"}, answer(P::kRecognizeSpeech, recognize_speech)},
       {P::kTrackFace,

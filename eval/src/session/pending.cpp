@@ -6,10 +6,6 @@
 namespace dreamsense::eval {
 using primitives::PrimitiveId;
 
-MetricGroup action_metrics() {
-  return {"actions", {{"action_accuracy", PrimitiveId::kIdentifyTrajectory}}, nullptr};
-}
-
 MetricGroup object_metrics() {
   return {"objects",
           {{"object_track_mean_iou", PrimitiveId::kGetObjects},
