@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -230,6 +231,63 @@ TEST_F(VideoCli, CsvTablesParseBackToThePrimitiveValues) {
     for (const auto& row : table) EXPECT_EQ(row.size(), table[0].size()) << file;
   }
   EXPECT_FALSE(fs::exists(a / "tables" / "F04_getBodyPose.csv")) << "disabled: no table";
+}
+
+// The report opens in a real browser (Debian's chromium, headless, started here; skipped when
+// it is not installed): its DOM has the sections, charts and key frames, it loads nothing from
+// the network, and the screenshot is a page with content (structure, not pixels).
+TEST_F(VideoCli, ReportRendersInAHeadlessBrowser) {
+  if (std::system("command -v chromium > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "chromium is not installed (tools/setup.sh installs it)";
+  const fs::path a = analysis();
+  const fs::path profile = root() / "chromium-profile";
+  const std::string browser =
+      "timeout 120 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars "
+      "--no-first-run --disable-extensions --user-data-dir=" +
+      profile.string() + " ";
+  const std::string url = "file://" + fs::absolute(a / "report.html").string();
+  const fs::path dom_file = root() / "report.dom.html";
+  ASSERT_EQ(
+      std::system(
+          (browser + "--dump-dom " + url + " > " + dom_file.string() + " 2>/dev/null").c_str()),
+      0);
+  std::ifstream in(dom_file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string dom = ss.str();
+  auto count = [&](const std::string& needle) {
+    size_t n = 0;
+    for (size_t p = dom.find(needle); p != std::string::npos; p = dom.find(needle, p + 1)) ++n;
+    return n;
+  };
+  for (const char* id :
+       {"summary", "gaze", "timeline", "frames", "quality", "availability", "plots", "episodes"})
+    EXPECT_EQ(count(std::string("<h2 id=\"") + id + "\""), 1u) << id;
+  EXPECT_GE(count("<svg class=\"chart\""), 4u) << "head pose, gaze, positions...";
+  EXPECT_EQ(count("<svg class=\"lanes\""), 1u);
+  EXPECT_EQ(count("<img "), 5u) << "five key frames";
+  EXPECT_EQ(count("src=\"http"), 0u) << "self-contained";
+  EXPECT_EQ(count("href=\"http"), 0u);
+  EXPECT_NE(dom.find("Approximate camera intrinsics"), std::string::npos);
+  EXPECT_NE(dom.find("time (s)"), std::string::npos);
+  EXPECT_EQ(count("<tr><td>F"), 25u) << "availability of the 25 primitives";
+
+  const fs::path png = root() / "report.png";
+  ASSERT_EQ(std::system((browser + "--window-size=1200,3000 --screenshot=" + png.string() + " " +
+                         url + " > /dev/null 2>&1")
+                            .c_str()),
+            0);
+  const cv::Mat shot = cv::imread(png.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(shot.empty());
+  EXPECT_EQ(shot.cols, 1200);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(shot, mean, stddev);
+  EXPECT_GT(stddev[0], 20.0) << "not a blank page";
+  // The approximate-intrinsics banner (#fff4d6) is drawn near the top of the page.
+  cv::Mat banner;
+  cv::inRange(shot.rowRange(0, 400), cv::Scalar(0xd0, 0xf0, 0xfa), cv::Scalar(0xdc, 0xf8, 0xff),
+              banner);
+  EXPECT_GT(cv::countNonZero(banner), 10000) << "warning banner rendered";
 }
 
 TEST_F(VideoCli, PrintPipelineShowsTheOneCameraGraph) {

@@ -73,6 +73,33 @@ std::map<SensorId, CameraModel> child_cameras(const PipelinePlan& plan) {
   return out;
 }
 
+// A key frame for the report: the selected camera (getFaces' source, else the first child camera
+// in the tick) with the analysis overlay, 480 pixels wide.
+void add_key_frame(exporters::HtmlReport& report, const MultiFrame& tick,
+                   const BlackboardView& view,
+                   const std::vector<primitives::PrimitiveRecord>& records,
+                   const std::map<SensorId, CameraModel>& cameras) {
+  SensorId camera;
+  for (const auto& r : records)
+    if (r.id == primitives::PrimitiveId::kGetFaces && r.ok()) camera = r.source;
+  if (camera.empty() || tick.frames.count(camera) == 0)
+    for (const auto& [id, frame] : tick.frames)
+      if (cameras.count(id) > 0) {
+        camera = id;
+        break;
+      }
+  auto it = tick.frames.find(camera);
+  if (it == tick.frames.end() || it->second == nullptr) return;
+  const auto* image = it->second->as<ColorImage>();
+  if (image == nullptr || image->image.empty()) return;
+  exporters::OverlayOptions oo;
+  oo.cameras = cameras;
+  const int w = 480;
+  const int h = std::max(2, image->image.rows * w / std::max(1, image->image.cols)) & ~1;
+  report.add_key_frame(tick.stamp, camera,
+                       exporters::draw_overlay(image->image, camera, tick, view, oo, {w, h}));
+}
+
 // Runs the planned analysers over `source` and writes the outputs (options.out_dir).
 // [t0, t1] is the media span for progress (unset for live sources).
 Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan plan,
@@ -85,6 +112,7 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
   for (const auto& a : plan.analyzers) summary.analyzers.emplace_back(a->name());
   summary.plan = plan.to_json();
   const auto overlay_cameras = child_cameras(plan);
+  const auto& plan_cameras = overlay_cameras;
   primitives::Evaluator evaluator(options.evaluator, plan.key_sensors, plan.cameras);
   auto pipeline = Pipeline::build(po, source.info(), std::move(plan.analyzers));
   if (!pipeline) return tl::unexpected(pipeline.error());
@@ -94,6 +122,7 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
   dream::EventLogWriter events;
   dream::DreamExport dream_export;
   exporters::HtmlReport report;
+  report.set_span(t0, t1);
   if (write) {
     DS_RETURN_IF_ERROR(jsonl.open(options.out_dir / "primitives.jsonl"));
     DS_RETURN_IF_ERROR(events.open(options.out_dir / "events.log", manifest.clock_origin_unix_ns));
@@ -118,6 +147,8 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
     DS_RETURN_IF_ERROR(jsonl.write(records));
     DS_RETURN_IF_ERROR(events.write(records));
     report.add(records);
+    if (report.wants_key_frame(tick.stamp))
+      add_key_frame(report, tick, view, records, plan_cameras);
     dream_export.add(view, tick.stamp, options.evaluator.freshness);
     return ok_status();
   };
@@ -134,13 +165,15 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
     DS_RETURN_IF_ERROR(events.commit());
     if (want_overlay) DS_RETURN_IF_ERROR(overlay.commit());
     DS_RETURN_IF_ERROR(dream_export.write(options.out_dir / "dream.json", manifest));
-    std::string names;
-    for (const auto& a : summary.analyzers) names += (names.empty() ? "" : ", ") + a;
     const auto& ps = (*pipeline)->stats();
-    DS_RETURN_IF_ERROR(
-        report.write(options.out_dir / "report.html", manifest,
-                     {fmt::format("{} ticks, {:.1f} s of session time", ps.ticks, ps.media_seconds),
-                      "analysers: " + (names.empty() ? std::string("none") : names)}));
+    exporters::ReportContext rc;
+    rc.input = summary.input;
+    rc.plan = summary.plan;
+    rc.analyzers = summary.analyzers;
+    rc.ticks = ps.ticks;
+    rc.dropped_frames = ps.sync.dropped_frames();
+    rc.wall_seconds = ps.wall_seconds;
+    DS_RETURN_IF_ERROR(report.write(options.out_dir / "report.html", manifest, rc));
     summary.outputs = {options.out_dir / "primitives.jsonl", options.out_dir / "events.log",
                        options.out_dir / "dream.json", options.out_dir / "report.html",
                        options.out_dir / "summary.json"};
