@@ -369,9 +369,12 @@ std::string HtmlReport::build(const sources::SessionManifest& m, const ReportCon
     if (gaze_on)
       bars.push_back({"elsewhere (face found, gaze away)",
                       std::max(0.0, gaze_ok_ticks / ticks - mutual_ticks_share), "#1f77b4"});
-    bars.push_back(
-        {"unknown (no face found)", faces_on ? 1.0 - face_ticks / ticks : 1.0, "#bbbbbb"});
-    const double bw = 900, row = 26, label_w = 260;
+    const double no_face = faces_on ? 1.0 - face_ticks / ticks : 1.0;
+    if (gaze_on)
+      bars.push_back({"unknown (face found, no gaze estimate)",
+                      std::max(0.0, 1.0 - no_face - gaze_ok_ticks / ticks), "#dddddd"});
+    bars.push_back({"unknown (no face found)", no_face, "#bbbbbb"});
+    const double bw = 900, row = 26, label_w = 290;
     h += fmt::format(
         "<svg class=\"bars\" viewBox=\"0 0 {} {}\" role=\"img\" "
         "aria-label=\"gaze targets\">",
