@@ -231,6 +231,17 @@ TEST_F(VideoCli, CsvTablesParseBackToThePrimitiveValues) {
     for (const auto& row : table) EXPECT_EQ(row.size(), table[0].size()) << file;
   }
   EXPECT_FALSE(fs::exists(a / "tables" / "F04_getBodyPose.csv")) << "disabled: no table";
+  // ticks.csv: the same values side by side, one row per tick.
+  const auto wide = read_csv(a / "tables" / "ticks.csv");
+  ASSERT_EQ(wide.size(), rows.size());
+  const auto wz = std::find(wide[0].begin(), wide[0].end(), "getHead.position_m.z");
+  const auto wok = std::find(wide[0].begin(), wide[0].end(), "getFaces.ok");
+  ASSERT_NE(wz, wide[0].end());
+  ASSERT_NE(wok, wide[0].end());
+  for (size_t i = 1; i < wide.size(); ++i) {
+    EXPECT_EQ(wide[i][1], rows[i][stamp]);
+    EXPECT_EQ(wide[i][static_cast<size_t>(wz - wide[0].begin())], rows[i][z]);
+  }
 }
 
 // The report opens in a real browser (Debian's chromium, headless, started here; skipped when

@@ -15,9 +15,9 @@ namespace dreamsense::exporters {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::string csv_table_name(const std::string& code, const std::string& primitive) {
-  std::string num = code.size() > 1 ? code.substr(1) : code;
-  if (num.size() == 1) num = "0" + num;
+namespace {
+// A primitive's name reduced to [A-Za-z0-9_] ("getHeadGaze (plane)" -> "getHeadGaze_plane").
+std::string plain_name(const std::string& primitive) {
   std::string name;
   for (char c : primitive) {
     if (std::isalnum(static_cast<unsigned char>(c)))
@@ -26,6 +26,14 @@ std::string csv_table_name(const std::string& code, const std::string& primitive
       name += '_';
   }
   while (!name.empty() && name.back() == '_') name.pop_back();
+  return name;
+}
+}  // namespace
+
+std::string csv_table_name(const std::string& code, const std::string& primitive) {
+  std::string num = code.size() > 1 ? code.substr(1) : code;
+  if (num.size() == 1) num = "0" + num;
+  std::string name = plain_name(primitive);
   return fmt::format("{}{}_{}.csv", code.empty() ? "P" : code.substr(0, 1), num, name);
 }
 
@@ -265,11 +273,13 @@ Result<std::vector<fs::path>> write_csv_tables(const fs::path& primitives_jsonl,
                                                const CsvTablesOptions& options) {
   // Pass 1: which primitives were evaluated and the union of their value columns.
   std::map<std::string, Table> tables;  // by primitive name
+  std::vector<std::string> order;       // primitive names in file (= catalogue) order
   int64_t first_stamp = -1;
   DS_RETURN_IF_ERROR(for_each_record(primitives_jsonl, [&](const json& r) -> Status {
     const std::string name = r["primitive"].get<std::string>();
     Table& t = tables[name];
     if (t.name.empty()) {
+      order.push_back(name);
       t.name = name;
       t.code = r.value("id", "");
       t.file = csv_table_name(t.code, name);
@@ -307,6 +317,41 @@ Result<std::vector<fs::path>> write_csv_tables(const fs::path& primitives_jsonl,
     index["tables"][t.file] = {{"primitive", name}, {"code", t.code}, {"columns", cols}};
     files[name] = std::move(f);
   }
+  // ticks.csv: every table side by side, one row per tick; a primitive's columns are prefixed
+  // with its plain name (getHeadGaze.yaw_deg), each with its .ok flag and .confidence.
+  OutputFile wide;
+  DS_RETURN_IF_ERROR(wide.open(dir / "ticks.csv"));
+  std::map<std::string, size_t> wide_offset;  // primitive -> index of its .ok cell
+  std::vector<std::string> wide_cols = {"time_s", "stamp_ns"};
+  for (const auto& name : order) {
+    const Table& t = tables[name];
+    if (!t.enabled) continue;
+    const std::string p = plain_name(name);
+    wide_offset[name] = wide_cols.size() - 2;
+    wide_cols.push_back(p + ".ok");
+    wide_cols.push_back(p + ".confidence");
+    for (const auto& c : t.columns) wide_cols.push_back(p + "." + c);
+  }
+  {
+    std::string header;
+    for (size_t i = 0; i < wide_cols.size(); ++i) header += (i ? "," : "") + csv_cell(wide_cols[i]);
+    DS_RETURN_IF_ERROR(wide.write(header + "\n"));
+  }
+  index["tables"]["ticks.csv"] = {{"columns", wide_cols}};
+  std::vector<std::string> wide_cells(wide_cols.size() - 2);
+  int64_t wide_stamp = 0;
+  bool wide_pending = false;
+  auto flush_wide = [&]() -> Status {
+    if (!wide_pending) return ok_status();
+    std::string line = format_time(wide_stamp - first_stamp) + "," + std::to_string(wide_stamp);
+    for (auto& c : wide_cells) {
+      line += "," + c;
+      c.clear();
+    }
+    wide_pending = false;
+    return wide.write(line + "\n");
+  };
+
   EpisodeCollector episodes;
   std::string row;
   DS_RETURN_IF_ERROR(for_each_record(primitives_jsonl, [&](const json& r) -> Status {
@@ -316,6 +361,12 @@ Result<std::vector<fs::path>> write_csv_tables(const fs::path& primitives_jsonl,
     if (f == files.end()) return ok_status();
     const int64_t stamp = r.value("stamp_ns", int64_t{0});
     const std::string status = r.value("status", "");
+    if (wide_pending && stamp != wide_stamp) DS_RETURN_IF_ERROR(flush_wide());
+    wide_stamp = stamp;
+    wide_pending = true;
+    const size_t w0 = wide_offset.at(name);
+    wide_cells[w0] = status == "ok" ? "1" : "0";
+    wide_cells[w0 + 1] = r.contains("confidence") ? scalar_text(r["confidence"]) : "";
     row = format_time(stamp - first_stamp) + "," + std::to_string(stamp) + "," + status + "," +
           (status == "ok" ? "1" : "0") + "," +
           (r.contains("confidence") ? scalar_text(r["confidence"]) : "") + "," +
@@ -325,12 +376,17 @@ Result<std::vector<fs::path>> write_csv_tables(const fs::path& primitives_jsonl,
     std::vector<std::string> cells(idx.size());
     for (const auto& [k, v] : value_cells(r, options.max_list_items))
       if (auto it = idx.find(k); it != idx.end()) cells[it->second] = csv_cell(v);
-    for (const auto& c : cells) row += "," + c;
+    for (size_t i = 0; i < cells.size(); ++i) {
+      row += "," + cells[i];
+      wide_cells[w0 + 2 + i] = cells[i];
+    }
     row += "\n";
     return f->second->write(row);
   }));
 
-  std::vector<fs::path> written;
+  DS_RETURN_IF_ERROR(flush_wide());
+  DS_RETURN_IF_ERROR(wide.commit());
+  std::vector<fs::path> written = {dir / "ticks.csv"};
   for (auto& [name, f] : files) {
     DS_RETURN_IF_ERROR(f->commit());
     written.push_back(dir / tables[name].file);

@@ -11,6 +11,9 @@
 //       NAME.4.*). Units are the JSON's: names end in _m, _deg, _px, _s, _ns, _mps (primitives.md).
 //       The value columns are the union over the session in a fixed order (path segments
 //       compared by name, numbers numerically); a cell is empty when the row has no such value.
+//   tables/ticks.csv: the per-primitive tables side by side, one row per tick: time_s, stamp_ns,
+//       then per evaluated primitive (catalogue order) <name>.ok, <name>.confidence and its value
+//       columns as <name>.<column> (name reduced to [A-Za-z0-9_], e.g. getHeadGaze.yaw_deg).
 //   tables/events.csv: episodes (type, label, start_s, end_s, duration_s, source, detail), see
 //       write_csv_tables.
 //   tables/tables.json: the files, their columns, and approximate_calibration.
