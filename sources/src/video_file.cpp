@@ -153,8 +153,10 @@ Result<std::unique_ptr<VideoFileSource>> VideoFileSource::open(const fs::path& p
   if (!options.calibration.empty()) e.calibration = fs::absolute(options.calibration).string();
   m.streams.push_back(e);
   m.metadata["source_video"] = v.path.string();
-  // Mutual gaze = looking at the camera: the "robot head" is the camera's centre (world origin).
-  m.metadata["robot_head_m"] = "0 0 0";
+  // Mutual gaze = looking at the camera: the "robot head" is the camera's centre (the world
+  // origin, unless a calibration file's extrinsics place the camera elsewhere).
+  const cv::Vec3d centre = v.camera.centre_world();
+  m.metadata["robot_head_m"] = fmt::format("{} {} {}", centre[0], centre[1], centre[2]);
   m.metadata["calibration"] =
       v.approximate_calibration ? "approximate" : fs::absolute(options.calibration).string();
   return src;

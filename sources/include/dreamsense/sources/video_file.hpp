@@ -2,7 +2,8 @@
 // A plain video file (.mp4, .avi, ... anything OpenCV's VideoCapture/FFmpeg opens) as a
 // one-camera session made on the fly (docs/video_input.md): no re-encoding, no files written.
 //
-//   - one colour stream, id "camera", role child_camera, world = that camera's optical frame;
+//   - one colour stream, id "camera", role child_camera, world = that camera's optical frame
+//     (with a calibration file: the world of its extrinsics, identity when it has none);
 //   - stamps: the container's presentation time of each frame (CAP_PROP_POS_MSEC after the
 //     frame is decoded), as int64 ns from the first frame; never the wall clock. Variable frame
 //     rates are kept as they are; a stamp that does not increase is an error naming the frame;
@@ -51,7 +52,7 @@ struct VideoFileInfo {
   // The one-camera session: stream kVideoStreamId (encoding "video", file = the absolute path,
   // calibration = the absolute calibration path or empty), role child_camera, frame_rate =
   // nominal_fps (25 when unknown), metadata: source_video, calibration ("approximate" or the file),
-  // robot_head_m "0 0 0" (mutual gaze = looking at the camera).
+  // robot_head_m = the camera's centre in world (mutual gaze = looking at the camera).
   SessionManifest manifest;
 };
 
