@@ -224,6 +224,9 @@ void EpisodeCollector::add(const json& r) {
 
 std::vector<json> EpisodeCollector::finish() {
   for (auto& [type, run] : runs_) close(type, run, run.last_ns + tick_ns_);
+  if (!mutual_gaze_target_.empty())
+    for (auto& e : episodes_)
+      if (e["type"] == "mutual_gaze") e["label"] = "looking at " + mutual_gaze_target_;
   std::stable_sort(episodes_.begin(), episodes_.end(), [](const json& a, const json& b) {
     return a["start_s"].get<double>() < b["start_s"].get<double>();
   });
@@ -353,6 +356,7 @@ Result<std::vector<fs::path>> write_csv_tables(const fs::path& primitives_jsonl,
   };
 
   EpisodeCollector episodes;
+  episodes.set_mutual_gaze_target(options.mutual_gaze_target);
   std::string row;
   DS_RETURN_IF_ERROR(for_each_record(primitives_jsonl, [&](const json& r) -> Status {
     episodes.add(r);

@@ -247,6 +247,7 @@ std::string HtmlReport::build(const sources::SessionManifest& m, const ReportCon
   const json input = c.input.is_object() ? c.input : json::object();
   const json plan = c.plan.is_object() ? c.plan : json::object();
   EpisodeCollector episodes_copy = *episodes_;  // finished on a copy: build() stays const
+  if (input.value("kind", "") == "video") episodes_copy.set_mutual_gaze_target("the camera");
   const std::vector<json> episodes = episodes_copy.finish();
   const double tick_s = tick_ns_ > 0 ? tick_ns_ * 1e-9 : 1.0 / std::max(m.frame_rate, 1.0);
   const double duration_s = ticks_ > 0 ? (last_stamp_ns_ - first_stamp_ns_) * 1e-9 + tick_s : 0.0;

@@ -181,6 +181,7 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
     if (options.csv.value_or(summary.input.value("kind", "") == "video")) {
       exporters::CsvTablesOptions co;
       co.approximate_calibration = summary.input.value("approximate_calibration", false);
+      if (summary.input.value("kind", "") == "video") co.mutual_gaze_target = "the camera";
       auto tables = exporters::write_csv_tables(options.out_dir / "primitives.jsonl",
                                                 options.out_dir / "tables", co);
       if (!tables) return tl::unexpected(tables.error());

@@ -36,6 +36,8 @@ struct CsvTablesOptions {
   // approximate. Written into tables.json.
   bool approximate_calibration = false;
   int max_list_items = 5;  // items of a list of objects given their own columns
+  // What mutual gaze is with: empty = the record's own `target` ("robot"); "camera" for a video.
+  std::string mutual_gaze_target;
 };
 
 // The file name of a primitive's table: "F<NN>_<name>.csv" with the name reduced to
@@ -67,6 +69,8 @@ Result<std::vector<std::filesystem::path>> write_csv_tables(
 class EpisodeCollector {
  public:
   void add(const nlohmann::json& record);  // one primitives.jsonl record, in file order
+  // Labels mutual-gaze episodes "looking at <target>" instead of the records' own target.
+  void set_mutual_gaze_target(std::string target) { mutual_gaze_target_ = std::move(target); }
   // Closes open runs at the last tick seen and returns every episode, sorted by start.
   std::vector<nlohmann::json> finish();
 
@@ -79,6 +83,7 @@ class EpisodeCollector {
   void close(const std::string& type, Run& run, int64_t end_ns);
   std::map<std::string, Run> runs_;  // by type
   std::set<std::string> intervals_seen_;
+  std::string mutual_gaze_target_;
   std::vector<nlohmann::json> episodes_;
   int64_t first_stamp_ns_ = -1;  // times are seconds since the first tick
   int64_t last_stamp_ns_ = 0;
