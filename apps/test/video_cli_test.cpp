@@ -325,6 +325,41 @@ TEST_F(VideoCli, BadVideosAreOneLineErrors) {
     const std::string bytes = ss.str();
     std::ofstream(dir / "cut.mp4", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
   }
+  {  // an AVI whose second half is missing: frames up to the cut decode, then the error
+    cv::VideoWriter w((dir / "full.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                      cv::Size(320, 240));
+    ASSERT_TRUE(w.isOpened());
+    for (int k = 0; k < 100; ++k) {
+      cv::Mat m(240, 320, CV_8UC3, cv::Scalar(k, 2 * k, 255 - k));
+      cv::putText(m, std::to_string(k), {50, 120}, cv::FONT_HERSHEY_SIMPLEX, 2, {255, 255, 255}, 3);
+      w.write(m);
+    }
+  }
+  {
+    std::ifstream src(dir / "full.avi", std::ios::binary);
+    std::stringstream ss;
+    ss << src.rdbuf();
+    const std::string bytes = ss.str();
+    std::ofstream(dir / "half.avi", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  }
+  RunResult half =
+      run("analyze " + (dir / "half.avi").string() + " --out " + (dir / "half.out").string());
+  EXPECT_NE(half.exit_code, 0);
+  EXPECT_NE(half.err.find("half.avi: corrupt or truncated: frame"), std::string::npos) << half.err;
+  EXPECT_EQ(std::count(half.err.begin(), half.err.end(), '\n'), 1) << half.err;
+  EXPECT_FALSE(fs::exists(dir / "half.out" / "primitives.jsonl"));
+  // The whole AVI (no face in it) is analysed: "nothing detected" is an answer, not an error.
+  RunResult full =
+      run("analyze " + (dir / "full.avi").string() + " --out " + (dir / "full.out").string());
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  int faces = 0;
+  for (const auto& r : read_jsonl(dir / "full.out" / "primitives.jsonl"))
+    if (r["primitive"] == "getFaces") {
+      ++faces;
+      EXPECT_EQ(r["status"], "no_data");
+    }
+  EXPECT_EQ(faces, 100);
+
   for (const char* name : {"empty.mp4", "text.mp4", "cut.mp4", "missing.mp4"}) {
     const fs::path out = dir / (std::string(name) + ".out");
     RunResult r = run("analyze " + (dir / name).string() + " --out " + out.string());
