@@ -301,6 +301,30 @@ TEST_F(VideoCli, ReportRendersInAHeadlessBrowser) {
   EXPECT_GT(cv::countNonZero(banner), 10000) << "warning banner rendered";
 }
 
+// OpenCV's sample video (Debian opencv-doc, installed by tools/setup.sh): an XviD AVI whose last
+// frame has no timestamp; per-tick CSV rows and faces on most ticks.
+TEST_F(VideoCli, AnalysesOpenCvsSampleVideo) {
+  const fs::path megamind = "/usr/share/doc/opencv-doc/examples/data/Megamind.avi";
+  if (!fs::exists(megamind)) GTEST_SKIP() << megamind << " not found (Debian package opencv-doc)";
+  const fs::path out = root() / "megamind";
+  RunResult r = run("analyze " + megamind.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = read_csv(out / "tables" / "F07_getFaces.csv");
+  ASSERT_EQ(rows.size(), 271u) << "header + 270 frames";
+  const size_t ok =
+      static_cast<size_t>(std::find(rows[0].begin(), rows[0].end(), "ok") - rows[0].begin());
+  int found = 0;
+  double last_t = -1;
+  for (size_t i = 1; i < rows.size(); ++i) {
+    found += rows[i][ok] == "1";
+    const double t = std::stod(rows[i][0]);
+    EXPECT_GT(t, last_t) << "row " << i;
+    last_t = t;
+  }
+  EXPECT_GE(found, 240) << "one face, almost always visible";
+  EXPECT_NEAR(last_t, 269 / 23.976, 0.01) << "container stamps at 23.976 fps";
+}
+
 TEST_F(VideoCli, PrintPipelineShowsTheOneCameraGraph) {
   const fs::path err = root() / "pp.txt";
   const std::string cmd = std::string(DREAMSENSE_EXE) + " analyze " + video().string() +

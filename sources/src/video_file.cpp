@@ -1,5 +1,7 @@
 #include "dreamsense/sources/video_file.hpp"
 
+#include "dreamsense/core/log.hpp"
+
 #include <fmt/format.h>
 #include <opencv2/videoio.hpp>
 
@@ -54,6 +56,7 @@ struct VideoFileSource::Impl {
   int64_t first_pts_ns = 0;
   int64_t last_stamp_ns = -1;
   uint64_t read = 0;
+  int64_t repaired = 0;  // frames whose stamp was not after the previous one (see next())
   bool ended = false;
 
   std::string name() const { return info.path.string(); }
@@ -191,12 +194,23 @@ Result<FramePtr> VideoFileSource::next() {
   if (image.cols != s.info.width || image.rows != s.info.height)
     return make_error(ErrorCode::kCorruptData, "{}: frame {} is {}x{}, the video started {}x{}",
                       s.name(), s.read, image.cols, image.rows, s.info.width, s.info.height);
-  const int64_t stamp = pts - s.first_pts_ns;
-  if (s.read > 0 && stamp <= s.last_stamp_ns)
-    return make_error(ErrorCode::kCorruptData,
-                      "{}: broken timestamps: frame {} is at {:.3f} ms, not after frame {} at "
-                      "{:.3f} ms",
-                      s.name(), s.read, stamp * 1e-6, s.read - 1, s.last_stamp_ns * 1e-6);
+  int64_t stamp = pts - s.first_pts_ns;
+  if (s.read > 0 && stamp <= s.last_stamp_ns) {
+    // FFmpeg gives some frames no presentation time (often the last one of an AVI): an isolated
+    // one is placed one nominal frame period after the previous frame; more than
+    // max(2, 1 % of the frames) of them is a broken video.
+    const int64_t allowed = std::max<int64_t>(2, s.info.frame_count / 100);
+    if (s.info.nominal_fps <= 0 || ++s.repaired > allowed)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: broken timestamps: frame {} is at {:.3f} ms, not after frame {} at "
+                        "{:.3f} ms",
+                        s.name(), s.read, stamp * 1e-6, s.read - 1, s.last_stamp_ns * 1e-6);
+    const int64_t repaired =
+        s.last_stamp_ns + static_cast<int64_t>(std::llround(1e9 / s.info.nominal_fps));
+    log::warn("{}: frame {} has no usable timestamp ({:.3f} ms); placed at {:.3f} ms", s.name(),
+              s.read, stamp * 1e-6, repaired * 1e-6);
+    stamp = repaired;
+  }
   s.last_stamp_ns = stamp;
   ColorImage c;
   c.image = image;

@@ -6,7 +6,9 @@
 //     (with a calibration file: the world of its extrinsics, identity when it has none);
 //   - stamps: the container's presentation time of each frame (CAP_PROP_POS_MSEC after the
 //     frame is decoded), as int64 ns from the first frame; never the wall clock. Variable frame
-//     rates are kept as they are; a stamp that does not increase is an error naming the frame;
+//     rates are kept as they are. A frame whose stamp does not increase (FFmpeg gives some frames,
+//     often an AVI's last, no time) is placed one nominal period after the previous one, with a
+//     warning; more than max(2, 1 % of the frames) such frames is an error naming the frame;
 //   - intrinsics: the calibration file given, else the approximate rule used by OpenFace for
 //     uncalibrated video: fx = fy = 500 * width / 640, cx = width / 2, cy = height / 2, no
 //     distortion (a horizontal field of view of about 65 degrees). Flagged `approximate`.
