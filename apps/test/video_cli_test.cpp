@@ -392,6 +392,11 @@ TEST_F(VideoCli, BadVideosAreOneLineErrors) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_FALSE(fs::exists(out / "primitives.jsonl")) << name;
   }
+  // A folder of videos is batch's job, said in one line.
+  RunResult folder = run("analyze " + dir.string() + " --out " + (dir / "folder.out").string());
+  EXPECT_NE(folder.exit_code, 0);
+  EXPECT_NE(folder.err.find("dreamsense batch"), std::string::npos) << folder.err;
+  EXPECT_EQ(std::count(folder.err.begin(), folder.err.end(), '\n'), 1) << folder.err;
   // --calibration must match the video's image size.
   std::ofstream(dir / "cam.yaml") << "%YAML:1.0\n---\nimage_width: 1280\nimage_height: 960\n"
                                      "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n"

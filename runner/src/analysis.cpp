@@ -271,6 +271,19 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
                                         const AnalysisProgress& progress) {
   DS_RETURN_IF_ERROR(options.check());
   if (is_video_input(options.session_dir)) return analyze_video(options, progress);
+  if (std::error_code ec; fs::is_directory(options.session_dir, ec) &&
+                          !fs::exists(options.session_dir / sources::kManifestName, ec)) {
+    // A folder of recordings is batch's job; say so instead of "session.yaml missing".
+    int videos = 0;
+    for (const auto& e : fs::directory_iterator(options.session_dir, ec))
+      videos += e.is_regular_file(ec) && sources::has_video_extension(e.path());
+    if (videos > 0)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "{}: a folder of {} videos, not a session (no {}): analyse each with "
+                        "`dreamsense batch {} --out DIR`",
+                        options.session_dir.string(), videos, sources::kManifestName,
+                        options.session_dir.string());
+  }
   if (!options.calibration.empty())
     return make_error(ErrorCode::kInvalidArgument,
                       "--calibration applies to a video input; {} is a session (its calibrations "
