@@ -10,6 +10,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <optional>
 #include <thread>
 
 #include "commands.hpp"
@@ -37,8 +38,10 @@ struct AnalyzeFlags {
   std::string pipeline;          // pipeline.yaml
   std::vector<std::string> set;  // ANALYSER.KEY=VALUE
   std::vector<std::string> enable, disable;
-  bool print_pipeline = false;  // analyze: show the graph and stop
-  bool save_subject = false;    // analyze: keep a converged self-calibration as the subject's
+  bool print_pipeline = false;       // analyze: show the graph and stop
+  bool save_subject = false;         // analyze: keep a converged self-calibration as the subject's
+  std::string calibration;           // analyze VIDEO: intrinsics instead of the approximate ones
+  bool csv = false, no_csv = false;  // analyze: CSV tables (default: on for a video)
 };
 
 void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path& out) {
@@ -47,6 +50,16 @@ void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path
                p.media_seconds, p.wall_seconds,
                p.wall_seconds > 0 ? p.media_seconds / p.wall_seconds : 0.0,
                static_cast<unsigned long long>(p.ticks));
+  if (s.input.value("kind", "") == "video")
+    std::fprintf(stderr, "video %dx%d: %s; audio %s\n", s.input.value("width", 0),
+                 s.input.value("height", 0),
+                 s.input.value("approximate_calibration", false)
+                     ? fmt::format("APPROXIMATE intrinsics (fx = {:.0f} px from the image size; "
+                                   "--calibration FILE for exact 3-D)",
+                                   s.input.value("fx_px", 0.0))
+                           .c_str()
+                     : ("calibration " + s.input.value("calibration", std::string())).c_str(),
+                 s.input.value("audio", std::string()).c_str());
   std::string names;
   for (const auto& a : s.analyzers) names += (names.empty() ? "" : ", ") + a;
   std::fprintf(stderr, "analysers: %s\n",
@@ -193,8 +206,20 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<AnalyzeFlags>();
   CLI::App* cmd = app.add_subcommand(
       "analyze",
-      "Offline analysis of a recorded session: primitives.jsonl, events.log, dream.json");
-  cmd->add_option("session", flags->session, "Session folder (with session.yaml)")->required();
+      "Offline analysis of a recorded session or of a plain video (a one-camera session made on "
+      "the fly): primitives.jsonl, events.log, dream.json, report.html, summary.json, CSV tables");
+  cmd->add_option("session", flags->session,
+                  "Session folder (with session.yaml), or a video file (.mp4, .avi, ... anything "
+                  "OpenCV/FFmpeg reads; docs/video_input.md)")
+      ->required();
+  cmd->add_option("--calibration", flags->calibration,
+                  "Video input: camera intrinsics (CameraModel YAML from `dreamsense calibrate "
+                  "intrinsics`) instead of the approximate ones (fx = 500 * width / 640)")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--csv", flags->csv,
+                "Also write OUT/tables/: one CSV per primitive, events.csv (docs/outputs.md); "
+                "default: on for a video, off for a session");
+  cmd->add_flag("--no-csv", flags->no_csv, "Do not write the CSV tables")->excludes("--csv");
   cmd->add_option("--out", flags->out,
                   "Output folder (created if needed; required unless --print-pipeline)");
   cmd->add_option("--policy", flags->policy,
@@ -211,6 +236,9 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     runner::AnalysisOptions o;
     o.session_dir = flags->session;
     o.out_dir = flags->out;
+    o.calibration = flags->calibration;
+    if (flags->csv) o.csv = true;
+    if (flags->no_csv) o.csv = false;
     if (auto s = apply_analysis_flags(*flags, o); !s) {
       exit_code = fail(s.error());
       return;
