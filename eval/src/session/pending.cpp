@@ -10,11 +10,4 @@ MetricGroup action_metrics() {
   return {"actions", {{"action_accuracy", PrimitiveId::kIdentifyTrajectory}}, nullptr};
 }
 
-MetricGroup object_metrics() {
-  return {"objects",
-          {{"object_track_mean_iou", PrimitiveId::kGetObjects},
-           {"object_position_median_m", PrimitiveId::kGetObjects}},
-          nullptr};
-}
-
 }  // namespace dreamsense::eval
