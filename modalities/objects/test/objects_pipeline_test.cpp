@@ -3,6 +3,7 @@
 // calibration, toys leaving the view).
 
 #include "dreamsense/geometry/plane.hpp"
+#include "dreamsense/objects/identification.hpp"
 #include "dreamsense/objects/objects_analyzer.hpp"
 #include "dreamsense/testing/analyzer_runner.hpp"
 
@@ -122,6 +123,26 @@ TEST(ObjectsPlan, BadOptionsAreErrorsNamingTheKey) {
       << p.error().message;
 }
 
+// A gallery of the synthetic pictures 0 and 1 (DREAM's car and cup, 10 x 7.5 x 3 cm).
+std::shared_ptr<const ObjectGallery> gallery2() {
+  std::vector<LabelledView> views;
+  for (int k = 0; k < 2; ++k)
+    for (int i = 0; i < 5; ++i) {
+      const Toy t{k, {-0.25 + 0.12 * i, 0.27, 0.5 + 0.04 * i}, -40.0 + 20 * i};
+      const cv::Mat img = testing::render_table({t}, {}, 100 + static_cast<uint64_t>(i));
+      const cv::Rect box =
+          cv::Rect(testing::toy_box(testing::table_camera(), t)) + cv::Size(6, 6) - cv::Point(3, 3);
+      auto v = make_view(img, box);
+      EXPECT_TRUE(v);
+      views.push_back({k, {v->crop.clone(), v->mask.clone(), v->footprint}});
+    }
+  std::vector<ObjectClass> c = dream_toy_classes();
+  c.resize(2);
+  auto g = ObjectGallery::enrol(c, views);
+  EXPECT_TRUE(g) << g.error().message;
+  return std::make_shared<const ObjectGallery>(std::move(*g));
+}
+
 FramePtr top_frame(int k, const cv::Mat& img) {
   return make_frame("top.color", Timestamp::from_ns(k * 40'000'000LL), static_cast<uint64_t>(k),
                     ColorImage{img});
@@ -132,7 +153,7 @@ TEST(ObjectsAnalyzerRunner, ToysOnTheTableThenLeavingTheViewEmptyTheList) {
   o.camera_model = testing::table_camera();
   o.table = testing::table_plane();
   o.objects.max_missing_frames = 10;
-  auto a = ObjectsAnalyzer::create(o, nullptr);
+  auto a = ObjectsAnalyzer::create(o, gallery2());
   ASSERT_TRUE(a) << a.error().message;
   dreamsense::testing::AnalyzerRunner runner(std::move(*a));
   const std::vector<Toy> toys = {{0, {-0.2, 0.27, 0.6}, 0}, {1, {0.2, 0.27, 0.6}, 20}};
@@ -153,10 +174,11 @@ TEST(ObjectsAnalyzerRunner, ToysOnTheTableThenLeavingTheViewEmptyTheList) {
   ASSERT_EQ(v.objects.size(), 2u);
   EXPECT_LT(v.objects[0].track_id, v.objects[1].track_id);  // by track id
   for (const auto& obj : v.objects) {
+    EXPECT_TRUE(obj.label == "car" || obj.label == "cup") << obj.label;
     ASSERT_TRUE(obj.position_m);
     ASSERT_TRUE(obj.height_m);
     EXPECT_NEAR(*obj.height_m, 0.03, 0.01);  // top face of a resting 3-cm toy
-    EXPECT_EQ(obj.lift_m, 0.0);
+    EXPECT_NEAR(obj.lift_m, 0.0, 1e-9);
     ASSERT_TRUE(obj.grip);
     EXPECT_NEAR(obj.grip->point_m[1], obj.position_m->operator[](1) + 0.015, 0.005);
     EXPECT_GE(obj.trajectory.size(), 4u);
@@ -167,16 +189,19 @@ TEST(ObjectsAnalyzerRunner, ToysOnTheTableThenLeavingTheViewEmptyTheList) {
       (*v.objects[0].position_m)[0] < (*v.objects[1].position_m)[0] ? v.objects[0] : v.objects[1];
   EXPECT_NEAR(sliding.velocity_mps[0], 0.10, 0.03);
 
-  // Both toys are taken off the table: after max_missing_frames the list is empty (a value).
+  // Both toys are taken off the table: carried for at most max_missing_frames (reported as not
+  // detected), then the list is empty (a value, not an absent entry).
   const cv::Mat empty = testing::render_table({}, {}, 99);
-  bool emptied = false;
-  for (int n = 0; n < 30 && !emptied; ++n, ++k) {
+  int emptied_after = -1;
+  for (int n = 0; n < 30 && emptied_after < 0; ++n, ++k) {
     ASSERT_TRUE(runner.run(Timestamp::from_ns(k * 40'000'000LL), {top_frame(k, empty)}));
     e = runner.output(keys::kTableObjects);
     ASSERT_TRUE(e && e->present());
-    emptied = e->value->objects.empty();
+    for (const auto& obj : e->value->objects) EXPECT_FALSE(obj.detected);
+    if (e->value->objects.empty()) emptied_after = n + 1;
   }
-  EXPECT_TRUE(emptied);
+  EXPECT_GT(emptied_after, 0);
+  EXPECT_LE(emptied_after, 12);
   // A tick without a top frame writes nothing.
   ASSERT_TRUE(runner.run(Timestamp::from_ns(k * 40'000'000LL), {}));
   EXPECT_TRUE(runner.last_writes().empty());
