@@ -46,8 +46,10 @@ TEST(ObjectMetrics, MatchByOverlapScoreEveryTruthPair) {
   };
   // Frame 0: both found (the cup 4 mm off); frame 100: the car found with the wrong id, the cup
   // missed.
+  // A hand taken for a toy at frame 0 overlaps nothing.
   primitives::ObjectsValue f0{{obj(0, {100, 100, 50, 40}, {-0.2, 0.27, 0.6}),
-                               obj(1, {300, 200, 50, 40}, {0.1, 0.27, 0.504})}};
+                               obj(1, {300, 200, 50, 40}, {0.1, 0.27, 0.504}),
+                               obj(-1, {500, 400, 40, 40}, {0.3, 0.27, 0.4})}};
   primitives::ObjectsValue f1{{obj(3, {200, 100, 50, 40}, {-0.2, 0.27, 0.61})}};
   d.records.push_back(record(PrimitiveId::kGetObjects, 10, 0, PrimitiveStatus::kOk, f0));
   d.records.push_back(record(PrimitiveId::kGetObjects, 110, 100, PrimitiveStatus::kOk, f1));
@@ -65,6 +67,7 @@ TEST(ObjectMetrics, MatchByOverlapScoreEveryTruthPair) {
   EXPECT_DOUBLE_EQ(metrics["object_track_mean_iou"].get<double>(), 0.75);
   EXPECT_NEAR(metrics["object_position_median_m"].get<double>(), 0.004, 1e-9);
   EXPECT_DOUBLE_EQ(metrics["object_identification_accuracy"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(metrics["object_false_objects_per_frame"].get<double>(), 0.5);
   EXPECT_DOUBLE_EQ(metrics["object_primitives_ok_fraction"].get<double>(), 0.5);
 }
 

@@ -9,6 +9,8 @@
 //   object_position_median_m       median 3-D distance of matched positions to the truth
 //   object_identification_accuracy fraction of all pairs whose match carries the true id (the id
 //                                  getObjects reports is the one identifyObject answers with)
+//   object_false_objects_per_frame reported toys that are no truth toy's match (hands taken for
+//                                  toys, split blobs), per frame
 //   object_primitives_ok_fraction  over the ticks whose newest top frame has truth toys: the
 //                                  smallest, over the six object primitives, fraction of ticks
 //                                  answered ok (F14 with the evaluator's default circle counts
@@ -50,6 +52,7 @@ MetricGroup object_metrics() {
   g.metrics = {{"object_track_mean_iou", PrimitiveId::kGetObjects},
                {"object_position_median_m", PrimitiveId::kGetObjects},
                {"object_identification_accuracy", PrimitiveId::kIdentifyObject},
+               {"object_false_objects_per_frame", PrimitiveId::kGetObjects},
                {"object_primitives_ok_fraction", PrimitiveId::kGetObjects}};
   g.compute = [](const SessionData& d, nlohmann::json& metrics, nlohmann::json& not_evaluated) {
     std::map<int64_t, std::vector<TruthToy>> truth;
@@ -64,8 +67,9 @@ MetricGroup object_metrics() {
     }
     const char* kNoTruth = "the truth has no object records with top_box and position_m";
     if (truth.empty()) {
-      for (const char* m : {"object_track_mean_iou", "object_position_median_m",
-                            "object_identification_accuracy", "object_primitives_ok_fraction"})
+      for (const char* m :
+           {"object_track_mean_iou", "object_position_median_m", "object_identification_accuracy",
+            "object_false_objects_per_frame", "object_primitives_ok_fraction"})
         not_evaluated[m] = kNoTruth;
       return;
     }
@@ -79,10 +83,12 @@ MetricGroup object_metrics() {
       if (!fresh && v != nullptr) it->second = v;
     }
     std::vector<double> ious, errors;
-    size_t pairs = 0, correct = 0;
+    size_t pairs = 0, correct = 0, frames = 0, extra = 0;
     for (const auto& [stamp, toys] : truth) {
       auto s = seen.find(stamp);
       if (s == seen.end()) continue;
+      ++frames;
+      std::set<const primitives::ObjectValue*> matched;
       for (const auto& t : toys) {
         ++pairs;
         const primitives::ObjectValue* best = nullptr;
@@ -94,13 +100,15 @@ MetricGroup object_metrics() {
           }
         ious.push_back(best_iou);
         if (best == nullptr) continue;
+        matched.insert(best);
         errors.push_back(cv::norm(best->position_m - t.position));
         if (best->id == t.id) ++correct;
       }
+      if (s->second != nullptr) extra += s->second->objects.size() - matched.size();
     }
     if (pairs == 0) {
-      for (const char* m :
-           {"object_track_mean_iou", "object_position_median_m", "object_identification_accuracy"})
+      for (const char* m : {"object_track_mean_iou", "object_position_median_m",
+                            "object_identification_accuracy", "object_false_objects_per_frame"})
         not_evaluated[m] = "no getObjects record is from a top frame the truth describes";
     } else {
       double sum = 0;
@@ -108,6 +116,8 @@ MetricGroup object_metrics() {
       metrics["object_track_mean_iou"] = sum / static_cast<double>(ious.size());
       metrics["object_identification_accuracy"] =
           static_cast<double>(correct) / static_cast<double>(pairs);
+      metrics["object_false_objects_per_frame"] =
+          static_cast<double>(extra) / static_cast<double>(frames);
       if (auto m = median(errors))
         metrics["object_position_median_m"] = *m;
       else
