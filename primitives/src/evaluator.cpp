@@ -4,6 +4,7 @@
 #include "dreamsense/primitives/audio.hpp"
 #include "dreamsense/primitives/body.hpp"
 #include "dreamsense/primitives/face.hpp"
+#include "dreamsense/primitives/objects.hpp"
 
 #include <functional>
 
@@ -37,7 +38,9 @@ const std::vector<PrimitiveSpec>& table() {
        answer(P::kGetEyeGaze, [](const PrimitiveContext& c) { return get_eye_gaze(c); })},
       {P::kGetEyes, {"face.eye_centers"}, answer(P::kGetEyes, get_eyes)},
       {P::kGetFaces, {"face.detections"}, answer(P::kGetFaces, get_faces)},
-      {P::kGetGripLocation, {"objects.detections"}, nullptr},
+      {P::kGetGripLocation,
+       {"objects.table"},
+       answer(P::kGetGripLocation, [](const PrimitiveContext& c) { return get_grip_location(c); })},
       {P::kGetHands, {"body.child"}, answer(P::kGetHands, get_hands)},
       {P::kGetHead, {"face.head_pose"}, answer(P::kGetHead, get_head)},
       {P::kGetHeadGaze, {"face.head_pose"}, answer(P::kGetHeadGaze, get_head_gaze)},
@@ -47,9 +50,18 @@ const std::vector<PrimitiveSpec>& table() {
               [](const PrimitiveContext& c) {
                 return get_head_gaze_plane(c, PlaneQuery{c.options().head_gaze_plane});
               })},
-      {P::kGetObjects, {"objects.detections"}, nullptr},
-      {P::kGetObjectsCircle, {"objects.detections"}, nullptr},
-      {P::kGetObjectTableDistance, {"objects.detections"}, nullptr},
+      {P::kGetObjects, {"objects.table"}, answer(P::kGetObjects, get_objects)},
+      {P::kGetObjectsCircle,
+       {"objects.table"},
+       answer(P::kGetObjectsCircle,
+              [](const PrimitiveContext& c) {
+                return get_objects_in_circle(c, CircleQuery{c.options().objects_circle_centre_m,
+                                                            c.options().objects_circle_radius_m});
+              })},
+      {P::kGetObjectTableDistance,
+       {"objects.table"},
+       answer(P::kGetObjectTableDistance,
+              [](const PrimitiveContext& c) { return get_object_table_distance(c); })},
       {P::kGetSoundDirection,
        {"audio.sound_direction"},
        answer(P::kGetSoundDirection,
@@ -59,7 +71,9 @@ const std::vector<PrimitiveSpec>& table() {
               })},
       {P::kIdentifyFace, {"face.identity"}, nullptr},
       {P::kIdentifyFaceExpression, {"face.expression"}, nullptr},
-      {P::kIdentifyObject, {"objects.detections"}, nullptr},
+      {P::kIdentifyObject,
+       {"objects.table"},
+       answer(P::kIdentifyObject, [](const PrimitiveContext& c) { return identify_object(c); })},
       {P::kIdentifyTrajectory,
        {"body.action"},
        answer(P::kIdentifyTrajectory,
@@ -72,7 +86,9 @@ const std::vector<PrimitiveSpec>& table() {
       {P::kTrackHand,
        {"body.child"},
        answer(P::kTrackHand, [](const PrimitiveContext& c) { return track_hand(c); })},
-      {P::kTrackObject, {"objects.tracks"}, nullptr},
+      {P::kTrackObject,
+       {"objects.table"},
+       answer(P::kTrackObject, [](const PrimitiveContext& c) { return track_object(c); })},
   };
   return kTable;
 }
