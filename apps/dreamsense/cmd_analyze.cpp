@@ -31,6 +31,9 @@ struct AnalyzeFlags {
   std::string policy = "settled";
   std::string grammar;
   bool overlay = false;
+  bool force = false;  // replace an earlier analysis in the output folder
+  bool allow_damaged = false;
+  bool follow_links = false;
   SubjectFlags subject;
   std::string mutual_mode;
   std::vector<double> robot_head;
@@ -92,6 +95,15 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
   cmd.add_flag("--overlay", flags.overlay,
                "Also write overlay.mp4: the selected camera with face boxes, landmarks, head "
                "axes, eye centres, gaze rays and mutual gaze");
+  cmd.add_flag("--force", flags.force,
+               "Replace an earlier analysis in the output folder (all of its files; without "
+               "this an output folder that holds one is an error)");
+  cmd.add_flag("--allow-damaged", flags.allow_damaged,
+               "Analyse streams even when more than 20 % of their records are damaged (the "
+               "damage is reported in summary.json and the report either way)");
+  cmd.add_flag("--follow-links", flags.follow_links,
+               "Read session files that are symbolic links to files outside the session folder "
+               "(refused by default)");
   add_subject_flags(cmd, flags.subject);
   cmd.add_option("--mutual-gaze", flags.mutual_mode,
                  "Mutual-gaze test: 3d (ray within 0.2 m of the robot head) or camera-plane "
@@ -113,6 +125,9 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
 
 Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& o) {
   o.overlay = flags.overlay;
+  o.replace_existing = flags.force;
+  o.allow_damaged = flags.allow_damaged;
+  o.follow_links_outside = flags.follow_links;
   apply_subject_flags(flags.subject, o);
   o.policy = flags.policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
   runner::PlanOptions& plan = o.plan;
@@ -262,7 +277,7 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       exit_code = fail(r.error());
       return;
     }
-    print_summary(*r, o.out_dir);
+    if (!g.quiet) print_summary(*r, o.out_dir);
   });
 }
 
@@ -391,7 +406,7 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       return;
     }
     if (!g.quiet) {
-      print_summary(*result, o.out_dir);
+      if (!g.quiet) print_summary(*result, o.out_dir);
       for (const auto& [id, st] : stats->streams)
         std::fprintf(stderr, "  %s: %llu frames captured, %llu dropped, %llu overruns\n",
                      id.c_str(), static_cast<unsigned long long>(st.frames_written),

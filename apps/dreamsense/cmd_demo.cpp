@@ -62,19 +62,22 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       exit_code = fail(demo.error());
       return;
     }
-    std::fprintf(stderr, "demo session (seed %llu, %.0f s) written to %s in %.1f s\n",
-                 static_cast<unsigned long long>(flags->seed), flags->duration_s,
-                 out.string().c_str(), demo->generation_s);
+    if (!g.quiet)
+      std::fprintf(stderr, "demo session (seed %llu, %.0f s) written to %s in %.1f s\n",
+                   static_cast<unsigned long long>(flags->seed), flags->duration_s,
+                   out.string().c_str(), demo->generation_s);
     if (flags->no_analyze) return;
     // The analysis goes beside the session, so the one folder holds everything.
     runner::AnalysisOptions a;
     a.session_dir = out;
     a.out_dir = out;
+    a.replace_existing = true;  // the demo rebuilds its folder (session and analysis) every time
     auto r = run_analysis_with_progress(a, g.quiet);
     if (!r) {
       exit_code = fail(r.error());
       return;
     }
+    if (g.quiet) return;
     std::fprintf(
         stderr,
         "analysis: %llu ticks in %.2f s; primitives.jsonl, events.log, dream.json, report.html, "

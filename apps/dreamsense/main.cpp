@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.fallthrough();  // global flags (-q, -v) also after the verb
   app::GlobalFlags g;
-  app.add_flag("-q,--quiet", g.quiet, "No progress bar and only warnings/errors in the log");
+  app.add_flag("-q,--quiet", g.quiet,
+               "Print nothing but errors (no progress bar, no summary, no warnings)");
   app.add_flag("-v,--verbose", g.verbose, "Debug logging");
   int exit_code = app::kExitOk;
   app::add_demo(app, g, exit_code);
@@ -69,7 +70,7 @@ int main(int argc, char** argv) {
   app::add_enroll_objects(*enroll, g, exit_code);
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug
-                   : g.quiet ? log::Level::kWarn
+                   : g.quiet ? log::Level::kError
                              : log::Level::kInfo);
   });
   try {

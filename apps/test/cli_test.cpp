@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <sys/wait.h>
@@ -195,6 +196,77 @@ TEST_F(Cli, TruncatedCameraVideoIsAOneLineErrorNamingTheFile) {
   EXPECT_NE(r.err.find("camera_left.mjpg"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(fs::exists(out / "primitives.jsonl")) << "no half-written output";
+}
+
+// A torn skeleton tail, a torn audio tail and one corrupted camera frame cost those records:
+// the analysis succeeds, summary.json counts exactly that damage, and the report says so.
+TEST_F(Cli, DamagedRecordsCostOnlyThemselves) {
+  const fs::path s = copy_of_demo("damaged", "camera_left.mjpg");
+  for (const char* f : {"front.skeleton.jsonl", "mic_array.wav"}) {
+    fs::remove(s / f);
+    fs::copy_file(demo() / f, s / f);
+  }
+  std::string skel = slurp(s / "front.skeleton.jsonl");
+  skel.resize(skel.size() - 40);  // the last line cut, as a crash leaves it
+  std::ofstream(s / "front.skeleton.jsonl", std::ios::binary) << skel;
+  fs::resize_file(s / "mic_array.wav", fs::file_size(s / "mic_array.wav") - 3000);
+  {  // 200 random bytes in the middle of camera_left's frame 40
+    std::ifstream idx(s / "camera_left.idx");
+    std::string line;
+    int k = -1;
+    unsigned long long seq = 0, stamp = 0, offset = 0, size = 0;
+    while (std::getline(idx, line) && k < 40)
+      if (!line.empty() && line[0] != '#' && ++k == 40)
+        ASSERT_EQ(std::sscanf(line.c_str(), "%llu,%llu,%llu,%llu", &seq, &stamp, &offset, &size),
+                  4);
+    std::fstream f(s / "camera_left.mjpg", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(offset + size / 2));
+    std::string noise(200, '\0');
+    for (size_t i = 0; i < noise.size(); ++i) noise[i] = static_cast<char>((i * 7919) % 251);
+    f.write(noise.data(), static_cast<std::streamsize>(noise.size()));
+  }
+  for (const char* f : {"primitives.jsonl", "summary.json", "report.html"}) fs::remove(s / f);
+  const fs::path out = root() / "damaged_out";
+  RunResult r = run("analyze " + s.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("Corrupt JPEG"), std::string::npos) << "libjpeg's messages are counted";
+  const json summary = json::parse(slurp(out / "summary.json"));
+  std::map<std::string, json> by_stream;
+  for (const auto& d : summary.at("damage")) by_stream[d.at("stream")] = d;
+  EXPECT_EQ(by_stream.at("front.skeleton").at("torn_tail"), 1);
+  EXPECT_EQ(by_stream.at("mic_array").at("torn_tail"), 1);
+  EXPECT_EQ(by_stream.at("camera_left").at("damaged"), 1);
+  EXPECT_EQ(by_stream.at("camera_left").at("first_damaged").at(0).at("record"), 40);
+  for (const auto& [id, d] : by_stream)
+    if (id != "front.skeleton" && id != "mic_array" && id != "camera_left")
+      EXPECT_EQ(d.at("damaged").get<int>() + d.at("torn_tail").get<int>(), 0) << id;
+  EXPECT_NE(slurp(out / "report.html").find("damaged recording: camera_left.mjpg"),
+            std::string::npos);
+  // The undamaged tick count is kept: a damaged record does not end the session.
+  EXPECT_EQ(summary.at("ticks"), json::parse(slurp(demo() / "summary.json")).at("ticks"));
+}
+
+// An output folder that holds an analysis is replaced only with --force, then completely.
+TEST_F(Cli, AnExistingAnalysisIsReplacedOnlyWithForce) {
+  const fs::path out = root() / "force_out";
+  fs::remove_all(out);
+  ASSERT_EQ(run("analyze " + demo().string() + " --out " + out.string()).exit_code, 0);
+  std::ofstream(out / "overlay.mp4") << "an old overlay";
+  RunResult again = run("analyze " + demo().string() + " --out " + out.string());
+  EXPECT_NE(again.exit_code, 0);
+  EXPECT_NE(again.err.find("--force"), std::string::npos) << again.err;
+  EXPECT_TRUE(fs::exists(out / "overlay.mp4"));
+  ASSERT_EQ(run("analyze " + demo().string() + " --out " + out.string() + " --force").exit_code, 0);
+  EXPECT_FALSE(fs::exists(out / "overlay.mp4")) << "old and new outputs never mix";
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  for (const auto& e : fs::directory_iterator(out))
+    EXPECT_EQ(e.path().filename().string().find("partial"), std::string::npos) << e.path();
+  // A run that fails after planning (unknown analyser option) leaves no folder behind.
+  const fs::path fresh = root() / "never_made";
+  RunResult bad = run("analyze " + demo().string() + " --out " + fresh.string() +
+                      " --set gaze.no_such_option=1");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_FALSE(fs::exists(fresh));
 }
 
 TEST_F(Cli, MissingStreamFileIsNamed) {

@@ -31,6 +31,13 @@ int MicArrayGeometry::rank() const {
 Status MicArrayGeometry::check() const {
   std::string bad;
   if (mics_m.size() < 2) bad += " needs at least 2 microphones;";
+  // Plausible: finite positions within 10 m of the array origin, a finite pose within 1 km.
+  for (size_t i = 0; i < mics_m.size(); ++i)
+    if (!cv::checkRange(mics_m[i]) || cv::norm(mics_m[i]) > 10)
+      bad += fmt::format(" microphone {} position is not finite or more than 10 m away;", i);
+  if (!cv::checkRange(array_from_world_R) || !cv::checkRange(array_from_world_t) ||
+      cv::norm(array_from_world_t) > 1000)
+    bad += " array_from_world_R/_t hold a non-finite or implausible value;";
   for (size_t i = 0; i < mics_m.size(); ++i)
     for (size_t j = i + 1; j < mics_m.size(); ++j)
       if (cv::norm(mics_m[i] - mics_m[j]) < 1e-3)
@@ -93,8 +100,11 @@ Result<MicArrayGeometry> read_mic_array(const std::filesystem::path& path) {
       t.convertTo(t, CV_64F);
       g.array_from_world_t = cv::Vec3d(t.ptr<double>()[0], t.ptr<double>()[1], t.ptr<double>()[2]);
     }
-  } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.msg);
+  } catch (const cv::Exception&) {
+    return make_error(ErrorCode::kCorruptData,
+                      "{}: not a valid OpenCV YAML/XML file, or a key holds a value of the wrong "
+                      "type (mic_positions_m, sample_rate, array_from_world_R, array_from_world_t)",
+                      path.string());
   }
   if (auto s = g.check(); !s)
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), s.error().message);

@@ -1,8 +1,14 @@
 #include "dreamsense/core/camera_model.hpp"
 
+#include "dreamsense/core/opencv_error.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <opencv2/calib3d.hpp>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace dreamsense {
 
@@ -27,16 +33,56 @@ double CameraModel::yaw_towards_deg(const cv::Vec3d& direction_world) const {
 }
 
 Status CameraModel::check() const {
-  std::string bad;
-  if (image_size.width <= 0 || image_size.height <= 0) bad += " image size must be positive;";
-  if (K(0, 0) <= 0 || K(1, 1) <= 0) bad += " focal lengths must be positive;";
-  const cv::Matx33d should_be_identity = R * R.t();
-  if (cv::norm(should_be_identity - cv::Matx33d::eye()) > 1e-6 || cv::determinant(R) < 0)
-    bad += " R is not a rotation;";
+  // Plausible ranges (docs/session_format.md, "Damaged recordings"): everything finite, image up
+  // to 100000 px a side, focal lengths in (0, 1e6) px, the camera within 1 km of the world origin.
+  std::vector<std::string> bad;
+  auto finite = [](const auto& m) {
+    for (int i = 0; i < m.rows * m.cols; ++i)
+      if (!std::isfinite(m.val[i])) return false;
+    return true;
+  };
+  if (image_size.width <= 0 || image_size.height <= 0 || image_size.width > 100000 ||
+      image_size.height > 100000)
+    bad.emplace_back(
+        fmt::format("image size {}x{} is not plausible", image_size.width, image_size.height));
+  if (!finite(K))
+    bad.emplace_back("camera_matrix holds a non-finite number");
+  else if (K(0, 0) <= 0 || K(1, 1) <= 0 || K(0, 0) > 1e6 || K(1, 1) > 1e6)
+    bad.emplace_back("focal lengths must be positive and below 1e6 px");
+  if (!distortion.empty() && !cv::checkRange(distortion))
+    bad.emplace_back("distortion_coefficients hold a non-finite number");
+  if (!finite(R)) {
+    bad.emplace_back("camera_from_world_R holds a non-finite number");
+  } else {
+    const cv::Matx33d should_be_identity = R * R.t();
+    if (cv::norm(should_be_identity - cv::Matx33d::eye()) > 1e-6 || cv::determinant(R) < 0)
+      bad.emplace_back("camera_from_world_R is not a rotation matrix");
+  }
+  if (!finite(t))
+    bad.emplace_back("camera_from_world_t holds a non-finite number");
+  else if (cv::norm(t) > 1000)
+    bad.emplace_back("camera_from_world_t is more than 1 km from the world origin");
   if (!bad.empty())
-    return make_error(ErrorCode::kInvalidArgument, "camera model '{}':{}", frame, bad);
+    return make_error(ErrorCode::kInvalidArgument, "camera model '{}': {}", frame,
+                      fmt::join(bad, "; "));
   return ok_status();
 }
+
+namespace {
+// Reads one key, turning OpenCV's parser exceptions into a message that names the key.
+template <typename T>
+Status read_key(const cv::FileStorage& fs, const char* key, T& out,
+                const std::filesystem::path& path) {
+  try {
+    const cv::FileNode n = fs[key];
+    if (!n.empty()) n >> out;
+    return ok_status();
+  } catch (const cv::Exception&) {
+    return make_error(ErrorCode::kCorruptData, "{}: key '{}' does not hold a valid value",
+                      path.string(), key);
+  }
+}
+}  // namespace
 
 Result<CameraModel> read_camera_model(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
@@ -45,30 +91,42 @@ Result<CameraModel> read_camera_model(const std::filesystem::path& path) {
   try {
     if (!fs.open(path.string(), cv::FileStorage::READ))
       return make_error(ErrorCode::kCorruptData, "{}: unreadable calibration file", path.string());
-    CameraModel m;
-    cv::Mat K, R, t;
-    fs["frame"] >> m.frame;
-    m.image_size.width = static_cast<int>(fs["image_width"]);
-    m.image_size.height = static_cast<int>(fs["image_height"]);
-    fs["camera_matrix"] >> K;
-    fs["distortion_coefficients"] >> m.distortion;
-    fs["camera_from_world_R"] >> R;
-    fs["camera_from_world_t"] >> t;
-    if (K.empty() || K.rows != 3 || K.cols != 3)
-      return make_error(ErrorCode::kCorruptData, "{}: camera_matrix missing or not 3x3",
-                        path.string());
-    m.K = cv::Matx33d(K);
-    if (m.distortion.empty()) m.distortion = cv::Mat::zeros(1, 5, CV_64F);
-    m.distortion.convertTo(m.distortion, CV_64F);
-    if (!R.empty()) m.R = cv::Matx33d(R);
-    if (!t.empty()) m.t = cv::Vec3d(t.reshape(1, 3));
-    if (auto st = m.check(); !st)
-      return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), st.error().message);
-    return m;
-  } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: unreadable calibration file ({})",
-                      path.string(), e.msg);
+  } catch (const cv::Exception&) {
+    return make_error(ErrorCode::kCorruptData,
+                      "{}: not a valid OpenCV YAML/XML calibration file (syntax error)",
+                      path.string());
   }
+  CameraModel m;
+  cv::Mat K, R, t;
+  DS_RETURN_IF_ERROR(read_key(fs, "frame", m.frame, path));
+  DS_RETURN_IF_ERROR(read_key(fs, "image_width", m.image_size.width, path));
+  DS_RETURN_IF_ERROR(read_key(fs, "image_height", m.image_size.height, path));
+  DS_RETURN_IF_ERROR(read_key(fs, "camera_matrix", K, path));
+  DS_RETURN_IF_ERROR(read_key(fs, "distortion_coefficients", m.distortion, path));
+  DS_RETURN_IF_ERROR(read_key(fs, "camera_from_world_R", R, path));
+  DS_RETURN_IF_ERROR(read_key(fs, "camera_from_world_t", t, path));
+  if (K.empty() || K.rows != 3 || K.cols != 3)
+    return make_error(ErrorCode::kCorruptData, "{}: key 'camera_matrix' missing or not 3x3",
+                      path.string());
+  if ((!R.empty() && (R.rows != 3 || R.cols != 3)) || (!t.empty() && t.total() != 3))
+    return make_error(ErrorCode::kCorruptData,
+                      "{}: keys 'camera_from_world_R'/'camera_from_world_t' must be 3x3 and 3x1",
+                      path.string());
+  K.convertTo(K, CV_64F);
+  m.K = cv::Matx33d(K);
+  if (m.distortion.empty()) m.distortion = cv::Mat::zeros(1, 5, CV_64F);
+  m.distortion.convertTo(m.distortion, CV_64F);
+  if (!R.empty()) {
+    R.convertTo(R, CV_64F);
+    m.R = cv::Matx33d(R);
+  }
+  if (!t.empty()) {
+    t.convertTo(t, CV_64F);
+    m.t = cv::Vec3d(t.reshape(1, 3));
+  }
+  if (auto st = m.check(); !st)
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), st.error().message);
+  return m;
 }
 
 void write_camera_model_keys(cv::FileStorage& fs, const CameraModel& m) {
@@ -89,7 +147,7 @@ Status write_camera_model(const std::filesystem::path& path, const CameraModel& 
     write_camera_model_keys(fs, m);
     return ok_status();
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kIoError, "{}: {}", path.string(), e.msg);
+    return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
   }
 }
 

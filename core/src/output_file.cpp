@@ -1,5 +1,6 @@
 #include "dreamsense/core/output_file.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -75,6 +76,85 @@ Status ensure_writable_dir(const std::filesystem::path& dir) {
                       std::strerror(errno));
   std::fclose(f);
   std::filesystem::remove(probe, ec);
+  return ok_status();
+}
+
+Result<StagedOutputDir> StagedOutputDir::create(const std::filesystem::path& out_dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  StagedOutputDir d;
+  d.out_ = out_dir;
+  d.created_out_ = !fs::exists(out_dir, ec);
+  if (auto s = ensure_writable_dir(out_dir); !s) return tl::unexpected(s.error());
+  d.stage_ = out_dir / kStageName;
+  fs::remove_all(d.stage_, ec);
+  if (!fs::create_directory(d.stage_, ec) || ec)
+    return make_error(ErrorCode::kIoError, "{}: cannot create a staging folder: {}",
+                      out_dir.string(), ec ? ec.message() : "it already exists");
+  return d;
+}
+
+StagedOutputDir::StagedOutputDir(StagedOutputDir&& other) noexcept
+    : out_(std::move(other.out_)),
+      stage_(std::move(other.stage_)),
+      created_out_(other.created_out_) {
+  other.stage_.clear();
+  other.out_.clear();
+}
+
+StagedOutputDir& StagedOutputDir::operator=(StagedOutputDir&& other) noexcept {
+  if (this != &other) {
+    discard();
+    out_ = std::move(other.out_);
+    stage_ = std::move(other.stage_);
+    created_out_ = other.created_out_;
+    other.stage_.clear();
+    other.out_.clear();
+  }
+  return *this;
+}
+
+StagedOutputDir::~StagedOutputDir() { discard(); }
+
+void StagedOutputDir::discard() {
+  namespace fs = std::filesystem;
+  if (stage_.empty()) return;
+  std::error_code ec;
+  fs::remove_all(stage_, ec);
+  if (created_out_ && fs::is_empty(out_, ec)) fs::remove(out_, ec);
+  stage_.clear();
+}
+
+Status StagedOutputDir::publish(const std::vector<std::string>& replaced, const std::string& last) {
+  namespace fs = std::filesystem;
+  if (stage_.empty())
+    return make_error(ErrorCode::kFailedPrecondition, "{}: outputs already published or discarded",
+                      out_.string());
+  std::error_code ec;
+  // The marker of completeness goes first, so a reader never sees an old one beside new files.
+  if (!last.empty()) fs::remove(out_ / last, ec);
+  for (const auto& name : replaced) {
+    fs::remove_all(out_ / name, ec);
+    if (ec)
+      return make_error(ErrorCode::kIoError, "{}: cannot replace the earlier output: {}",
+                        (out_ / name).string(), ec.message());
+  }
+  std::vector<fs::path> entries;
+  for (const auto& e : fs::directory_iterator(stage_, ec)) entries.push_back(e.path());
+  if (ec)
+    return make_error(ErrorCode::kIoError, "{}: cannot list: {}", stage_.string(), ec.message());
+  std::stable_partition(entries.begin(), entries.end(),
+                        [&](const fs::path& p) { return p.filename() != last; });
+  for (const auto& from : entries) {
+    const fs::path to = out_ / from.filename();
+    fs::remove_all(to, ec);
+    fs::rename(from, to, ec);
+    if (ec)
+      return make_error(ErrorCode::kIoError, "{}: cannot move into place: {}", to.string(),
+                        ec.message());
+  }
+  fs::remove_all(stage_, ec);
+  stage_.clear();
   return ok_status();
 }
 

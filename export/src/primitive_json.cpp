@@ -2,6 +2,7 @@
 
 #include "dreamsense/dream/legacy.hpp"
 
+#include <cmath>
 #include <fstream>
 
 namespace dreamsense::exporters {
@@ -456,6 +457,22 @@ Result<std::vector<PrimitiveRecord>> read_primitives_jsonl(const std::filesystem
     out.push_back(std::move(*r));
   }
   return out;
+}
+
+namespace {
+bool all_finite(const nlohmann::json& j) {
+  if (j.is_number_float()) return std::isfinite(j.get<double>());
+  if (j.is_array() || j.is_object()) {
+    for (const auto& v : j)
+      if (!all_finite(v)) return false;
+  }
+  return true;
+}
+}  // namespace
+
+bool value_is_finite(const primitives::PrimitiveRecord& record) {
+  if (record.confidence && !std::isfinite(*record.confidence)) return false;
+  return all_finite(value_json(record));
 }
 
 }  // namespace dreamsense::exporters

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace dreamsense::exporters {
 namespace {
 using namespace primitives;
@@ -18,6 +20,21 @@ TEST(PrimitiveJson, RecordHasTheContractFields) {
   EXPECT_EQ(j["status"], "disabled");
   for (const char* k : {"confidence", "value", "legacy", "source"}) EXPECT_TRUE(j.contains(k)) << k;
   EXPECT_FALSE(j.contains("query")) << "no query unless one was answered";
+}
+
+TEST(PrimitiveJson, NonFiniteValuesAreFound) {
+  PrimitiveRecord r;
+  r.id = PrimitiveId::kGetHead;
+  r.status = PrimitiveStatus::kOk;
+  r.value = HeadValue{{0.1, 0.2, 1.0}, "camera_left"};
+  EXPECT_TRUE(value_is_finite(r));
+  r.value = HeadValue{{0.1, std::numeric_limits<double>::quiet_NaN(), 1.0}, "camera_left"};
+  EXPECT_FALSE(value_is_finite(r));
+  r.value = HeadValue{{0.1, 0.2, std::numeric_limits<double>::infinity()}, "camera_left"};
+  EXPECT_FALSE(value_is_finite(r));
+  r.value = HeadValue{{0.1, 0.2, 1.0}, "camera_left"};
+  r.confidence = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(value_is_finite(r));
 }
 
 // Every typed value goes to JSON and back unchanged, with DREAM's legacy vector beside it.

@@ -1,5 +1,7 @@
 #include "dreamsense/geometry/calibration_io.hpp"
 
+#include "dreamsense/core/opencv_error.hpp"
+
 #include <atomic>
 #include <system_error>
 #include <unistd.h>
@@ -43,7 +45,7 @@ Status write_camera_yaml(const std::filesystem::path& path, const CameraModel& m
       if (extra) extra(fs);
       return ok_status();
     } catch (const cv::Exception& e) {
-      return make_error(ErrorCode::kIoError, "{}: {}", path.string(), e.msg);
+      return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
     }
   });
 }

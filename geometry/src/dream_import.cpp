@@ -1,6 +1,7 @@
 #include "dreamsense/geometry/dream_import.hpp"
 
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/core/opencv_error.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -54,7 +55,8 @@ Result<cv::FileStorage> open(const std::filesystem::path& path) {
                         path.string());
     return fs;
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: unreadable ({})", path.string(), e.msg);
+    return make_error(ErrorCode::kCorruptData, "{}: unreadable ({})", path.string(),
+                      opencv_reason(e));
   }
 }
 
@@ -111,7 +113,7 @@ Result<DreamIntrinsics> read_dream_intrinsics(const std::filesystem::path& path,
     }
     return out;
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.msg);
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
 }
 
@@ -147,7 +149,7 @@ Result<DreamExtrinsics> read_dream_extrinsics(const std::filesystem::path& path)
            "world = Kinect0 colour); imported as-is, recalibrate before use");
     return out;
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.msg);
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
 }
 
@@ -205,7 +207,7 @@ Result<DreamObjectFile> read_dream_object_file(const std::filesystem::path& path
                         path.string());
     return out;
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.msg);
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
 }
 

@@ -1,6 +1,7 @@
 #include "dreamsense/geometry/intrinsics.hpp"
 
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/core/opencv_error.hpp"
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -114,7 +115,7 @@ Result<IntrinsicsResult> calibrate_from_points(
           op, ip, image_size, K, dist, rvecs, tvecs, res.flags,
           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
     } catch (const cv::Exception& e) {
-      return make_error(ErrorCode::kInvalidArgument, "calibration failed: {}", e.msg);
+      return make_error(ErrorCode::kInvalidArgument, "calibration failed: {}", opencv_reason(e));
     }
     double sq = 0;
     size_t npts = 0;

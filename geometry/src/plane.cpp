@@ -1,5 +1,6 @@
 #include "dreamsense/geometry/plane.hpp"
 
+#include "dreamsense/core/opencv_error.hpp"
 #include "dreamsense/geometry/calibration_io.hpp"
 
 #include <cmath>
@@ -117,7 +118,7 @@ Status write_table_frame(const std::filesystem::path& path, const TableFrame& ta
       fs << "points" << pts;
       return ok_status();
     } catch (const cv::Exception& e) {
-      return make_error(ErrorCode::kIoError, "{}: {}", path.string(), e.msg);
+      return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
     }
   });
 }
@@ -153,7 +154,7 @@ Result<TableFrame> read_table_frame(const std::filesystem::path& path) {
                         path.string());
     return tf;
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.msg);
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
 }
 

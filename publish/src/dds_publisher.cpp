@@ -195,6 +195,10 @@ Result<std::unique_ptr<DdsPublisher>> DdsPublisher::create(const DdsPublisherOpt
     return make_error(ErrorCode::kIoError, "DDS: cannot create a publisher");
   log::info("DDS: publishing primitives on rt/{}/<primitive> (domain {}, {})", options.topic_prefix,
             options.domain_id, options.network ? "all network interfaces" : "this machine only");
+  if (options.network)
+    log::warn(
+        "DDS: --dds-network: the session's primitives (where the child is and looks, what "
+        "is said) are visible to every machine on this network");
   return std::unique_ptr<DdsPublisher>(new DdsPublisher(std::move(m)));
 }
 

@@ -5,6 +5,7 @@
 #include "dreamsense/dream/writers.hpp"
 #include "dreamsense/export/csv_tables.hpp"
 #include "dreamsense/export/overlay.hpp"
+#include "dreamsense/export/primitive_json.hpp"
 #include "dreamsense/export/report.hpp"
 #include "dreamsense/export/writers.hpp"
 #include "dreamsense/sources/recorder.hpp"
@@ -22,6 +23,27 @@ Status AnalysisOptions::check() const {
   DS_RETURN_IF_ERROR(plan.check());
   return evaluator.check();
 }
+
+namespace {
+nlohmann::json damage_json(const std::vector<sources::StreamDamage>& damage) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& d : damage) {
+    nlohmann::json first = nlohmann::json::array();
+    for (const auto& r : d.first)
+      first.push_back({{"record", r.record},
+                       {"stamp_ns", r.stamp_ns ? nlohmann::json(*r.stamp_ns) : nlohmann::json()},
+                       {"what", r.what}});
+    out.push_back({{"stream", d.stream},
+                   {"file", d.file},
+                   {"records", d.records},
+                   {"damaged", d.damaged},
+                   {"torn_tail", d.torn_tail},
+                   {"empty_lines", d.empty_lines},
+                   {"first_damaged", first}});
+  }
+  return out;
+}
+}  // namespace
 
 nlohmann::json AnalysisSummary::to_json() const {
   nlohmann::json stages = nlohmann::json::array();
@@ -45,6 +67,8 @@ nlohmann::json AnalysisSummary::to_json() const {
           {"stages", stages},
           {"dropped_frames", pipeline.sync.dropped_frames()},
           {"status_counts", status_counts},
+          {"damage", damage_json(damage)},
+          {"non_finite_values", non_finite},
           {"outputs", outs},
           {"input", input}};
 }
@@ -102,11 +126,21 @@ void add_key_frame(exporters::HtmlReport& report, const MultiFrame& tick,
 
 // Runs the planned analysers over `source` and writes the outputs (options.out_dir).
 // [t0, t1] is the media span for progress (unset for live sources).
-Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan plan,
-                                 const sources::SessionManifest& manifest, Source& source,
-                                 const PipelineOptions& po, const AnalysisProgress& progress,
-                                 Timestamp t0, Timestamp t1, const fs::path& error_dir,
-                                 const std::string& session_name, nlohmann::json input) {
+Result<AnalysisSummary> run_plan(
+    const AnalysisOptions& options, PipelinePlan plan, const sources::SessionManifest& manifest,
+    Source& source, const PipelineOptions& po, const AnalysisProgress& progress, Timestamp t0,
+    Timestamp t1, const fs::path& error_dir, const std::string& session_name, nlohmann::json input,
+    const std::function<std::vector<sources::StreamDamage>()>& damage_of) {
+  // Outputs are written into a staging folder and appear together at the end (or not at all).
+  const bool write = !options.out_dir.empty();
+  StagedOutputDir staging;
+  if (write) {
+    auto created = StagedOutputDir::create(options.out_dir);
+    if (!created) return tl::unexpected(created.error());
+    staging = std::move(*created);
+  }
+  auto out = [&](const char* name) { return staging.staged(name); };
+
   AnalysisSummary summary;
   summary.input = std::move(input);
   for (const auto& a : plan.analyzers) summary.analyzers.emplace_back(a->name());
@@ -117,15 +151,14 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
   auto pipeline = Pipeline::build(po, source.info(), std::move(plan.analyzers));
   if (!pipeline) return tl::unexpected(pipeline.error());
 
-  const bool write = !options.out_dir.empty();
   exporters::PrimitivesJsonlWriter jsonl;
   dream::EventLogWriter events;
   dream::DreamExport dream_export;
   exporters::HtmlReport report;
   report.set_span(t0, t1);
   if (write) {
-    DS_RETURN_IF_ERROR(jsonl.open(options.out_dir / "primitives.jsonl"));
-    DS_RETURN_IF_ERROR(events.open(options.out_dir / "events.log", manifest.clock_origin_unix_ns));
+    DS_RETURN_IF_ERROR(jsonl.open(out("primitives.jsonl")));
+    DS_RETURN_IF_ERROR(events.open(out("events.log"), manifest.clock_origin_unix_ns));
   }
 
   exporters::OverlayWriter overlay;
@@ -134,14 +167,25 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
     exporters::OverlayOptions oo;
     oo.cameras = overlay_cameras;
     oo.fps = manifest.frame_rate > 0 ? manifest.frame_rate : 25.0;
-    DS_RETURN_IF_ERROR(overlay.open(options.out_dir / "overlay.mp4", oo));
+    DS_RETURN_IF_ERROR(overlay.open(out("overlay.mp4"), oo));
   }
   auto on_tick = [&](const MultiFrame& tick, const BlackboardView& view) -> Status {
     if (want_overlay) DS_RETURN_IF_ERROR(overlay.add(tick, view));
     if (options.on_tick_frames) options.on_tick_frames(tick);
-    const auto records = evaluator.evaluate(tick, view);
-    for (const auto& r : records)
+    auto records = evaluator.evaluate(tick, view);
+    for (auto& r : records) {
+      // No ok answer ever carries a NaN or infinity (a bad calibration or sensor value that got
+      // through): it becomes no_data, counted in summary.json.
+      if (r.ok() && !exporters::value_is_finite(r)) {
+        if (summary.non_finite[primitives::info(r.id).name]++ == 0)
+          log::warn("{}: an analyser produced a non-finite value at {}; reported as no_data",
+                    primitives::info(r.id).name, r.stamp.to_string());
+        r.status = primitives::PrimitiveStatus::kNoData;
+        r.value = primitives::PrimitiveValue{};
+        r.confidence.reset();
+      }
       summary.status_counts[primitives::info(r.id).name][primitives::to_string(r.status)]++;
+    }
     if (options.on_records) DS_RETURN_IF_ERROR(options.on_records(records));
     if (!write) return ok_status();
     DS_RETURN_IF_ERROR(jsonl.write(records));
@@ -159,12 +203,13 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
   if (auto s = (*pipeline)->run(source, on_tick, on_progress); !s)
     return tl::unexpected(in_session(s.error(), error_dir));
   summary.pipeline = (*pipeline)->stats();
+  if (damage_of) summary.damage = damage_of();
 
   if (write) {
     DS_RETURN_IF_ERROR(jsonl.commit());
     DS_RETURN_IF_ERROR(events.commit());
     if (want_overlay) DS_RETURN_IF_ERROR(overlay.commit());
-    DS_RETURN_IF_ERROR(dream_export.write(options.out_dir / "dream.json", manifest));
+    DS_RETURN_IF_ERROR(dream_export.write(out("dream.json"), manifest));
     const auto& ps = (*pipeline)->stats();
     exporters::ReportContext rc;
     rc.input = summary.input;
@@ -173,28 +218,46 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
     rc.ticks = ps.ticks;
     rc.dropped_frames = ps.sync.dropped_frames();
     rc.wall_seconds = ps.wall_seconds;
-    DS_RETURN_IF_ERROR(report.write(options.out_dir / "report.html", manifest, rc));
-    summary.outputs = {options.out_dir / "primitives.jsonl", options.out_dir / "events.log",
-                       options.out_dir / "dream.json", options.out_dir / "report.html",
-                       options.out_dir / "summary.json"};
-    if (want_overlay) summary.outputs.push_back(options.out_dir / "overlay.mp4");
+    for (const auto& d : summary.damage)
+      if (d.any())
+        rc.summary_lines.push_back(fmt::format(
+            "Damaged recording: {}: {} of {} records skipped, {} torn at the end, {} empty lines{}",
+            d.file, d.damaged, d.records, d.torn_tail, d.empty_lines,
+            d.first.empty() ? "" : " (first: " + d.first.front().what + ")"));
+    DS_RETURN_IF_ERROR(report.write(out("report.html"), manifest, rc));
     if (options.csv.value_or(summary.input.value("kind", "") == "video")) {
       exporters::CsvTablesOptions co;
       co.approximate_calibration = summary.input.value("approximate_calibration", false);
       if (summary.input.value("kind", "") == "video") co.mutual_gaze_target = "the camera";
-      auto tables = exporters::write_csv_tables(options.out_dir / "primitives.jsonl",
-                                                options.out_dir / "tables", co);
+      auto tables = exporters::write_csv_tables(out("primitives.jsonl"), out("tables"), co);
       if (!tables) return tl::unexpected(tables.error());
-      for (const auto& t : *tables) summary.outputs.push_back(t);
     }
+    for (const auto& e : fs::directory_iterator(staging.staged("")))
+      summary.outputs.push_back(options.out_dir / e.path().filename());
+    summary.outputs.push_back(options.out_dir / "summary.json");
     OutputFile f;
-    DS_RETURN_IF_ERROR(f.open(options.out_dir / "summary.json"));
+    DS_RETURN_IF_ERROR(f.open(out("summary.json")));
     nlohmann::json sj = summary.to_json();
     sj["session"] = session_name;
     DS_RETURN_IF_ERROR(f.write(sj.dump(2) + "\n"));
     DS_RETURN_IF_ERROR(f.commit());
+    DS_RETURN_IF_ERROR(staging.publish(analysis_output_names(), "summary.json"));
   }
   return summary;
+}
+
+// An output folder that already holds an analysis is replaced only when asked (--force), so a
+// re-run never silently mixes with, or destroys, an earlier result.
+Status check_output_folder(const AnalysisOptions& options) {
+  if (options.out_dir.empty() || options.replace_existing) return ok_status();
+  std::error_code ec;
+  for (const auto& name : analysis_output_names())
+    if (fs::exists(options.out_dir / name, ec))
+      return make_error(ErrorCode::kFailedPrecondition,
+                        "{}: the output folder already holds an analysis ({}); add --force to "
+                        "replace it",
+                        options.out_dir.string(), name);
+  return ok_status();
 }
 
 PipelineOptions pipeline_options(const sources::SessionManifest& manifest) {
@@ -242,17 +305,25 @@ Result<AnalysisSummary> analyze_video(const AnalysisOptions& options,
   const sources::VideoFileInfo& info = v.source->video();
   auto plan = plan_pipeline(v.plan, info.manifest, info.path.parent_path());
   if (!plan) return tl::unexpected(plan.error());
-  if (!options.out_dir.empty()) DS_RETURN_IF_ERROR(ensure_writable_dir(options.out_dir));
+  DS_RETURN_IF_ERROR(check_output_folder(options));
   PipelineOptions po = pipeline_options(info.manifest);
   po.sync.policy = options.policy;
   po.sync.start = Timestamp::from_ns(0);
   po.pace_source = options.pace_source;
   const SourceInfo si = v.source->info();
   return run_plan(options, std::move(*plan), info.manifest, *v.source, po, progress, si.start,
-                  si.end, fs::path(), info.path.string(), video_input_json(info));
+                  si.end, fs::path(), info.path.filename().string(), video_input_json(info),
+                  nullptr);
 }
 
 }  // namespace
+
+const std::vector<std::string>& analysis_output_names() {
+  static const std::vector<std::string> names = {"primitives.jsonl", "events.log", "dream.json",
+                                                 "report.html", "overlay.mp4", "tables",
+                                                 "summary.json"};
+  return names;
+}
 
 Result<PipelinePlan> plan_session(const AnalysisOptions& options) {
   DS_RETURN_IF_ERROR(options.check());
@@ -292,18 +363,23 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
 
   // Validate the whole session first (every stream, even those no analyser reads yet), so a
   // damaged recording is reported before any output is written.
-  auto full = sources::SessionReader::open(options.session_dir);
+  sources::SessionReaderOptions full_options;
+  full_options.allow_damaged = options.allow_damaged;
+  full_options.follow_links_outside = options.follow_links_outside;
+  auto full = sources::SessionReader::open(options.session_dir, full_options);
   if (!full) return tl::unexpected(in_session(full.error(), options.session_dir));
-  if (!options.out_dir.empty()) DS_RETURN_IF_ERROR(ensure_writable_dir(options.out_dir));
+  DS_RETURN_IF_ERROR(check_output_folder(options));
   const sources::SessionManifest manifest = (*full)->manifest();
   const SourceInfo full_info = (*full)->info();
+  std::vector<sources::StreamDamage> open_damage = (*full)->damage();
 
   auto plan = plan_pipeline(options.plan, manifest, (*full)->dir());
   if (!plan) return tl::unexpected(plan.error());
   const std::vector<SensorId> used = plan->used;
 
-  sources::SessionReaderOptions ro;
+  sources::SessionReaderOptions ro = full_options;
   ro.only = used;
+  ro.log_damage = false;  // the full reader has said it
   auto reader =
       used.empty() ? std::move(full) : sources::SessionReader::open(options.session_dir, ro);
   if (!reader) return tl::unexpected(in_session(reader.error(), options.session_dir));
@@ -313,16 +389,29 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   po.sync.policy = options.policy;
   po.sync.start = full_info.start;  // ticks on the session clock, whatever streams are read
   po.pace_source = options.pace_source;
+  // Damage of every stream: found when opening (all streams), and while reading (those analysed).
+  const sources::SessionReader* used_reader = reader->get();
+  auto damage_of = [open_damage, used_reader] {
+    std::vector<sources::StreamDamage> all = open_damage;
+    for (const auto& d : used_reader->damage())
+      for (auto& a : all)
+        if (a.stream == d.stream) a = d;
+    return all;
+  };
+  // The folder's name, not its absolute path (which may name people or machines).
+  fs::path session_path = fs::absolute(options.session_dir).lexically_normal();
+  if (session_path.filename().empty()) session_path = session_path.parent_path();  // "dir/"
+  const std::string session_name = session_path.filename().string();
   return run_plan(options, std::move(*plan), manifest, **reader, po, progress, full_info.start,
-                  full_info.end, options.session_dir, fs::absolute(options.session_dir).string(),
-                  {{"kind", "session"}, {"path", fs::absolute(options.session_dir).string()}});
+                  full_info.end, options.session_dir, session_name,
+                  {{"kind", "session"}, {"name", session_name}}, damage_of);
 }
 
 Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
                                      sources::LiveCapture& capture) {
   DS_RETURN_IF_ERROR(options.plan.check());
   DS_RETURN_IF_ERROR(options.evaluator.check());
-  if (!options.out_dir.empty()) DS_RETURN_IF_ERROR(ensure_writable_dir(options.out_dir));
+  DS_RETURN_IF_ERROR(check_output_folder(options));
   const sources::SessionManifest& manifest = capture.manifest();
   // The live manifest's file references are the operator's absolute paths.
   PlanOptions plan_options = options.plan;
@@ -333,7 +422,8 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   po.sync.policy = SyncPolicy::kLatestWithinTolerance;
   po.pace_source = false;  // the devices deliver in real time
   return run_plan(options, std::move(*plan), manifest, capture, po, nullptr, Timestamp::unset(),
-                  Timestamp::unset(), fs::path("live"), manifest.name, {{"kind", "live"}});
+                  Timestamp::unset(), fs::path("live"), manifest.name, {{"kind", "live"}},
+                  nullptr);
 }
 
 }  // namespace dreamsense::runner

@@ -1,5 +1,6 @@
 // session.yaml: reading, validation and atomic writing (format v1, docs/session_format.md).
 
+#include "dreamsense/core/text.hpp"
 #include "dreamsense/sources/session.hpp"
 
 #include <fmt/format.h>
@@ -449,6 +450,12 @@ Result<SessionManifest> read_manifest(const std::filesystem::path& session_dir) 
     return make_error(ErrorCode::kIoError, "{}: cannot read: {}", kManifestName, errno_text(errno));
   std::stringstream text;
   text << in.rdbuf();
+  // Names and notes end up in JSON outputs, which must be UTF-8: refuse here, naming the line,
+  // rather than fail after the whole analysis.
+  if (auto bad = find_invalid_utf8(text.str()))
+    return manifest_error(ErrorCode::kCorruptData,
+                          fmt::format("line {}: not valid UTF-8 text (byte {})",
+                                      line_of_offset(text.str(), *bad), *bad));
   YAML::Node root;
   try {
     root = YAML::Load(text.str());

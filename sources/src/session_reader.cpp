@@ -39,6 +39,9 @@ namespace {
 // Upper bound of SessionReaderOptions::decode_threads.
 constexpr int kMaxDecodeThreads = 16;
 
+// Skeleton joints further than this from the sensor (metres, any axis) are damage.
+constexpr double kMaxJointDistanceM = 100.0;
+
 // Streams whose first stamps are further apart than this are on different clocks.
 constexpr int64_t kMaxFirstStampSpreadNs = 10'000'000'000LL;
 
@@ -61,20 +64,27 @@ struct JpegErrorManager {
 }
 
 // Only trivially destructible locals here: a libjpeg error long-jumps back into this frame.
-bool decode_jpeg_direct(const std::vector<uchar>& data, cv::Mat* out) {
+// libjpeg's warnings ("Corrupt JPEG data: ...") go to stderr by default, one per damaged frame;
+// here they are only counted (num_warnings) and the frame is reported as damaged.
+void jpeg_silent_output(j_common_ptr /*cinfo*/) {}
+
+enum class JpegDecode { kDecoded, kDamaged, kNotHandled };
+
+JpegDecode decode_jpeg_direct(const std::vector<uchar>& data, cv::Mat* out) {
 #ifndef JCS_EXTENSIONS  // plain libjpeg (not libjpeg-turbo) has no BGR output: cv::imdecode
   (void)data;
   (void)out;
-  return false;
+  return JpegDecode::kNotHandled;
 #else
-  if (data.size() < 4 || data[0] != 0xFF || data[1] != 0xD8) return false;
+  if (data.size() < 4 || data[0] != 0xFF || data[1] != 0xD8) return JpegDecode::kDamaged;
   jpeg_decompress_struct cinfo;
   JpegErrorManager err;
   cinfo.err = jpeg_std_error(&err.pub);
   err.pub.error_exit = jpeg_error_exit;
+  err.pub.output_message = jpeg_silent_output;
   if (setjmp(err.jump) != 0) {
     jpeg_destroy_decompress(&cinfo);
-    return false;
+    return JpegDecode::kDamaged;
   }
   jpeg_create_decompress(&cinfo);
   jpeg_mem_src(&cinfo, data.data(), static_cast<unsigned long>(data.size()));
@@ -82,7 +92,7 @@ bool decode_jpeg_direct(const std::vector<uchar>& data, cv::Mat* out) {
       !((cinfo.num_components == 3 && cinfo.jpeg_color_space == JCS_YCbCr) ||
         (cinfo.num_components == 1 && cinfo.jpeg_color_space == JCS_GRAYSCALE))) {
     jpeg_destroy_decompress(&cinfo);
-    return false;
+    return JpegDecode::kNotHandled;
   }
   const bool colour = cinfo.num_components == 3;
   cinfo.out_color_space = colour ? JCS_EXT_BGR : JCS_GRAYSCALE;
@@ -94,8 +104,9 @@ bool decode_jpeg_direct(const std::vector<uchar>& data, cv::Mat* out) {
     jpeg_read_scanlines(&cinfo, &row, 1);
   }
   jpeg_finish_decompress(&cinfo);
+  const bool warned = err.pub.num_warnings > 0;
   jpeg_destroy_decompress(&cinfo);
-  return true;
+  return warned ? JpegDecode::kDamaged : JpegDecode::kDecoded;
 #endif
 }
 
@@ -117,6 +128,17 @@ Status require_file(const Context& ctx, const std::string& name) {
   if (!std::filesystem::exists(p, ec)) return missing(name);
   if (!std::filesystem::is_regular_file(p, ec))
     return make_error(ErrorCode::kCorruptData, "{}: not a regular file", name);
+  // A symlink may point anywhere (e.g. /etc/passwd): session files must stay inside the session.
+  if (!ctx.options.follow_links_outside) {
+    const auto root = std::filesystem::canonical(ctx.dir, ec);
+    const auto target = std::filesystem::canonical(p, ec);
+    const auto m = std::mismatch(root.begin(), root.end(), target.begin(), target.end());
+    if (ec || m.first != root.end())
+      return make_error(ErrorCode::kInvalidArgument,
+                        "{}: is a link to a file outside the session folder ({}); refused unless "
+                        "--follow-links",
+                        name, target.string());
+  }
   return ok_status();
 }
 
@@ -183,7 +205,10 @@ int64_t sample_stamp(int64_t start_ns, int64_t sample, int64_t rate) {
 
 class StreamReader {
  public:
-  explicit StreamReader(const StreamEntry& e) : entry_(e) {}
+  explicit StreamReader(const StreamEntry& e) : entry_(e) {
+    damage_.stream = e.id;
+    damage_.file = e.file;
+  }
   virtual ~StreamReader() = default;
   virtual Status open(const Context& ctx) = 0;
   // Stamp of the next frame, or nullopt at the end.
@@ -196,8 +221,52 @@ class StreamReader {
   virtual const std::string& main_file() const { return entry_.file; }
   const StreamEntry& entry() const { return entry_; }
 
+  const StreamDamage& damage() const { return damage_; }
+  // Index of the frame the last read() returned or failed on.
+  virtual uint64_t last_read_index() const { return 0; }
+  // A record in the middle that is skipped.
+  // `reading`: found while reading frames (logged even by a second reader of the session).
+  void note_damaged(uint64_t record, std::optional<int64_t> stamp, std::string what,
+                    bool reading = false) {
+    if ((log_damage_ || reading) && damage_.damaged == 0)
+      log::warn("{} (skipped; damaged records are counted in summary.json)", what);
+    damage_.damaged++;
+    if (damage_.first.size() < StreamDamage::kListed)
+      damage_.first.push_back({record, stamp, std::move(what)});
+  }
+  // A partly written last record (or several, for frame streams), dropped with a warning.
+  void note_torn_tail(uint64_t records, const std::string& what) {
+    damage_.torn_tail += records;
+    if (log_damage_) log::warn("{} (a torn tail: {} record(s) at the end dropped)", what, records);
+  }
+  void set_log_damage(bool on) { log_damage_ = on; }
+  // Beyond the policy's threshold: an error, unless allowed. In a session marked complete a torn
+  // tail is lost data too (a crash leaves one record at most), so it counts.
+  Status check_damage_limit(const SessionReaderOptions& options) const {
+    const uint64_t torn = torn_tail_counts_ ? damage_.torn_tail : 0;
+    const uint64_t lost = damage_.damaged + torn;
+    const uint64_t total = damage_.records + torn;
+    if (options.allow_damaged || lost == 0 ||
+        static_cast<double>(lost) <= options.max_damaged_fraction * static_cast<double>(total))
+      return ok_status();
+    const std::string first =
+        !damage_.first.empty() ? fmt::format("first at record {}: {}", damage_.first.front().record,
+                                             damage_.first.front().what)
+                               : fmt::format("{} torn at the end", torn);
+    return make_error(ErrorCode::kCorruptData,
+                      "{}: {} of {} records damaged ({:.0f} %, more than {:.0f} %): {}; "
+                      "--allow-damaged analyses what is left",
+                      damage_.file, lost, total,
+                      100.0 * static_cast<double>(lost) / static_cast<double>(total),
+                      100 * options.max_damaged_fraction, first);
+  }
+  void set_torn_tail_counts(bool on) { torn_tail_counts_ = on; }
+
  protected:
   StreamEntry entry_;
+  StreamDamage damage_;
+  bool log_damage_ = true;
+  bool torn_tail_counts_ = false;
 };
 
 class ReadAhead;
@@ -232,12 +301,11 @@ class IndexedReader : public StreamReader {
     for (size_t i = 0; i < lines.size(); ++i) {
       const Line& l = lines[i];
       const std::string_view t = trim(l.text);
-      if (t.empty() || t.front() == '#') continue;
-      if (!l.terminated && ctx.tolerate_tail) {
-        log::warn("{}: line {}: ignoring the partial last line (incomplete session)", entry_.index,
-                  l.number);
-        break;
+      if (t.empty()) {
+        damage_.empty_lines++;
+        continue;
       }
+      if (t.front() == '#') continue;
       Entry e;
       std::vector<std::string_view> fields;
       for (size_t pos = 0;;) {
@@ -253,69 +321,116 @@ class IndexedReader : public StreamReader {
         ok = v.has_value();
         if (ok) values[f] = *v;
       }
-      if (!ok || values[0] < 0 || values[2] < 0 || values[3] <= 0)
-        return make_error(ErrorCode::kCorruptData,
-                          "{}: line {}: malformed index line '{}' (expected "
-                          "sequence,stamp_ns,offset,size)",
-                          entry_.index, l.number, shorten(t));
+      damage_.records++;
+      if (!ok || values[0] < 0 || values[2] < 0 || values[3] <= 0) {
+        if (!l.terminated) {  // the recorder died while writing this line
+          damage_.records--;
+          note_torn_tail(1, fmt::format("{}: line {} is cut", entry_.index, l.number));
+          break;
+        }
+        note_damaged(static_cast<uint64_t>(l.number), std::nullopt,
+                     fmt::format("{}: line {}: malformed index line '{}' (expected "
+                                 "sequence,stamp_ns,offset,size)",
+                                 entry_.index, l.number, shorten(t)));
+        continue;
+      }
       e.sequence = static_cast<uint64_t>(values[0]);
       e.stamp_ns = values[1];
       e.offset = static_cast<uint64_t>(values[2]);
       e.size = static_cast<uint64_t>(values[3]);
-      if (!entries_.empty() && e.stamp_ns <= entries_.back().stamp_ns)
-        return make_error(ErrorCode::kCorruptData, "{}: line {}: stamp {} not after previous {}",
-                          entry_.index, l.number, e.stamp_ns, entries_.back().stamp_ns);
-      if (raw16 && e.size != depth_bytes)
-        return make_error(ErrorCode::kCorruptData,
-                          "{}: line {}: frame of {} bytes, a {}x{} raw16 frame has {}",
-                          entry_.index, l.number, e.size, entry_.width, entry_.height, depth_bytes);
+      if (!entries_.empty() && e.stamp_ns <= entries_.back().stamp_ns) {
+        note_damaged(static_cast<uint64_t>(l.number), e.stamp_ns,
+                     fmt::format("{}: line {}: stamp {} not after previous {}", entry_.index,
+                                 l.number, e.stamp_ns, entries_.back().stamp_ns));
+        continue;
+      }
+      if (raw16 && e.size != depth_bytes) {
+        note_damaged(
+            static_cast<uint64_t>(l.number), e.stamp_ns,
+            fmt::format("{}: line {}: frame of {} bytes, a {}x{} raw16 frame has {}", entry_.index,
+                        l.number, e.size, entry_.width, entry_.height, depth_bytes));
+        continue;
+      }
       entries_.push_back(e);
     }
 
-    // Truncation: an index entry past the end of the data.
-    for (size_t k = 0; k < entries_.size(); ++k) {
-      const Entry& e = entries_[k];
-      if (e.offset <= data_size && e.size <= data_size - e.offset) continue;
-      if (ctx.tolerate_tail) {
-        log::warn("{}: incomplete session: index has {} frames, data holds {}; reading {}",
-                  entry_.file, entries_.size(), k, k);
-        entries_.resize(k);
-        break;
+    // Truncation: index entries past the end of the data are a torn tail (the data file was cut
+    // or not flushed); one in the middle is a damaged record.
+    const auto inside = [&](const Entry& e) {
+      return e.offset <= data_size && e.size <= data_size - e.offset;
+    };
+    {
+      size_t keep = entries_.size();
+      while (keep > 0 && !inside(entries_[keep - 1])) --keep;
+      if (keep != entries_.size()) {
+        note_torn_tail(entries_.size() - keep,
+                       fmt::format("{}: index has {} frames, the data ends inside or before frame "
+                                   "{}",
+                                   entry_.file, entries_.size(), keep));
+        damage_.records -= entries_.size() - keep;
+        entries_.resize(keep);
       }
-      return make_error(ErrorCode::kCorruptData,
-                        "{}: truncated: index has {} frames but data ends {} frame {}", entry_.file,
-                        entries_.size(), e.offset < data_size ? "inside" : "before", k);
     }
 
     // Cheap integrity check of every frame: a JPEG has SOI at the start and EOI at the end, a PNG
-    // its 8-byte signature at the start (its CRCs are checked when it is decoded). In an
-    // incomplete session, broken frames at the very end (a torn tail) are dropped with a warning.
-    if (!raw16) {
-      const auto frame_ok = [&](const Entry& e) {
-        return png16 ? png_signature_ok(e) : jpeg_markers_ok(e);
-      };
-      if (ctx.tolerate_tail) {
-        const size_t before = entries_.size();
-        while (!entries_.empty() && !frame_ok(entries_.back())) entries_.pop_back();
-        if (entries_.size() != before)
-          log::warn("{}: incomplete session: dropping {} torn frame(s) at the end", entry_.file,
-                    before - entries_.size());
-      }
-      for (size_t k = 0; k < entries_.size(); ++k) {
-        const Entry& e = entries_[k];
-        if (frame_ok(e)) continue;
-        if (png16)
-          return make_error(ErrorCode::kCorruptData,
-                            "{}: corrupt: frame {} (offset {}, {} bytes) is not a PNG (no PNG "
-                            "signature)",
-                            entry_.file, k, e.offset, e.size);
-        return make_error(ErrorCode::kCorruptData,
-                          "{}: corrupt: frame {} (offset {}, {} bytes) is not a complete JPEG "
-                          "(no SOI/EOI marker)",
-                          entry_.file, k, e.offset, e.size);
+    // its 8-byte signature at the start (its CRCs are checked when it is decoded). Broken frames
+    // at the very end are a torn tail; in the middle they are skipped and counted.
+    const auto frame_ok = [&](const Entry& e) {
+      if (!inside(e)) return false;
+      if (raw16) return true;
+      return png16 ? png_signature_ok(e) : jpeg_markers_ok(e);
+    };
+    {
+      size_t keep = entries_.size();
+      while (keep > 0 && !frame_ok(entries_[keep - 1])) --keep;
+      if (keep != entries_.size()) {
+        note_torn_tail(entries_.size() - keep,
+                       fmt::format("{}: the last {} frame(s) are incomplete", entry_.file,
+                                   entries_.size() - keep));
+        damage_.records -= entries_.size() - keep;
+        entries_.resize(keep);
       }
     }
-    return ok_status();
+    std::vector<Entry> usable;
+    usable.reserve(entries_.size());
+    for (size_t k = 0; k < entries_.size(); ++k) {
+      const Entry& e = entries_[k];
+      if (frame_ok(e)) {
+        usable.push_back(e);
+        continue;
+      }
+      note_damaged(
+          k, e.stamp_ns,
+          fmt::format("{}: frame {} (offset {}, {} bytes) is {}", entry_.file, k, e.offset, e.size,
+                      !inside(e) ? "outside the data file"
+                      : png16    ? "not a PNG (no PNG signature)"
+                                 : "not a complete JPEG (no SOI/EOI marker)"));
+    }
+    entries_ = std::move(usable);
+
+    // Data the index does not cover (an index cut short in a session marked complete): those
+    // frames would be lost silently. Counted as damaged, estimated from the mean frame size; a
+    // recorder that was killed leaves this normally (its index lags), so only warn then.
+    if (!entries_.empty()) {
+      const Entry& last = entries_.back();
+      const uint64_t covered = last.offset + last.size;
+      const uint64_t mean = std::max<uint64_t>(1, covered / entries_.size());
+      const uint64_t missing = data_size > covered ? (data_size - covered) / mean : 0;
+      if (missing >= 1 && !ctx.tolerate_tail) {
+        damage_.records += missing;
+        note_damaged(entries_.size(), std::nullopt,
+                     fmt::format("{}: about {} frame(s) ({} bytes) after the last indexed frame "
+                                 "are not in {}; `dreamsense check --repair` rebuilds the index",
+                                 entry_.file, missing, data_size - covered, entry_.index));
+        damage_.damaged += missing - 1;
+      } else if (missing >= 1) {
+        log::warn(
+            "{}: incomplete session: about {} frame(s) after the last indexed one are not "
+            "indexed yet",
+            entry_.file, missing);
+      }
+    }
+    return check_damage_limit(ctx.options);
   }
 
   std::optional<int64_t> peek() const override {
@@ -332,6 +447,7 @@ class IndexedReader : public StreamReader {
   }
 
   Result<FramePtr> read() override;
+  uint64_t last_read_index() const override { return next_ == 0 ? 0 : next_ - 1; }
 
   size_t frame_count() const { return entries_.size(); }
   int64_t stamp_of(size_t k) const { return entries_[k].stamp_ns; }
@@ -368,7 +484,12 @@ class IndexedReader : public StreamReader {
     }
     if (entry_.encoding == "png16") return decode_png16(k, e, stamp, buffer);
     cv::Mat image;
-    if (!decode_jpeg_direct(buffer, &image)) {
+    const JpegDecode direct = decode_jpeg_direct(buffer, &image);
+    if (direct == JpegDecode::kDamaged)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: corrupt: frame {} (offset {}) holds corrupt JPEG data", entry_.file, k,
+                        e.offset);
+    if (direct == JpegDecode::kNotHandled) {
       try {
         image = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
       } catch (const cv::Exception&) {
@@ -646,6 +767,7 @@ class VideoReader : public StreamReader {
     if (stamps_.empty()) return std::nullopt;
     return stamps_.back();
   }
+  uint64_t last_read_index() const override { return next_ == 0 ? 0 : next_ - 1; }
   Result<FramePtr> read() override {
     const size_t k = next_++;
     cv::Mat image;
@@ -682,20 +804,29 @@ class SkeletonReader : public StreamReader {
     auto text = read_text(ctx, entry_.file);
     if (!text) return tl::unexpected(text.error());
     for (const Line& l : split_lines(*text)) {
-      if (trim(l.text).empty()) continue;
-      if (!l.terminated && ctx.tolerate_tail) {
-        log::warn("{}: line {}: ignoring the partial last line (incomplete session)", entry_.file,
-                  l.number);
-        break;
+      if (trim(l.text).empty()) {
+        damage_.empty_lines++;
+        continue;
       }
       auto frame = parse_line(l);
-      if (!frame) return tl::unexpected(frame.error());
-      if (!frames_.empty() && (*frame)->stamp <= frames_.back()->stamp)
-        return make_error(ErrorCode::kCorruptData, "{}: line {}: stamp {} not after previous {}",
-                          entry_.file, l.number, (*frame)->stamp.ns(), frames_.back()->stamp.ns());
+      if (!frame && !l.terminated) {  // the recorder died while writing the last line
+        note_torn_tail(1, fmt::format("line {}: {}", l.number, frame.error().message));
+        break;
+      }
+      damage_.records++;
+      if (!frame) {
+        note_damaged(static_cast<uint64_t>(l.number), std::nullopt, frame.error().message);
+        continue;
+      }
+      if (!frames_.empty() && (*frame)->stamp <= frames_.back()->stamp) {
+        note_damaged(static_cast<uint64_t>(l.number), (*frame)->stamp.ns(),
+                     fmt::format("{}: line {}: stamp {} not after previous {}", entry_.file,
+                                 l.number, (*frame)->stamp.ns(), frames_.back()->stamp.ns()));
+        continue;
+      }
       frames_.push_back(std::move(*frame));
     }
-    return ok_status();
+    return check_damage_limit(ctx.options);
   }
   std::optional<int64_t> peek() const override {
     if (next_ >= frames_.size()) return std::nullopt;
@@ -756,9 +887,19 @@ class SkeletonReader : public StreamReader {
                 !std::all_of(v.begin(), v.end(), [](const auto& x) { return x.is_number(); }))
               return bad(
                   fmt::format("bodies[{}].joints.{}: expected [x, y, z, confidence]", b, name));
+            // Plausible (docs/session_format.md): finite, within 100 m of the sensor,
+            // confidence in [0, 1].
+            const cv::Vec3d p(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+            const double c = v.size() == 4 ? v[3].get<double>() : 1.0;
+            if (!cv::checkRange(p, true, nullptr, -kMaxJointDistanceM, kMaxJointDistanceM) ||
+                !std::isfinite(c) || c < 0 || c > 1)
+              return bad(
+                  fmt::format("bodies[{}].joints.{}: implausible value (position within "
+                              "{} m, confidence in [0, 1])",
+                              b, name, kMaxJointDistanceM));
             JointObservation& o = body.joint(*id);
-            o.position_m = {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
-            o.confidence = v.size() == 4 ? v[3].get<float>() : 1.f;
+            o.position_m = p;
+            o.confidence = static_cast<float>(c);
           }
         }
         sk.bodies.push_back(body);
@@ -821,19 +962,22 @@ class WavReader : public StreamReader {
       const int64_t frame_bytes = static_cast<int64_t>(info.channels) *
                                   ((info.format & SF_FORMAT_SUBMASK) == SF_FORMAT_PCM_16 ? 2 : 0);
       if (frame_bytes > 0 && *declared / frame_bytes > info.frames) {
-        if (!ctx.tolerate_tail)
-          return make_error(ErrorCode::kCorruptData,
-                            "{}: truncated: header declares {} samples but the data holds {}",
-                            entry_.file, *declared / frame_bytes, info.frames);
-        log::warn("{}: incomplete session: header declares {} samples, data holds {}; reading {}",
-                  entry_.file, *declared / frame_bytes, info.frames, info.frames);
+        const int64_t chunk =
+            std::max<int64_t>(1, ctx.options.audio_chunk.ns() * entry_.sample_rate / 1000000000LL);
+        const int64_t lost = *declared / frame_bytes - info.frames;
+        note_torn_tail(static_cast<uint64_t>((lost + chunk - 1) / chunk),
+                       fmt::format("{}: header declares {} samples, the data holds {} ({:.2f} s "
+                                   "cut)",
+                                   entry_.file, *declared / frame_bytes, info.frames,
+                                   static_cast<double>(lost) / entry_.sample_rate));
       }
     }
     pcm16_ = (info.format & SF_FORMAT_SUBMASK) == SF_FORMAT_PCM_16;
     if (!pcm16_) sf_command(file_, SFC_SET_NORM_FLOAT, nullptr, SF_TRUE);
     total_ = info.frames;
     chunk_ = std::max<int64_t>(1, ctx.options.audio_chunk.ns() * entry_.sample_rate / 1000000000LL);
-    return ok_status();
+    damage_.records = static_cast<uint64_t>((total_ + chunk_ - 1) / chunk_);
+    return check_damage_limit(ctx.options);
   }
   std::optional<int64_t> peek() const override {
     if (pos_ >= total_) return std::nullopt;
@@ -901,6 +1045,9 @@ Status SessionReaderOptions::check() const {
                               decode_threads));
   if (read_ahead_frames < 1)
     bad.push_back(fmt::format("read_ahead_frames must be >= 1, got {}", read_ahead_frames));
+  if (!(max_damaged_fraction >= 0 && max_damaged_fraction <= 1))
+    bad.push_back(
+        fmt::format("max_damaged_fraction must be in [0, 1], got {}", max_damaged_fraction));
   if (bad.empty()) return ok_status();
   std::string msg = "SessionReaderOptions: ";
   for (size_t i = 0; i < bad.size(); ++i) msg += (i ? "; " : "") + bad[i];
@@ -981,6 +1128,8 @@ Result<std::unique_ptr<SessionReader>> SessionReader::open(const std::filesystem
     else
       return make_error(ErrorCode::kUnsupported, "{}: stream {}: unknown encoding '{}'",
                         kManifestName, s.id, s.encoding);
+    r->set_log_damage(options.log_damage);
+    r->set_torn_tail_counts(m.complete);
     if (auto st = r->open(ctx); !st) return tl::unexpected(st.error());
     impl.streams.push_back(std::move(r));
   }
@@ -1044,20 +1193,32 @@ Result<std::unique_ptr<SessionReader>> SessionReader::open(const std::filesystem
   return reader;
 }
 
+std::vector<StreamDamage> SessionReader::damage() const {
+  std::vector<StreamDamage> out;
+  for (const auto& r : impl_->streams) out.push_back(r->damage());
+  return out;
+}
+
 Result<FramePtr> SessionReader::next() {
-  StreamReader* best = nullptr;
-  int64_t best_stamp = 0;
-  for (auto& r : impl_->streams) {
-    auto s = r->peek();
-    if (!s) continue;
-    if (best == nullptr || *s < best_stamp) {  // ties: the earlier stream in the manifest
-      best = r.get();
-      best_stamp = *s;
+  for (;;) {
+    StreamReader* best = nullptr;
+    int64_t best_stamp = 0;
+    for (auto& r : impl_->streams) {
+      auto s = r->peek();
+      if (!s) continue;
+      if (best == nullptr || *s < best_stamp) {  // ties: the earlier stream in the manifest
+        best = r.get();
+        best_stamp = *s;
+      }
     }
+    if (best == nullptr)
+      return make_error(ErrorCode::kEndOfStream, "{}: end of session", impl_->dir.string());
+    Result<FramePtr> frame = best->read();
+    if (frame || frame.error().code != ErrorCode::kCorruptData) return frame;
+    // A frame that does not decode costs that frame: skipped, counted, reported.
+    best->note_damaged(best->last_read_index(), best_stamp, frame.error().message, true);
+    if (auto st = best->check_damage_limit(impl_->options); !st) return tl::unexpected(st.error());
   }
-  if (best == nullptr)
-    return make_error(ErrorCode::kEndOfStream, "{}: end of session", impl_->dir.string());
-  return best->read();
 }
 
 }  // namespace dreamsense::sources

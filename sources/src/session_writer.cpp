@@ -312,21 +312,51 @@ class WavWriter : public StreamWriter {
       start_ns_ = frame.stamp.ns();
       if (auto st = on_start_(start_ns_); !st) return st;
     } else {
+    }
+    // Devices do not always deliver contiguous chunks (ALSA xruns, the `null` device): the WAV
+    // must stay on the session clock, so a gap is filled with silence and an overlap is cut, both
+    // counted (gap_samples/overlap_samples, logged); only an absurd jump is an error.
+    size_t skip = 0;  // leading samples per channel already covered by earlier chunks
+    if (frames_written_ > 0) {
       const int64_t expected = stamp_of(frames_written_);
       const int64_t sample_ns = 1000000000LL / entry_.sample_rate + 1;
-      if (std::llabs(frame.stamp.ns() - expected) > sample_ns)
+      const int64_t offset_ns = frame.stamp.ns() - expected;
+      const int64_t offset =
+          std::llround(static_cast<double>(offset_ns) * 1e-9 * entry_.sample_rate);
+      if (std::llabs(offset_ns) > kMaxAudioJumpS * 1000000000LL)
         return make_error(ErrorCode::kInvalidArgument,
-                          "stream {}: chunk stamp {} is not contiguous (expected {} after {} "
-                          "samples; gaps and overlaps are not allowed)",
-                          entry_.id, frame.stamp.ns(), expected, frames_written_);
+                          "stream {}: chunk stamp {} is {:.1f} s from the expected {} (more than "
+                          "{} s: not the same clock)",
+                          entry_.id, frame.stamp.ns(), offset_ns * 1e-9, expected, kMaxAudioJumpS);
+      if (offset > 0 && std::llabs(offset_ns) > sample_ns) {
+        if (gap_samples_ == 0)
+          log::warn("stream {}: audio gap of {} samples at {} filled with silence (counted)",
+                    entry_.id, offset, frame.stamp.to_string());
+        shorts_.assign(static_cast<size_t>(offset * entry_.channels), 0);
+        if (sf_writef_short(file_, shorts_.data(), offset) != offset)
+          return make_error(ErrorCode::kIoError, "{}: write failed: {}", entry_.file,
+                            sf_strerror(file_));
+        frames_written_ += offset;
+        gap_samples_ += offset;
+      } else if (offset < 0 && std::llabs(offset_ns) > sample_ns) {
+        skip = static_cast<size_t>(std::min<int64_t>(-offset, a->frames()));
+        if (overlap_samples_ == 0)
+          log::warn(
+              "stream {}: audio chunk at {} overlaps the previous one by {} samples (cut, "
+              "counted)",
+              entry_.id, frame.stamp.to_string(), -offset);
+        overlap_samples_ += static_cast<int64_t>(skip);
+        if (static_cast<int64_t>(skip) == a->frames()) return ok_status();
+      }
     }
     last_stamp_ = frame.stamp;
-    shorts_.resize(a->samples.size());
+    const size_t first = skip * static_cast<size_t>(a->channels);
+    shorts_.resize(a->samples.size() - first);
     for (size_t i = 0; i < shorts_.size(); ++i) {
-      const float v = std::clamp(a->samples[i], -1.f, 1.f);
+      const float v = std::clamp(a->samples[first + i], -1.f, 1.f);
       shorts_[i] = static_cast<int16_t>(std::lrint(v * 32767.f));
     }
-    const sf_count_t n = static_cast<sf_count_t>(a->frames());
+    const sf_count_t n = static_cast<sf_count_t>(a->frames() - skip);
     if (sf_writef_short(file_, shorts_.data(), n) != n)
       return make_error(ErrorCode::kIoError, "{}: write failed: {}", entry_.file,
                         sf_strerror(file_));
@@ -353,9 +383,11 @@ class WavWriter : public StreamWriter {
     const int64_t sr = entry_.sample_rate;
     return start_ns_ + (sample / sr) * 1000000000LL + (sample % sr) * 1000000000LL / sr;
   }
+  static constexpr int64_t kMaxAudioJumpS = 60;
   std::function<Status(int64_t)> on_start_;
   SNDFILE* file_ = nullptr;
   int64_t frames_written_ = 0;
+  int64_t gap_samples_ = 0, overlap_samples_ = 0;
   int64_t start_ns_ = 0;
   std::vector<int16_t> shorts_;
 };
@@ -478,7 +510,9 @@ Status SessionWriter::write(const SensorFrame& frame) {
                       frame.sensor);
   if (auto st = s->write(frame); !st) return st;
   if (!impl.last_flush.is_set()) {
-    impl.last_flush = frame.stamp;
+    // The first flush comes 0.25 s after the first frame, so a recording killed in its first
+    // second still reads back; then one every flush_interval.
+    impl.last_flush = frame.stamp - impl.options.flush_interval + Duration::from_ms(250);
   } else if (frame.stamp >= impl.last_flush + impl.options.flush_interval) {
     if (auto st = flush(); !st) return st;
     impl.last_flush = frame.stamp;

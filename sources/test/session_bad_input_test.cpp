@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <sndfile.h>
 
+#include <algorithm>
 #include <fstream>
 #include <vector>
 
@@ -36,6 +37,7 @@ class SessionBadInput : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
+#define EXPECT_TEXT_HAS(str, text) EXPECT_NE((str).find(text), std::string::npos) << (str)
 #define EXPECT_MESSAGE_HAS(error, text) \
   EXPECT_NE((error).message.find(text), std::string::npos) << (error).message
 
@@ -89,6 +91,15 @@ TEST_F(SessionBadInput, InvalidYaml) {
   EXPECT_MESSAGE_HAS(e, "session.yaml: line");
 }
 
+TEST_F(SessionBadInput, TextThatIsNotUtf8) {
+  // A Latin-1 name (0xE9): JSON outputs need UTF-8, so it is refused before any analysis.
+  replace_in_file(dir_ / kManifestName, "name: ", "name: Z\xE9 ");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "session.yaml: line");
+  EXPECT_MESSAGE_HAS(e, "not valid UTF-8");
+}
+
 TEST_F(SessionBadInput, MissingRequiredKey) {
   replace_in_file(dir_ / kManifestName, "    encoding: raw16\n", "");
   const Error e = open_error();
@@ -131,24 +142,50 @@ TEST_F(SessionBadInput, UnknownStreamInOnly) {
   EXPECT_MESSAGE_HAS(e, "no stream 'camera_left'");
 }
 
-TEST_F(SessionBadInput, TruncatedMjpegData) {
+// ---- Damage policy (docs/session_format.md "Damaged recordings"): a torn tail is dropped, a
+// damaged record in the middle is skipped and counted, too much damage is an error.
+
+// Opens the session (failing the test if it does not) and reads every frame of `stream`.
+struct ReadBack {
+  std::vector<int64_t> stamps;
+  StreamDamage damage;
+};
+ReadBack read_stream(const std::filesystem::path& dir, const SensorId& stream,
+                     SessionReaderOptions options = {}) {
+  options.only = {stream};
+  ReadBack out;
+  auto reader = SessionReader::open(dir, options);
+  if (!reader) {
+    ADD_FAILURE() << reader.error().message;
+    return out;
+  }
+  for (auto f = (*reader)->next(); f; f = (*reader)->next()) out.stamps.push_back((*f)->stamp.ns());
+  out.damage = (*reader)->damage().at(0);
+  return out;
+}
+
+TEST_F(SessionBadInput, TruncatedMjpegDataIsATornTail) {
   const auto path = dir_ / "cam.mjpg";
-  const auto size = std::filesystem::file_size(path);
-  std::filesystem::resize_file(path, size / 2);
-  const Error e = open_error();
-  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "cam.mjpg: truncated: index has 10 frames but data ends inside frame");
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) / 2);
+  // Half the frames of a session marked complete: lost data beyond the 20 % threshold.
+  EXPECT_MESSAGE_HAS(open_error(), "cam.mjpg: ");
+  EXPECT_MESSAGE_HAS(open_error(), "torn at the end; --allow-damaged");
+  // Marked incomplete (a crash), the torn tail is what a crash leaves: read what is there.
+  replace_in_file(dir_ / kManifestName, "complete: true", "complete: false");
+  const ReadBack r = read_stream(dir_, "cam");
+  EXPECT_GT(r.damage.torn_tail, 0u);
+  EXPECT_EQ(r.damage.damaged, 0u);
+  EXPECT_EQ(r.stamps.size() + r.damage.torn_tail, 10u);  // nothing else lost
 }
 
-TEST_F(SessionBadInput, TruncatedDepthData) {
-  const auto path = dir_ / "depth.depth";
-  std::filesystem::resize_file(path, 3 * kWidth * kHeight * 2);
-  const Error e = open_error();
-  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "depth.depth: truncated: index has 10 frames but data ends before frame 3");
+TEST_F(SessionBadInput, TruncatedDepthDataIsATornTail) {
+  std::filesystem::resize_file(dir_ / "depth.depth", 3 * kWidth * kHeight * 2);
+  const ReadBack r = read_stream(dir_, "depth", {.allow_damaged = true});
+  EXPECT_EQ(r.stamps.size(), 3u);
+  EXPECT_EQ(r.damage.torn_tail, 7u);
 }
 
-TEST_F(SessionBadInput, CorruptJpegBytes) {
+TEST_F(SessionBadInput, CorruptJpegBytesCostThatFrame) {
   // Frame 3 keeps its SOI/EOI markers but everything between is zeros: fails to decode.
   const std::string idx = read_file(dir_ / "cam.idx");
   size_t line_start = 0;
@@ -164,26 +201,54 @@ TEST_F(SessionBadInput, CorruptJpegBytes) {
     const std::string zeros(size - 4, '\0');
     f.write(zeros.data(), static_cast<std::streamsize>(zeros.size()));
   }
-  auto reader = SessionReader::open(dir_, {.only = {"cam"}});
-  ASSERT_TRUE(reader) << reader.error().message;
-  for (int k = 0; k < 3; ++k) ASSERT_TRUE((*reader)->next());
-  auto bad = (*reader)->next();
-  ASSERT_FALSE(bad);
-  EXPECT_EQ(bad.error().code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(bad.error(), "cam.mjpg: corrupt: frame 3");
-  // The reader goes on after a bad frame.
-  EXPECT_TRUE((*reader)->next());
+  const ReadBack r = read_stream(dir_, "cam");
+  ASSERT_EQ(r.stamps.size(), 9u);
+  EXPECT_EQ(std::count(r.stamps.begin(), r.stamps.end(), static_cast<int64_t>(stamp)), 0);
+  EXPECT_EQ(r.damage.damaged, 1u);
+  ASSERT_EQ(r.damage.first.size(), 1u);
+  EXPECT_EQ(r.damage.first[0].record, 3u);
+  EXPECT_EQ(r.damage.first[0].stamp_ns, static_cast<int64_t>(stamp));
+  EXPECT_TEXT_HAS(r.damage.first[0].what, "cam.mjpg: corrupt: frame 3");
 }
 
-TEST_F(SessionBadInput, CorruptJpegMarker) {
-  // Overwrite the first bytes of frame 0: no SOI marker, caught at open.
+TEST_F(SessionBadInput, CorruptJpegMarkerCostsThatFrame) {
+  // Overwrite the first bytes of frame 0: no SOI marker, found at open.
   {
     std::fstream f(dir_ / "cam.mjpg", std::ios::in | std::ios::out | std::ios::binary);
     f.write("\0\0\0\0", 4);
   }
+  const ReadBack r = read_stream(dir_, "cam");
+  EXPECT_EQ(r.stamps.size(), 9u);
+  EXPECT_EQ(r.damage.damaged, 1u);
+  ASSERT_FALSE(r.damage.first.empty());
+  EXPECT_TEXT_HAS(r.damage.first[0].what, "not a complete JPEG");
+}
+
+TEST_F(SessionBadInput, TooMuchDamageIsAnErrorUnlessAllowed) {
+  // Three of ten frames without markers: more than 20 %.
+  const std::string idx = read_file(dir_ / "cam.idx");
+  std::vector<unsigned long long> offsets;
+  size_t pos = idx.find('\n') + 1;
+  for (int k = 0; k < 10; ++k, pos = idx.find('\n', pos) + 1) {
+    unsigned long long seq = 0, stamp = 0, offset = 0, size = 0;
+    ASSERT_EQ(std::sscanf(idx.c_str() + pos, "%llu,%llu,%llu,%llu", &seq, &stamp, &offset, &size),
+              4);
+    offsets.push_back(offset);
+  }
+  {
+    std::fstream f(dir_ / "cam.mjpg", std::ios::in | std::ios::out | std::ios::binary);
+    for (int k : {2, 4, 6}) {
+      f.seekp(static_cast<std::streamoff>(offsets[static_cast<size_t>(k)]));
+      f.write("\0\0", 2);
+    }
+  }
   const Error e = open_error();
   EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "cam.mjpg: corrupt: frame 0");
+  EXPECT_MESSAGE_HAS(e, "cam.mjpg: 3 of 10 records damaged");
+  EXPECT_MESSAGE_HAS(e, "--allow-damaged");
+  const ReadBack r = read_stream(dir_, "cam", {.allow_damaged = true});
+  EXPECT_EQ(r.stamps.size(), 7u);
+  EXPECT_EQ(r.damage.damaged, 3u);
 }
 
 TEST_F(SessionBadInput, UnreadableWav) {
@@ -193,20 +258,16 @@ TEST_F(SessionBadInput, UnreadableWav) {
   EXPECT_MESSAGE_HAS(e, "mic.wav: unreadable: ");
 }
 
-TEST_F(SessionBadInput, TruncatedWav) {
+TEST_F(SessionBadInput, TruncatedWavIsATornTail) {
   const auto path = dir_ / "mic.wav";
   std::filesystem::resize_file(path, std::filesystem::file_size(path) - 1000);
-  const Error e = open_error();
-  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "mic.wav: truncated: header declares 6400 samples");
-  // In an incomplete session, what is there is read.
-  replace_in_file(dir_ / kManifestName, "complete: true", "complete: false");
   auto reader = SessionReader::open(dir_, {.only = {"mic"}});
   ASSERT_TRUE(reader) << reader.error().message;
   int64_t samples = 0;
   for (auto f = (*reader)->next(); f; f = (*reader)->next())
     samples += (*f)->as<AudioChunk>()->frames();
   EXPECT_EQ(samples, 6400 - 250);
+  EXPECT_GE((*reader)->damage().at(0).torn_tail, 1u);
 }
 
 void write_wav(const std::filesystem::path& path, int rate, int channels) {
@@ -235,32 +296,90 @@ TEST_F(SessionBadInput, WrongChannelCountWav) {
   EXPECT_MESSAGE_HAS(e, "mic.wav: 4 channels, session.yaml declares 2");
 }
 
-TEST_F(SessionBadInput, NonIncreasingStampsInIndex) {
+TEST_F(SessionBadInput, NonIncreasingStampInIndexCostsThatFrame) {
   // Frame 2 (line 4, after the header line) goes back in time.
   replace_in_file(dir_ / "cam.idx", "2,80000000,", "2,30000000,");
-  const Error e = open_error();
-  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "cam.idx: line 4: stamp 30000000 not after previous 40000000");
+  const ReadBack r = read_stream(dir_, "cam");
+  EXPECT_EQ(r.stamps.size(), 9u);
+  EXPECT_EQ(r.damage.damaged, 1u);
+  ASSERT_FALSE(r.damage.first.empty());
+  EXPECT_TEXT_HAS(r.damage.first[0].what,
+                  "cam.idx: line 4: stamp 30000000 not after previous 40000000");
 }
 
-TEST_F(SessionBadInput, MalformedIndexLine) {
+TEST_F(SessionBadInput, MalformedIndexLineCostsThatFrame) {
   replace_in_file(dir_ / "depth.idx", "\n5,", "\n5;");
-  const Error e = open_error();
-  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "depth.idx: line 7: malformed index line");
+  const ReadBack r = read_stream(dir_, "depth");
+  EXPECT_EQ(r.stamps.size(), 9u);
+  EXPECT_EQ(r.damage.damaged, 1u);
+  ASSERT_FALSE(r.damage.first.empty());
+  EXPECT_EQ(r.damage.first[0].record, 7u);  // the line
+  EXPECT_TEXT_HAS(r.damage.first[0].what, "depth.idx: line 7: malformed index line");
 }
 
-TEST_F(SessionBadInput, MalformedSkeletonLine) {
+TEST_F(SessionBadInput, IndexCutShortInACompleteSessionIsReported) {
+  // Keep the header and 4 of 10 index lines: the data of 6 frames is no longer indexed.
+  const std::string idx = read_file(dir_ / "cam.idx");
+  size_t pos = 0;
+  for (int k = 0; k < 5; ++k) pos = idx.find('\n', pos) + 1;
+  write_file(dir_ / "cam.idx", idx.substr(0, pos));
+  const ReadBack r = read_stream(dir_, "cam", {.allow_damaged = true});
+  EXPECT_EQ(r.stamps.size(), 4u);
+  EXPECT_NEAR(static_cast<double>(r.damage.damaged), 6.0, 1.0);  // estimated from frame sizes
+  ASSERT_FALSE(r.damage.first.empty());
+  EXPECT_TEXT_HAS(r.damage.first[0].what, "not in cam.idx");
+  EXPECT_MESSAGE_HAS(open_error(), "records damaged");  // > 20 %: not analysed silently
+}
+
+TEST_F(SessionBadInput, MalformedSkeletonLineCostsThatRecord) {
   replace_in_file(dir_ / "skel.jsonl", "{\"stamp_ns\":120000000", "{\"stamp_ns\":120000000,,");
-  const Error e = open_error();
-  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "skel.jsonl: line 4: malformed JSON");
+  const ReadBack r = read_stream(dir_, "skel");
+  EXPECT_EQ(r.stamps.size(), 9u);
+  EXPECT_EQ(r.damage.damaged, 1u);
+  ASSERT_FALSE(r.damage.first.empty());
+  EXPECT_EQ(r.damage.first[0].record, 4u);
+  EXPECT_TEXT_HAS(r.damage.first[0].what, "skel.jsonl: line 4: malformed JSON");
 }
 
-TEST_F(SessionBadInput, UnknownSkeletonJoint) {
+TEST_F(SessionBadInput, CutLastSkeletonLineIsATornTailEvenInACompleteSession) {
+  std::string text = read_file(dir_ / "skel.jsonl");
+  text.resize(text.size() - 10);  // the recorder died in the middle of the last line
+  write_file(dir_ / "skel.jsonl", text);
+  const ReadBack r = read_stream(dir_, "skel");
+  EXPECT_EQ(r.stamps.size(), 9u);
+  EXPECT_EQ(r.damage.torn_tail, 1u);
+  EXPECT_EQ(r.damage.damaged, 0u);
+}
+
+TEST_F(SessionBadInput, ImplausibleJointsAndEmptyLinesAreCounted) {
+  replace_in_file(dir_ / "skel.jsonl", "{\"stamp_ns\":120000000", "\n{\"stamp_ns\":120000000");
+  std::string text = read_file(dir_ / "skel.jsonl");
+  const auto head = text.find("\"head\":[");
+  ASSERT_NE(head, std::string::npos);
+  const auto comma = text.find(',', head + 8);
+  text.replace(head + 8, comma - (head + 8), "1e308");  // x of the head: 1e308 m
+  write_file(dir_ / "skel.jsonl", text);
+  const ReadBack r = read_stream(dir_, "skel", {.allow_damaged = true});
+  EXPECT_EQ(r.damage.empty_lines, 1u);
+  EXPECT_EQ(r.damage.damaged, 1u);
+  EXPECT_EQ(r.stamps.size(), 9u);
+}
+
+TEST_F(SessionBadInput, UnknownSkeletonJointCostsThatRecord) {
   replace_in_file(dir_ / "skel.jsonl", "\"head\"", "\"tail\"");
+  const ReadBack r = read_stream(dir_, "skel", {.allow_damaged = true});
+  ASSERT_FALSE(r.damage.first.empty());
+  EXPECT_TEXT_HAS(r.damage.first[0].what, "skel.jsonl: line 1: bodies[0]: unknown joint 'tail'");
+}
+
+TEST_F(SessionBadInput, LinksOutOfTheSessionAreRefused) {
+  TempDir outside;
+  std::filesystem::rename(dir_ / "skel.jsonl", outside.path() / "skel.jsonl");
+  std::filesystem::create_symlink(outside.path() / "skel.jsonl", dir_ / "skel.jsonl");
   const Error e = open_error();
-  EXPECT_MESSAGE_HAS(e, "skel.jsonl: line 1: bodies[0]: unknown joint 'tail'");
+  EXPECT_EQ(e.code, ErrorCode::kInvalidArgument);
+  EXPECT_MESSAGE_HAS(e, "skel.jsonl: is a link to a file outside the session folder");
+  EXPECT_TRUE(SessionReader::open(dir_, {.follow_links_outside = true}));
 }
 
 TEST_F(SessionBadInput, ClockMismatch) {

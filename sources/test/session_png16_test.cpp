@@ -23,6 +23,7 @@ namespace {
 
 using namespace test_util;
 
+#define EXPECT_TEXT_HAS(str, text) EXPECT_NE((str).find(text), std::string::npos) << (str)
 #define EXPECT_MESSAGE_HAS(error, text) \
   EXPECT_NE((error).message.find(text), std::string::npos) << (error).message
 
@@ -262,79 +263,92 @@ class Png16BadInput : public ::testing::Test {
   std::vector<IndexLine> index_;
 };
 
-TEST_F(Png16BadInput, TruncatedData) {
-  // Cut inside frame 6.
+// Reads the depth stream: the frames' indices (by content) and what the damage policy skipped.
+struct DepthReadBack {
+  std::vector<int> frames;  // k of depth_frame(k) for every frame returned
+  StreamDamage damage;
+};
+DepthReadBack read_depth(const std::filesystem::path& dir, SessionReaderOptions o = {}) {
+  o.only = {"depth"};
+  DepthReadBack out;
+  auto reader = SessionReader::open(dir, o);
+  if (!reader) {
+    ADD_FAILURE() << reader.error().message;
+    return out;
+  }
+  for (auto f = (*reader)->next(); f; f = (*reader)->next()) {
+    int match = -1;
+    for (int k = 0; k < 10 && match < 0; ++k)
+      if (max_abs_diff((*f)->as<DepthImage>()->depth_mm, depth_frame(k)) == 0.0) match = k;
+    out.frames.push_back(match);
+  }
+  out.damage = (*reader)->damage().at(0);
+  return out;
+}
+
+TEST_F(Png16BadInput, TruncatedDataIsATornTail) {
+  // Cut inside frame 6: frames 0-5 read bit-exact, 4 torn.
   std::filesystem::resize_file(dir_ / "depth.depth", index_[6].offset + index_[6].size / 2);
-  const Error e = open_error();
-  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "depth.depth: truncated: index has 10 frames but data ends inside frame 6");
-  // Cut exactly at the end of frame 3: the data ends before frame 4.
+  EXPECT_MESSAGE_HAS(open_error(), "depth.depth: 4 of 10 records damaged");  // marked complete
+  DepthReadBack r = read_depth(dir_, {.allow_damaged = true});
+  EXPECT_EQ(r.frames, (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(r.damage.torn_tail, 4u);
+  EXPECT_EQ(r.damage.damaged, 0u);
+  // Cut exactly at the end of frame 3, in an incomplete session: the same rule.
   std::filesystem::resize_file(dir_ / "depth.depth", index_[3].offset + index_[3].size);
-  EXPECT_MESSAGE_HAS(open_error(),
-                     "depth.depth: truncated: index has 10 frames but data ends before frame 4");
-  // In an incomplete session the frames before the cut are read (bit-exact), with a warning.
   replace_in_file(dir_ / kManifestName, "complete: true", "complete: false");
   EXPECT_MESSAGE_HAS(open_error({.allow_incomplete = false}), "session.yaml: incomplete session");
-  auto reader = SessionReader::open(dir_, {.only = {"depth"}});
-  ASSERT_TRUE(reader) << reader.error().message;
-  int k = 0;
-  for (auto f = (*reader)->next(); f; f = (*reader)->next(), ++k)
-    EXPECT_EQ(max_abs_diff((*f)->as<DepthImage>()->depth_mm, depth_frame(k)), 0.0);
-  EXPECT_EQ(k, 4);
+  r = read_depth(dir_);
+  EXPECT_EQ(r.frames, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(r.damage.torn_tail, 6u);
 }
 
-TEST_F(Png16BadInput, EmptyDataFile) {
+TEST_F(Png16BadInput, EmptyDataFileIsAllTorn) {
   std::filesystem::resize_file(dir_ / "depth.depth", 0);
-  EXPECT_MESSAGE_HAS(open_error(),
-                     "depth.depth: truncated: index has 10 frames but data ends before frame 0");
+  const DepthReadBack r = read_depth(dir_, {.allow_damaged = true});
+  EXPECT_TRUE(r.frames.empty());
+  EXPECT_EQ(r.damage.torn_tail, 10u);
 }
 
-TEST_F(Png16BadInput, CorruptFrameBytes) {
+TEST_F(Png16BadInput, CorruptFrameBytesCostThatFrame) {
   // Frame 3 keeps its signature but the rest is zeros: found when decoding, not at open.
   overwrite(index_[3].offset + 8, std::string(index_[3].size - 8, '\0'));
-  auto reader = SessionReader::open(dir_, {.only = {"depth"}});
-  ASSERT_TRUE(reader) << reader.error().message;
-  for (int k = 0; k < 3; ++k) ASSERT_TRUE((*reader)->next());
-  auto bad = (*reader)->next();
-  ASSERT_FALSE(bad);
-  EXPECT_EQ(bad.error().code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(bad.error(), "depth.depth: corrupt: frame 3 (offset " +
-                                      std::to_string(index_[3].offset) + ") does not decode");
-  EXPECT_EQ(bad.error().message.find('\n'), std::string::npos);
-  // The reader goes on after a bad frame.
-  auto next = (*reader)->next();
-  ASSERT_TRUE(next) << next.error().message;
-  EXPECT_EQ(max_abs_diff((*next)->as<DepthImage>()->depth_mm, depth_frame(4)), 0.0);
+  const DepthReadBack r = read_depth(dir_);
+  EXPECT_EQ(r.frames, (std::vector<int>{0, 1, 2, 4, 5, 6, 7, 8, 9}));
+  ASSERT_EQ(r.damage.damaged, 1u);
+  EXPECT_TEXT_HAS(r.damage.first[0].what, "depth.depth: corrupt: frame 3 (offset " +
+                                              std::to_string(index_[3].offset) +
+                                              ") does not decode");
 }
 
-TEST_F(Png16BadInput, FlippedBitInPixelData) {
+TEST_F(Png16BadInput, FlippedBitInPixelDataCostsThatFrame) {
   // One flipped bit in the middle of frame 5's compressed data: the chunk CRC catches it.
   std::string data = read_file(dir_ / "depth.depth");
   const uint64_t pos = index_[5].offset + index_[5].size / 2;
   overwrite(pos, std::string(1, static_cast<char>(data[pos] ^ 0x10)));
-  auto reader = SessionReader::open(dir_, {.only = {"depth"}});
-  ASSERT_TRUE(reader) << reader.error().message;
-  for (int k = 0; k < 5; ++k) ASSERT_TRUE((*reader)->next());
-  auto bad = (*reader)->next();
-  ASSERT_FALSE(bad);
-  EXPECT_EQ(bad.error().code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(bad.error(), "depth.depth: corrupt: frame 5");
+  const DepthReadBack r = read_depth(dir_);
+  EXPECT_EQ(r.frames, (std::vector<int>{0, 1, 2, 3, 4, 6, 7, 8, 9}));
+  ASSERT_EQ(r.damage.damaged, 1u);
+  EXPECT_TEXT_HAS(r.damage.first[0].what, "depth.depth: corrupt: frame 5");
 }
 
-TEST_F(Png16BadInput, MissingSignature) {
+TEST_F(Png16BadInput, MissingSignatureCostsThatFrame) {
   overwrite(index_[2].offset, std::string(4, '\0'));
-  const Error e = open_error();
-  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(e, "depth.depth: corrupt: frame 2 (offset " +
-                            std::to_string(index_[2].offset) + ", " +
-                            std::to_string(index_[2].size) + " bytes) is not a PNG");
+  const DepthReadBack r = read_depth(dir_);
+  EXPECT_EQ(r.frames, (std::vector<int>{0, 1, 3, 4, 5, 6, 7, 8, 9}));
+  ASSERT_EQ(r.damage.damaged, 1u);
+  EXPECT_TEXT_HAS(r.damage.first[0].what,
+                  "depth.depth: frame 2 (offset " + std::to_string(index_[2].offset) + ", " +
+                      std::to_string(index_[2].size) + " bytes) is not a PNG");
 }
 
-TEST_F(Png16BadInput, IndexOffsetNotAtAFrame) {
+TEST_F(Png16BadInput, IndexOffsetNotAtAFrameCostsThatFrame) {
   // An index line that points into the middle of a frame: no signature there.
   replace_in_file(dir_ / "depth.idx", "," + std::to_string(index_[7].offset) + ",",
                   "," + std::to_string(index_[7].offset + 1) + ",");
-  EXPECT_MESSAGE_HAS(open_error(), "depth.depth: corrupt: frame 7");
+  const DepthReadBack r = read_depth(dir_);
+  EXPECT_EQ(r.damage.damaged, 1u);
+  EXPECT_EQ(r.frames.size(), 9u);
 }
 
 // Valid PNGs that are not what the manifest declares: 8-bit, or the wrong size.
@@ -357,20 +371,18 @@ TEST(Png16WrongImage, WrongTypeOrSizeIsCorruptData) {
   }
   write_file(tmp.path() / "depth.depth", data);
   write_file(tmp.path() / "depth.idx", idx);
-  auto reader = SessionReader::open(tmp.path());
+  auto reader = SessionReader::open(tmp.path(), {.allow_damaged = true});
   ASSERT_TRUE(reader) << reader.error().message;
-  auto f0 = (*reader)->next();
-  ASSERT_FALSE(f0);
-  EXPECT_EQ(f0.error().code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(f0.error(),
-                     "depth.depth: corrupt: frame 0 (offset 0) is not a 16-bit grey PNG");
-  auto f1 = (*reader)->next();
-  ASSERT_FALSE(f1);
-  EXPECT_EQ(f1.error().code, ErrorCode::kCorruptData);
-  EXPECT_MESSAGE_HAS(f1.error(), "depth.depth: frame 1 is 8x8, session.yaml declares 64x48");
-  auto f2 = (*reader)->next();
-  ASSERT_TRUE(f2) << f2.error().message;
-  EXPECT_EQ(max_abs_diff((*f2)->as<DepthImage>()->depth_mm, depth_frame(2)), 0.0);
+  // Frames 0 and 1 do not decode to what the manifest declares: skipped and reported.
+  auto f = (*reader)->next();
+  ASSERT_TRUE(f) << f.error().message;
+  EXPECT_EQ(max_abs_diff((*f)->as<DepthImage>()->depth_mm, depth_frame(2)), 0.0);
+  EXPECT_FALSE((*reader)->next());
+  const StreamDamage d = (*reader)->damage().at(0);
+  ASSERT_EQ(d.damaged, 2u);
+  EXPECT_TEXT_HAS(d.first[0].what,
+                  "depth.depth: corrupt: frame 0 (offset 0) is not a 16-bit grey PNG");
+  EXPECT_TEXT_HAS(d.first[1].what, "depth.depth: frame 1 is 8x8, session.yaml declares 64x48");
 }
 
 // The numbers in docs/session_format.md. Run with

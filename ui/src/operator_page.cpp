@@ -35,21 +35,43 @@ async function refresh(){
     const p=await (await fetch('/api/primitives')).json();
     const s=await (await fetch('/api/status')).json();
     document.getElementById('status').textContent=JSON.stringify(s);
-    let html='';
+    // Values come from the session (e.g. speaker folder names): text nodes only, never HTML.
+    const rows=[];
     for(const [name,r] of Object.entries(p.primitives)){
       const v=r.value===null?'':JSON.stringify(r.value);
-      html+=`<tr class="${r.status}"><td>${r.id} ${name}</td><td>${r.status}</td><td>${r.confidence===null?'':r.confidence.toFixed(2)}</td><td><code>${v.length>300?v.slice(0,300)+'...':v}</code></td></tr>`;
+      const tr=document.createElement('tr');tr.className=String(r.status);
+      const cells=[r.id+' '+name,String(r.status),r.confidence===null?'':Number(r.confidence).toFixed(2),null];
+      for(const c of cells){const td=document.createElement('td');
+        if(c===null){const code=document.createElement('code');code.textContent=v.length>300?v.slice(0,300)+'...':v;td.appendChild(code);}
+        else td.textContent=c;
+        tr.appendChild(td);}
+      rows.push(tr);
     }
-    document.getElementById('rows').innerHTML=html;
+    document.getElementById('rows').replaceChildren(...rows);
     const cams=await (await fetch('/api/cameras')).json();
     const div=document.getElementById('cams');
-    if(div.childElementCount!==cams.length){div.innerHTML='';for(const c of cams){const i=document.createElement('img');i.id='cam_'+c;i.title=c;div.appendChild(i);}}
+    if(div.childElementCount!==cams.length){div.replaceChildren();for(const c of cams){const i=document.createElement('img');i.id='cam_'+c;i.title=c;div.appendChild(i);}}
     for(const c of cams){document.getElementById('cam_'+c).src='/camera/'+c+'.jpg?t='+Date.now();}
   }catch(e){document.getElementById('status').textContent='(not running)';}
 }
 setInterval(refresh,1000);refresh();
 </script></body></html>
 )html";
+
+// Worker threads of the page's server (each open connection holds one while it is read).
+constexpr size_t kWorkerThreads = 32;
+
+// The Host header's name (without port) is one this page is served as.
+bool host_allowed(const std::string& host_header, const std::string& configured) {
+  std::string name = host_header;
+  if (!name.empty() && name.front() == '[') {  // [::1]:port
+    const auto close = name.find(']');
+    name = close == std::string::npos ? name : name.substr(1, close - 1);
+  } else if (const auto colon = name.rfind(':'); colon != std::string::npos) {
+    name = name.substr(0, colon);
+  }
+  return name == "127.0.0.1" || name == "localhost" || name == "::1" || name == configured;
+}
 
 }  // namespace
 
@@ -149,6 +171,22 @@ Result<std::unique_ptr<OperatorPage>> OperatorPage::start(const OperatorPageOpti
                   }
                   res.set_content(jpeg, "image/jpeg");
                 });
+  // Requests whose Host is not this page's own name are refused: a web page elsewhere could
+  // otherwise reach 127.0.0.1 through DNS rebinding.
+  m->server.set_pre_routing_handler([raw](const httplib::Request& req, httplib::Response& res) {
+    if (host_allowed(req.get_header_value("Host"), raw->options.host))
+      return httplib::Server::HandlerResponse::Unhandled;
+    res.status = 403;
+    res.set_content("forbidden: unexpected Host header", "text/plain");
+    return httplib::Server::HandlerResponse::Handled;
+  });
+  // Slow or idle clients cannot starve the page: a connection that sends nothing for 2 s is
+  // closed, and the worker pool is much larger than a handful of such connections.
+  m->server.set_read_timeout(2, 0);
+  m->server.set_write_timeout(2, 0);
+  m->server.set_keep_alive_timeout(2);
+  m->server.set_keep_alive_max_count(20);
+  m->server.new_task_queue = [] { return new httplib::ThreadPool(kWorkerThreads); };
   // SO_REUSEADDR only: cpp-httplib's default SO_REUSEPORT would let a second page bind the same
   // port and silently share its requests.
   m->server.set_socket_options([](socket_t sock) {

@@ -6,6 +6,10 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <httplib.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+#include <vector>
 
 namespace dreamsense::ui {
 namespace {
@@ -73,6 +77,55 @@ TEST(OperatorPage, ServesLatestPrimitivesFramesAndStatus) {
   auto missing = client.Get("/camera/camera_left.jpg");
   ASSERT_TRUE(missing);
   EXPECT_EQ(missing->status, 404);
+}
+
+// DNS rebinding: a page elsewhere that resolves its own name to 127.0.0.1 sends its own Host.
+TEST(OperatorPage, RefusesForeignHostHeaders) {
+  OperatorPageOptions o;
+  o.port = 0;
+  auto page = OperatorPage::start(o);
+  ASSERT_TRUE(page) << page.error().message;
+  httplib::Client client("127.0.0.1", (*page)->port());
+  auto own = client.Get("/api/status");
+  ASSERT_TRUE(own);
+  EXPECT_EQ(own->status, 200);
+  auto foreign = client.Get("/api/primitives", {{"Host", "attacker.example:80"}});
+  ASSERT_TRUE(foreign);
+  EXPECT_EQ(foreign->status, 403);
+  auto localhost = client.Get("/api/status", {{"Host", "localhost:1234"}});
+  ASSERT_TRUE(localhost);
+  EXPECT_EQ(localhost->status, 200);
+  // Values are written into the page as text, never as HTML.
+  auto root = client.Get("/");
+  ASSERT_TRUE(root);
+  EXPECT_EQ(root->body.find("innerHTML"), std::string::npos);
+}
+
+// Slow clients that open connections and send headers byte by byte do not stop the page.
+TEST(OperatorPage, AnswersWhileEightSlowConnectionsAreOpen) {
+  OperatorPageOptions o;
+  o.port = 0;
+  auto page = OperatorPage::start(o);
+  ASSERT_TRUE(page) << page.error().message;
+  std::vector<int> slow;
+  for (int i = 0; i < 8; ++i) {
+    const int s = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<uint16_t>((*page)->port()));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(s, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)), 0);
+    const char partial[] = "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ";
+    ASSERT_GT(::send(s, partial, sizeof(partial) - 1, 0), 0);
+    slow.push_back(s);
+  }
+  httplib::Client client("127.0.0.1", (*page)->port());
+  client.set_connection_timeout(2, 0);
+  client.set_read_timeout(2, 0);
+  auto r = client.Get("/api/status");
+  ASSERT_TRUE(r) << "the page did not answer while 8 slow connections were open";
+  EXPECT_EQ(r->status, 200);
+  for (auto s : slow) ::close(s);
 }
 
 TEST(OperatorPage, BusyPortAndBadOptionsAreErrors) {

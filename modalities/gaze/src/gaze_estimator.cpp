@@ -1,5 +1,6 @@
 #include "dreamsense/gaze/gaze_estimator.hpp"
 
+#include "dreamsense/core/opencv_error.hpp"
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/perception/gaze.hpp"
@@ -168,7 +169,7 @@ Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& 
     fs << "samples" << model.samples << "provenance" << model.provenance;
     fs.release();
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kIoError, "{}: {}", path.string(), e.what());
+    return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
   }
   std::error_code ec;
   std::filesystem::rename(partial, path, ec);
@@ -225,7 +226,7 @@ Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
     m.samples = fs["samples"].empty() ? 0 : static_cast<int>(fs["samples"]);
     m.provenance = fs["provenance"].empty() ? "" : static_cast<std::string>(fs["provenance"]);
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.what());
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
   for (const EyeAngleModel* e : {&m.right_eye, &m.left_eye})
     if (auto s = e->check(); !s)

@@ -1,5 +1,7 @@
 #include "dreamsense/head_pose/face_shape_fit.hpp"
 
+#include "dreamsense/core/opencv_error.hpp"
+
 #include <opencv2/calib3d.hpp>
 
 #include <algorithm>
@@ -149,7 +151,7 @@ Status write_face_model(const std::string& path, const FaceModel3d& model,
     fs << "]";
     fs.release();
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kIoError, "{}: {}", path, e.what());
+    return make_error(ErrorCode::kIoError, "{}: {}", path, opencv_reason(e));
   }
   std::error_code ec;
   std::filesystem::rename(partial, path, ec);
@@ -181,7 +183,7 @@ Result<FaceModel3d> read_face_model(const std::string& path) {
                               static_cast<double>(p["z"]));
     }
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: {}", path, e.what());
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path, opencv_reason(e));
   }
   if (auto s = m.check(); !s)
     return make_error(ErrorCode::kCorruptData, "{}: {}", path, s.error().message);

@@ -1,5 +1,7 @@
 #include "dreamsense/voice_id/voice_model.hpp"
 
+#include "dreamsense/core/opencv_error.hpp"
+
 #include <opencv2/core/persistence.hpp>
 
 #include <algorithm>
@@ -96,7 +98,8 @@ Status VoiceModel::save(const fs::path& path) const {
     f << "]";
     f.release();
   } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kIoError, "{}: cannot write ({})", path.string(), e.msg);
+    return make_error(ErrorCode::kIoError, "{}: cannot write ({})", path.string(),
+                      opencv_reason(e));
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);

@@ -19,6 +19,10 @@ nlohmann::json to_json(const primitives::PrimitiveRecord& record);
 nlohmann::json value_json(const primitives::PrimitiveRecord& record);  // the "value" member
 nlohmann::json query_json(const primitives::PrimitiveQuery& query);    // null for monostate
 
+// False when the record's value or confidence holds a NaN or infinity anywhere (such a record
+// must never be presented as ok: the runner turns it into no_data and counts it).
+bool value_is_finite(const primitives::PrimitiveRecord& record);
+
 // A record from its JSON form; a record that does not follow the format is an error saying
 // which member is wrong.
 Result<primitives::PrimitiveRecord> record_from_json(const nlohmann::json& j);

@@ -2,11 +2,13 @@
 // Offline analysis of a recorded session (`dreamsense analyze`): opens and validates the session,
 // plans the analysis graph (plan.hpp), runs the pipeline and writes
 //   primitives.jsonl, events.log, dream.json, report.html, summary.json
-// into the output folder. Outputs appear under their final names only when complete.
+// into the output folder. Outputs appear under their final names together, only when all are
+// complete (core/output_file.hpp StagedOutputDir); a failed run leaves the folder as it was.
 
 #include "dreamsense/core/pipeline.hpp"
 #include "dreamsense/primitives/evaluator.hpp"
 #include "dreamsense/runner/plan.hpp"
+#include "dreamsense/sources/session.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -37,6 +39,14 @@ struct AnalysisOptions {
   primitives::EvaluatorOptions evaluator;
   // The analysis graph: pipeline.yaml, command-line options and the child's calibration.
   PlanOptions plan;
+  // An output folder that already holds an analysis is an error unless this is set (--force);
+  // then every earlier output is replaced, none is left beside the new ones.
+  bool replace_existing = false;
+  // Analyse a stream even when more than 20 % of its records are damaged (the damage policy in
+  // docs/session_format.md; what is skipped is reported either way).
+  bool allow_damaged = false;
+  // Follow session files that are links to files outside the session folder (--follow-links).
+  bool follow_links_outside = false;
   // Also write overlay.mp4 (boxes, landmarks, head axes, gaze rays, selected camera).
   bool overlay = false;
   // Called with every tick's primitive records as they are produced (e.g. DDS publishing in
@@ -56,8 +66,15 @@ struct AnalysisSummary {
   // What was analysed: {"kind": "session"|"video", ...; for a video its size, frame rate,
   // frames, codec, "calibration" ("approximate" or the file), "approximate_calibration", "audio"}.
   nlohmann::json input;
+  // What the damage policy skipped, per stream (recorded sessions; docs/session_format.md).
+  std::vector<sources::StreamDamage> damage;
+  // Per primitive: ok answers that held a NaN/infinity and were reported as no_data instead.
+  std::map<std::string, int> non_finite;
   nlohmann::json to_json() const;
 };
+
+// The file names an analysis writes into its output folder (all of them are replaced together).
+const std::vector<std::string>& analysis_output_names();
 
 using AnalysisProgress = std::function<void(double fraction)>;
 

@@ -115,7 +115,42 @@ struct SessionReaderOptions {
   // Memory bound of read-ahead: at most this many frames (over all streams) queued, being decoded
   // or decoded and not yet returned by next(). Must be >= 1; unused when decode_threads is 0.
   int read_ahead_frames = 8;
+  // Damage policy (docs/session_format.md, "Damaged recordings"): a torn tail is dropped with a
+  // warning; a damaged record in the middle is skipped and counted (SessionReader::damage()); a
+  // stream with more than this fraction of its records damaged is an error unless allow_damaged.
+  double max_damaged_fraction = 0.2;
+  bool allow_damaged = false;
+  // Session files that are symbolic links to files outside the session folder are refused
+  // (a shared session must not make the analysis read /etc/passwd); true follows them.
+  bool follow_links_outside = false;
+  // Log each stream's first damaged record and torn tail (warnings); off for a second reader of
+  // the same session.
+  bool log_damage = true;
   Status check() const;  // every bad field in one message
+};
+
+// One record a stream lost: where (record index in the stream: frame, index line or skeleton
+// line number; stamp when known) and why.
+struct DamagedRecord {
+  uint64_t record = 0;
+  std::optional<int64_t> stamp_ns;
+  std::string what;
+};
+
+// What the damage policy did to one stream.
+struct StreamDamage {
+  SensorId stream;
+  std::string file;
+  uint64_t records = 0;              // records the stream holds, damaged ones included
+  uint64_t damaged = 0;              // skipped in the middle (unreadable, undecodable, implausible)
+  uint64_t torn_tail = 0;            // dropped at the end (a partly written last record)
+  uint64_t empty_lines = 0;          // blank lines in a line-based file (skipped, counted)
+  std::vector<DamagedRecord> first;  // the first damaged records (at most kListed)
+  static constexpr size_t kListed = 20;
+  bool any() const { return damaged > 0 || torn_tail > 0 || empty_lines > 0; }
+  double damaged_fraction() const {
+    return records == 0 ? 0.0 : static_cast<double>(damaged) / static_cast<double>(records);
+  }
 };
 
 // Replays a session as a Source: frames of all streams merged in stamp order (ties broken by
@@ -123,8 +158,10 @@ struct SessionReaderOptions {
 // open() validates everything it can before the first frame: files present and readable, index
 // consistent with data size (truncation), WAV rate/channels as declared, stamps increasing.
 // Errors name the file and the problem in one line.
-// A frame that fails to decode is returned as an error at its place in the order; the next call
-// goes on with the following frame. next() is called by one thread at a time. With read-ahead
+// Damage (SessionReaderOptions): a record that cannot be used (torn tail, malformed line, frame
+// that does not decode, implausible values) is skipped and counted in damage(), never returned;
+// next() fails only when a stream is damaged beyond max_damaged_fraction (unless allow_damaged).
+// next() is called by one thread at a time. With read-ahead
 // (options.decode_threads > 0) the destructor stops the workers after their current frame.
 class SessionReader : public Source {
  public:
@@ -135,6 +172,9 @@ class SessionReader : public Source {
   SourceInfo info() const override;
   const SessionManifest& manifest() const;
   const std::filesystem::path& dir() const;
+  // Per stream read (manifest order): what the damage policy skipped so far (complete after the
+  // last next()). Streams without damage are included with zero counts.
+  std::vector<StreamDamage> damage() const;
 
  private:
   SessionReader();
