@@ -287,7 +287,7 @@ Result<VideoPlan> open_video(const AnalysisOptions& options) {
 
 nlohmann::json video_input_json(const sources::VideoFileInfo& v) {
   return {{"kind", "video"},
-          {"path", v.path.string()},
+          {"path", v.path.filename().string()},  // the name only: paths may name people
           {"width", v.width},
           {"height", v.height},
           {"nominal_fps", v.nominal_fps},
