@@ -1,12 +1,12 @@
 #include "dreamsense/audio/voice_activity.hpp"
 
+#include "dreamsense/audio/fft.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <string>
-
-#include "fft.hpp"
 
 namespace dreamsense::audio {
 
@@ -34,7 +34,7 @@ Status VoiceActivityOptions::check() const {
 
 struct VoiceActivityDetector::Impl {
   explicit Impl(int fft_size) : fft(fft_size) {}
-  detail::RealFft fft;
+  RealFft fft;
   std::vector<double> window;
   std::vector<float> pending;  // samples of the current partial frame
   int bin_lo = 0, bin_hi = 0;  // in-band bins [lo, hi)
