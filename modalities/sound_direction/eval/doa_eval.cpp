@@ -1,8 +1,7 @@
 #include "doa_eval.hpp"
 
+#include "dreamsense/audio/audio_file.hpp"
 #include "dreamsense/sim/room_acoustics.hpp"
-
-#include <sndfile.h>
 
 #include <algorithm>
 #include <cmath>
@@ -36,34 +35,11 @@ Result<std::vector<double>> load_clip(const fs::path& path, int rate) {
     return make_error(ErrorCode::kNotFound,
                       "{}: missing speech clip (install Debian package pocketsphinx-testdata)",
                       path.string());
-  std::vector<double> out;
-  if (path.extension() == ".raw") {  // 16-bit little-endian mono, 16 kHz
-    if (rate != 16000)
-      return make_error(ErrorCode::kUnsupported, "{}: raw clips are 16 kHz, the array runs at {}",
-                        path.string(), rate);
-    std::ifstream in(path, std::ios::binary);
-    std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)),
-                                 std::istreambuf_iterator<char>());
-    out.resize(b.size() / 2);
-    for (size_t i = 0; i < out.size(); ++i)
-      out[i] = static_cast<int16_t>(static_cast<uint16_t>(b[2 * i]) |
-                                    (static_cast<uint16_t>(b[2 * i + 1]) << 8)) /
-               32768.0;
-    return out;
-  }
-  SF_INFO info{};
-  SNDFILE* f = sf_open(path.string().c_str(), SFM_READ, &info);
-  if (!f) return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), sf_strerror(nullptr));
-  if (info.channels != 1 || info.samplerate != rate) {
-    sf_close(f);
-    return make_error(ErrorCode::kUnsupported, "{}: expected mono {} Hz, got {} channels {} Hz",
-                      path.string(), rate, info.channels, info.samplerate);
-  }
-  out.resize(static_cast<size_t>(info.frames));
-  const sf_count_t got = sf_readf_double(f, out.data(), info.frames);
-  sf_close(f);
-  out.resize(static_cast<size_t>(std::max<sf_count_t>(got, 0)));
-  return out;
+  audio::ReadAudioOptions ro;
+  ro.require_mono = true;
+  ro.expected_sample_rate = rate;  // also checks that .raw clips (16 kHz) match the array
+  DS_ASSIGN_OR_RETURN(audio::AudioClip clip, audio::read_audio(path, ro));
+  return std::vector<double>(clip.samples.begin(), clip.samples.end());
 }
 
 // Speech extent of a clean clip (seconds): 20 ms frames within 30 dB of the loudest one.

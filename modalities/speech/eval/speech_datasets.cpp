@@ -1,6 +1,6 @@
 #include "speech_datasets.hpp"
 
-#include <sndfile.h>
+#include "dreamsense/audio/audio_file.hpp"
 
 #include <algorithm>
 #include <fstream>
@@ -14,32 +14,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct WavHeader {
-  int rate = 0, channels = 0;
-  int64_t frames = 0;
-};
+using WavHeader = audio::AudioFileInfo;
 
-Result<WavHeader> wav_header(const fs::path& path, SNDFILE** keep_open = nullptr) {
-  SF_INFO info{};
-  SNDFILE* sf = sf_open(path.string().c_str(), SFM_READ, &info);
-  if (!sf)
-    return make_error(ErrorCode::kCorruptData, "cannot read audio {}: {}", path.string(),
-                      sf_strerror(nullptr));
-  if (keep_open)
-    *keep_open = sf;
-  else
-    sf_close(sf);
-  return WavHeader{info.samplerate, info.channels, static_cast<int64_t>(info.frames)};
-}
+Result<WavHeader> wav_header(const fs::path& path) { return audio::audio_file_info(path); }
 
 Status check_header(const fs::path& path, const WavHeader& h, int expected_rate_hz,
                     const std::string& layout) {
   if (h.channels != 1)
     return make_error(ErrorCode::kUnsupported, "{}: {} has {} channels; the {} layout needs mono",
                       path.string(), path.filename().string(), h.channels, layout);
-  if (expected_rate_hz > 0 && h.rate != expected_rate_hz)
+  if (expected_rate_hz > 0 && h.sample_rate != expected_rate_hz)
     return make_error(ErrorCode::kUnsupported, "{}: sample rate {} Hz; the {} layout needs {} Hz",
-                      path.string(), h.rate, layout, expected_rate_hz);
+                      path.string(), h.sample_rate, layout, expected_rate_hz);
   return ok_status();
 }
 
@@ -58,19 +44,12 @@ std::vector<fs::path> wav_files(const fs::path& dir) {
 }  // namespace
 
 Result<Audio> read_mono_wav(const fs::path& path, int expected_rate_hz, const std::string& layout) {
-  SNDFILE* sf = nullptr;
-  auto h = wav_header(path, &sf);
-  if (!h) return tl::unexpected(h.error());
-  if (auto st = check_header(path, *h, expected_rate_hz, layout); !st) {
-    sf_close(sf);
-    return tl::unexpected(st.error());
-  }
+  DS_ASSIGN_OR_RETURN(audio::AudioClip clip, audio::read_audio(path));
+  const WavHeader h{clip.sample_rate, clip.channels, clip.frames()};
+  DS_RETURN_IF_ERROR(check_header(path, h, expected_rate_hz, layout));
   Audio a;
-  a.rate_hz = h->rate;
-  a.samples.resize(static_cast<size_t>(h->frames));
-  const sf_count_t got = sf_read_short(sf, a.samples.data(), h->frames);
-  sf_close(sf);
-  a.samples.resize(static_cast<size_t>(std::max<sf_count_t>(0, got)));
+  a.rate_hz = clip.sample_rate;
+  a.samples = audio::to_pcm16(clip.samples);
   return a;
 }
 

@@ -1,6 +1,6 @@
 #include "speech_eval.hpp"
 
-#include <sndfile.h>
+#include "dreamsense/audio/audio_file.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -29,28 +29,11 @@ struct Clip {
 Result<Clip> load_clip(const fs::path& p) {
   Clip c;
   c.name = p.filename().string();
-  if (p.extension() == ".raw") {  // headerless s16le mono 16 kHz
-    std::ifstream in(p, std::ios::binary);
-    if (!in) return make_error(ErrorCode::kNotFound, "cannot open {}", p.string());
-    in.seekg(0, std::ios::end);
-    const auto bytes = static_cast<size_t>(in.tellg());
-    in.seekg(0);
-    c.samples.resize(bytes / 2);
-    in.read(reinterpret_cast<char*>(c.samples.data()),
-            static_cast<std::streamsize>(c.samples.size() * 2));
-    return c;
-  }
-  SF_INFO info{};
-  SNDFILE* sf = sf_open(p.string().c_str(), SFM_READ, &info);
-  if (!sf)
-    return make_error(ErrorCode::kCorruptData, "cannot read audio {}: {}", p.string(),
-                      sf_strerror(nullptr));
-  std::vector<int16_t> all(static_cast<size_t>(info.frames) * info.channels);
-  sf_read_short(sf, all.data(), static_cast<sf_count_t>(all.size()));
-  sf_close(sf);
-  c.rate = info.samplerate;
-  c.samples.resize(static_cast<size_t>(info.frames));
-  for (size_t i = 0; i < c.samples.size(); ++i) c.samples[i] = all[i * info.channels];  // channel 0
+  audio::ReadAudioOptions ro;
+  ro.channel = 0;  // headerless .raw: s16le mono 16 kHz
+  DS_ASSIGN_OR_RETURN(audio::AudioClip clip, audio::read_audio(p, ro));
+  c.rate = clip.sample_rate;
+  c.samples = audio::to_pcm16(clip.samples);
   return c;
 }
 
