@@ -26,6 +26,8 @@ Status VoiceActivityOptions::check() const {
   if (!(spectral_threshold_db > 0)) add("spectral_threshold_db must be > 0");
   if (!(noise_adapt_s > 0 && noise_fall_s > 0 && smoothing_s >= 0))
     add("noise_adapt_s and noise_fall_s must be > 0, smoothing_s >= 0");
+  if (!(gate_threshold_db > 0 && gate_floor_rise_db_per_s >= 0))
+    add("gate_threshold_db must be > 0, gate_floor_rise_db_per_s >= 0");
   if (!(noise_window_s >= 4 * frame_s))
     add(fmt::format("noise_window_s must be >= 4 frames (is {} s)", noise_window_s));
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "VoiceActivityOptions: {}", bad);
@@ -45,6 +47,7 @@ struct VoiceActivityDetector::Impl {
   int block_frames = 0, frames_in_block = 0;
   size_t next_block = 0;
   int64_t frames_seen = 0;
+  double gate_floor_db = 0;  // kEnergyGate
   double a_smooth = 0, a_adapt = 0, a_fall = 0;
 };
 
@@ -94,6 +97,7 @@ void VoiceActivityDetector::reset() {
   m.frames_in_block = 0;
   m.next_block = 0;
   m.frames_seen = 0;
+  m.gate_floor_db = 0;
   pushed_ = 0;
 }
 
@@ -124,6 +128,17 @@ VoiceActivityFrame VoiceActivityDetector::analyse_frame() {
   }
   for (int i = frame_len_; i < m.fft.size(); ++i) x[i] = 0;
   f.level_dbfs = 10 * std::log10(sum2 / frame_len_ + 1e-12);
+  if (options_.method == VoiceActivityMethod::kEnergyGate) {
+    const double frame_s = static_cast<double>(frame_len_) / options_.sample_rate;
+    m.gate_floor_db =
+        std::min(f.level_dbfs, m.gate_floor_db + options_.gate_floor_rise_db_per_s * frame_s);
+    f.energy_snr_db = f.level_dbfs - m.gate_floor_db;
+    const double margin = f.energy_snr_db - options_.gate_threshold_db;
+    f.speech = margin > 0;
+    f.probability = static_cast<float>(1.0 / (1.0 + std::exp(-margin / 3.0)));
+    ++m.frames_seen;
+    return f;
+  }
   m.fft.forward();
   const auto* spec = m.fft.spectrum();
   const size_t nb = m.noise.size();

@@ -602,7 +602,7 @@ Result<json> run_speech_commands(const SpeechEvalOptions& o,
     auto a = read_mono_wav(it.path, 16000, "speech-commands");
     if (!a) return tl::unexpected(a.error());
     const auto t0 = std::chrono::steady_clock::now();
-    const SpeechPresence presence = detect_speech(a->samples, a->rate_hz, o.presence);
+    const audio::SpeechPresence presence = audio::detect_speech(a->samples, a->rate_hz, o.presence);
     std::string hyp = kSilenceLabel;
     Decoding d;
     if (presence.speech) {

@@ -3,10 +3,10 @@
 // on Debian's pocketsphinx-testdata, the Free Spoken Digit Dataset and the Speech Commands
 // layout; JSON of spec/cli.md. Protocols and measured numbers: modalities/speech/README.md.
 
+#include "dreamsense/audio/speech_presence.hpp"
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/speech/acoustic_adaptation.hpp"
 #include "dreamsense/speech/recognizer.hpp"
-#include "dreamsense/speech/voice_activity.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -38,10 +38,10 @@ struct SpeechEvalOptions {
   // which a live recogniser cannot do, so the headline accuracy is clip by clip.
   bool fsdd_speaker_adapt = false;
   NeighbourVoteOptions fsdd_vote;
-  SpeechPresenceOptions presence;  // speech-commands: the silence check
-  double trim_margin_s = -1;       // speech-commands: decode the active span +- this (<0: all)
-  bool list_items = true;          // per-item records in the JSON ("items")
-  std::filesystem::path grammar;   // list: the grammar every listed utterance is decoded under
+  audio::SpeechPresenceOptions presence;  // speech-commands: the silence check
+  double trim_margin_s = -1;      // speech-commands: decode the active span +- this (<0: all)
+  bool list_items = true;         // per-item records in the JSON ("items")
+  std::filesystem::path grammar;  // list: the grammar every listed utterance is decoded under
 };
 
 // FSDD protocol constants, tuned on speaker george only (leave-speaker-out; README).

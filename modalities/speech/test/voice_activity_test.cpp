@@ -1,7 +1,6 @@
 // Silence check (detect_speech), the libsoxr resampler, and the recogniser with PocketSphinx's
 // TIDIGITS model (another phone set for the garbage loop, an 8 kHz front end).
-#include "dreamsense/speech/voice_activity.hpp"
-
+#include "dreamsense/audio/speech_presence.hpp"
 #include "dreamsense/speech/recognizer.hpp"
 
 #include <gtest/gtest.h>
@@ -66,22 +65,22 @@ std::vector<int16_t> noise_clip(const std::string& kind, double rms, unsigned se
 TEST(DetectSpeech, VoicedSoundIsSpeechNoiseIsNot) {
   for (double f0 : {60.0, 110.0, 220.0, 350.0}) {
     const auto clip = vowel_clip(f0, 0.1, 0.003, 1);
-    const auto p = detect_speech(clip, kRate);
+    const auto p = audio::detect_speech(clip, kRate);
     EXPECT_TRUE(p.speech) << "f0 " << f0 << " voiced " << p.voiced_s;
     EXPECT_NEAR(p.start_s, 0.35, 0.08);
     EXPECT_NEAR(p.end_s, 0.65, 0.08);
   }
   // Quiet but clearly above its floor: still speech.
-  EXPECT_TRUE(detect_speech(vowel_clip(120, 0.003, 0.0001, 2), kRate).speech);
+  EXPECT_TRUE(audio::detect_speech(vowel_clip(120, 0.003, 0.0001, 2), kRate).speech);
   for (const char* kind : {"white", "brown", "hum"})
     for (double rms : {0.0003, 0.01, 0.2}) {
-      const auto p = detect_speech(noise_clip(kind, rms, 3), kRate);
+      const auto p = audio::detect_speech(noise_clip(kind, rms, 3), kRate);
       EXPECT_FALSE(p.speech) << kind << " " << rms << " voiced " << p.voiced_s;
     }
   const std::vector<int16_t> zeros(kRate, 0);
-  EXPECT_FALSE(detect_speech(zeros, kRate).speech);
-  EXPECT_FALSE(detect_speech({}, kRate).speech);
-  SpeechPresenceOptions bad;
+  EXPECT_FALSE(audio::detect_speech(zeros, kRate).speech);
+  EXPECT_FALSE(audio::detect_speech({}, kRate).speech);
+  audio::SpeechPresenceOptions bad;
   bad.f0_max_hz = 10;
   EXPECT_FALSE(bad.check());
 }

@@ -1,10 +1,10 @@
-#include "dreamsense/speech/voice_activity.hpp"
+#include "dreamsense/audio/speech_presence.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-namespace dreamsense::speech {
+namespace dreamsense::audio {
 
 Status SpeechPresenceOptions::check() const {
   if (!(frame_s > 0 && hop_s > 0 && active_db >= 0 && voicing_threshold > 0 && f0_min_hz > 0 &&
@@ -82,4 +82,4 @@ SpeechPresence detect_speech(std::span<const int16_t> s, int rate, const SpeechP
   return r;
 }
 
-}  // namespace dreamsense::speech
+}  // namespace dreamsense::audio

@@ -11,13 +11,18 @@
 //    periodic but never rises above its own floor.
 // A clip is speech when the voiced active frames add up to >= min_voiced_s. Cheap (~5 ms per
 // second of 16 kHz audio); used as the silence check in front of the recogniser.
+//
+// This is the whole-clip decision of the audio library's voice activity detection; streams use
+// VoiceActivityDetector (voice_activity.hpp), whose noise floor needs a running stream. Kept as
+// its own function because the 1 s Speech Commands clips give a stream no time to learn its
+// floor (the speech-commands numbers in modalities/speech/README.md are measured with it).
 
 #include "dreamsense/core/status.hpp"
 
 #include <cstdint>
 #include <span>
 
-namespace dreamsense::speech {
+namespace dreamsense::audio {
 
 struct SpeechPresenceOptions {
   double frame_s = 0.04;
@@ -42,4 +47,4 @@ struct SpeechPresence {
 SpeechPresence detect_speech(std::span<const int16_t> samples, int sample_rate_hz,
                              const SpeechPresenceOptions& options = {});
 
-}  // namespace dreamsense::speech
+}  // namespace dreamsense::audio
