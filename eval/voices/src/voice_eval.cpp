@@ -1,4 +1,4 @@
-#include "voice_eval.hpp"
+#include "dreamsense/eval/voice_eval.hpp"
 
 #include "dreamsense/voice_id/audio_files.hpp"
 
@@ -141,8 +141,8 @@ Status VoiceEvalOptions::check() const {
   return train.check();
 }
 
-Result<json> run_voice_eval(const VoiceEvalOptions& o,
-                            const std::function<void(double)>& progress) {
+Result<eval::EvalReport> run_voice_eval(const VoiceEvalOptions& o,
+                                        const std::function<void(double)>& progress) {
   if (auto s = o.check(); !s) return tl::unexpected(s.error());
   std::vector<std::string> wanted = o.speakers;
   if (!wanted.empty())
@@ -262,10 +262,12 @@ Result<json> run_voice_eval(const VoiceEvalOptions& o,
   std::string speakers_list, unknown_list;
   for (const auto& k : known) speakers_list += (speakers_list.empty() ? "" : ",") + k;
   for (const auto& u : unknown) unknown_list += (unknown_list.empty() ? "" : ",") + u;
-  json out;
-  out["task"] = "voices";
-  out["dataset"] = {{"name", d->name}, {"items", tests.size()}, {"dir", o.dir.string()}};
-  out["protocol"] =
+  eval::EvalReport out;
+  out.task = "voices";
+  out.dataset = d->name;
+  out.items = tests.size();
+  out.extra["dataset_dir"] = o.dir.string();
+  out.protocol =
       o.model.empty()
           ? fmt::format(
                 "GMM-UBM ({} components, MAP relevance {}{}); first {} recordings of each "
@@ -278,15 +280,15 @@ Result<json> run_voice_eval(const VoiceEvalOptions& o,
                 model.background)
           : fmt::format("model {} ({}); first {} recordings of each speaker skipped",
                         o.model.string(), speakers_list, o.enroll);
-  out["metrics"] = metrics;
-  out["timing"] = {{"ms_per_utterance_median", median(ms)}, {"train_s", train_s}};
-  out["per_class"] = per_class;
-  out["confusion"] = confusion;
-  out["model"] = {{"components", model.ubm.components()},
-                  {"dimension", model.ubm.dimension()},
-                  {"threshold", model.threshold},
-                  {"background", model.background}};
-  out["items"] = items;
+  out.metrics = metrics;
+  out.timing = {{"ms_per_utterance_median", median(ms)}, {"train_s", train_s}};
+  out.per_class = per_class;
+  out.extra["confusion"] = confusion;
+  out.extra["model"] = {{"components", model.ubm.components()},
+                        {"dimension", model.ubm.dimension()},
+                        {"threshold", model.threshold},
+                        {"background", model.background}};
+  out.extra["items"] = items;
   return out;
 }
 

@@ -1,5 +1,6 @@
 // Dataset checks (label dataset): 0 % sentence error on cards and goforward; FSDD's official
 // test split (take indices 0-4) with the default protocol. Skip without data.
+#include "dreamsense/eval/speech_eval.hpp"
 #include "dreamsense/speech/acoustic_adaptation.hpp"
 
 #include <gtest/gtest.h>
@@ -7,8 +8,6 @@
 #include <cstdlib>
 #include <set>
 #include <unistd.h>
-
-#include "speech_eval.hpp"
 
 namespace dreamsense::speech {
 namespace {
@@ -29,12 +28,12 @@ TEST(SpeechDataset, PocketsphinxGrammarsHaveNoSentenceErrors) {
     GTEST_SKIP() << "pocketsphinx test data or model absent (" << o.dir << ")";
   auto r = run_speech_eval(o);
   ASSERT_TRUE(r) << r.error().to_string();
-  const auto& m = (*r)["metrics"];
-  EXPECT_EQ(m["grammar_sentence_accuracy"].get<double>(), 1.0) << (*r)["items"].dump(1);
-  EXPECT_EQ((*r)["per_class"]["cards"]["grammar_sentence_accuracy"].get<double>(), 1.0);
-  EXPECT_EQ((*r)["per_class"]["goforward"]["grammar_sentence_accuracy"].get<double>(), 1.0);
+  const auto m = r->to_json()["metrics"];
+  EXPECT_EQ(m["grammar_sentence_accuracy"].get<double>(), 1.0) << r->to_json()["items"].dump(1);
+  EXPECT_EQ(r->to_json()["per_class"]["cards"]["grammar_sentence_accuracy"].get<double>(), 1.0);
+  EXPECT_EQ(r->to_json()["per_class"]["goforward"]["grammar_sentence_accuracy"].get<double>(), 1.0);
   EXPECT_LE(m["false_accept_rate"].get<double>(), 0.1);
-  EXPECT_LT((*r)["timing"]["rtf"].get<double>(), 1.0);
+  EXPECT_LT(r->to_json()["timing"]["rtf"].get<double>(), 1.0);
 }
 
 // $DREAMSENSE_DATA/fsdd, else ../shared/data/fsdd next to the source tree.
@@ -55,15 +54,15 @@ TEST(SpeechDataset, FsddTestSplit) {
   o.fsdd_speaker_adapt = true;  // both results: the vote and each clip on its own
   auto r = run_speech_eval(o);
   ASSERT_TRUE(r) << r.error().to_string();
-  const auto& m = (*r)["metrics"];
+  const auto m = r->to_json()["metrics"];
   // Measured 0.913 (voted) and 0.907 (per utterance) on george/jackson/nicolas (README; the
   // old defaults gave 0.80); the bars guard against regressions.
   EXPECT_GE(m["accuracy"].get<double>(), 0.85) << m.dump(1);
   ASSERT_TRUE(m.contains("per_utterance"));
   EXPECT_GE(m["per_utterance"]["accuracy"].get<double>(), 0.84) << m.dump(1);
-  EXPECT_EQ((*r)["per_class"].size(), 10u);
+  EXPECT_EQ(r->to_json()["per_class"].size(), 10u);
   for (const auto& [spk, v] : m["per_speaker"].items()) EXPECT_EQ(v["items"].get<int>(), 50) << spk;
-  EXPECT_LT((*r)["timing"]["rtf"].get<double>(), 1.0);
+  EXPECT_LT(r->to_json()["timing"]["rtf"].get<double>(), 1.0);
 }
 
 // Enrolment (train speech): adapting the TIDIGITS model to one FSDD speaker on takes 10-49 must
@@ -110,7 +109,8 @@ TEST(SpeechDataset, FsddEnrolmentHelpsTheEnrolledSpeaker) {
     auto after = run_speech_eval(o);
     std::filesystem::remove_all(model);
     ASSERT_TRUE(before && after);
-    const double b = (*before)["metrics"]["accuracy"], a = (*after)["metrics"]["accuracy"];
+    const double b = before->to_json()["metrics"]["accuracy"],
+                 a = after->to_json()["metrics"]["accuracy"];
     RecordProperty(speaker + "_before", std::to_string(b));
     RecordProperty(speaker + "_after", std::to_string(a));
     EXPECT_GT(a, b) << speaker;

@@ -1,11 +1,11 @@
 // Dataset check (label dataset): speaker identification on FSDD with 10 enrolment recordings per
 // speaker, and the open set with one speaker held out. Skips cleanly without the data.
 
+#include "dreamsense/eval/voice_eval.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
-
-#include "voice_eval.hpp"
 
 namespace dreamsense::voice_id {
 namespace {
@@ -24,9 +24,8 @@ TEST(VoiceIdDataset, FsddClosedSetWithTenEnrolmentRecordings) {
   o.enroll = 10;
   auto r = run_voice_eval(o);
   ASSERT_TRUE(r) << r.error().message;
-  EXPECT_GE((*r)["metrics"]["accuracy"].get<double>(), 0.95)
-      << (*r)["per_class"].dump();  // 0.978 measured
-  EXPECT_GT((*r)["dataset"]["items"].get<int>(), 1000);
+  EXPECT_GE(r->metrics["accuracy"].get<double>(), 0.95) << r->per_class.dump();  // 0.978 measured
+  EXPECT_GT(r->items, 1000u);
 }
 
 TEST(VoiceIdDataset, FsddHeldOutSpeakerIsMostlyRejected) {
@@ -39,10 +38,9 @@ TEST(VoiceIdDataset, FsddHeldOutSpeakerIsMostlyRejected) {
   o.unknown = {"nicolas"};
   auto r = run_voice_eval(o);
   ASSERT_TRUE(r) << r.error().message;
-  const auto& m = (*r)["metrics"];
-  EXPECT_GE(m["accuracy"].get<double>(), 0.9);  // 0.957 measured
-  EXPECT_GE(m["unknown_reject_rate"].get<double>(), 0.3)
-      << (*r)["per_class"].dump();  // 0.52 measured
+  const auto& m = r->metrics;
+  EXPECT_GE(m["accuracy"].get<double>(), 0.9);                                    // 0.957 measured
+  EXPECT_GE(m["unknown_reject_rate"].get<double>(), 0.3) << r->per_class.dump();  // 0.52 measured
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "speech_datasets.hpp"
+#include "dreamsense/eval/speech_datasets.hpp"
 
 #include "dreamsense/audio/audio_file.hpp"
 

@@ -1,4 +1,4 @@
-#include "doa_eval.hpp"
+#include "dreamsense/eval/doa_eval.hpp"
 
 #include "dreamsense/audio/audio_file.hpp"
 #include "dreamsense/sim/room_acoustics.hpp"
@@ -114,7 +114,8 @@ Status parse_azimuth_grid(const std::string& text, DoaEvalOptions& o) {
   return o.check();
 }
 
-Result<json> run_doa_eval(const DoaEvalOptions& o, const std::function<void(double)>& progress) {
+Result<eval::EvalReport> run_doa_eval(const DoaEvalOptions& o,
+                                      const std::function<void(double)>& progress) {
   if (auto s = o.check(); !s) return tl::unexpected(s.error());
   auto geometry = named_geometry(o.geometry);
   if (!geometry) return tl::unexpected(geometry.error());
@@ -272,13 +273,12 @@ Result<json> run_doa_eval(const DoaEvalOptions& o, const std::function<void(doub
     for (size_t i = 7; i < bins.size(); ++i) n += bins[i].frames, w += bins[i].within;
     confident = {static_cast<double>(n), n ? static_cast<double>(w) / n : 0.0};
   }
-  json out;
-  out["task"] = "doa";
-  out["dataset"] = {
-      {"name",
-       fmt::format("simulated rooms ({} geometry, pocketsphinx-testdata speech)", o.geometry)},
-      {"items", all_err.size()}};
-  out["protocol"] = fmt::format(
+  eval::EvalReport out;
+  out.task = "doa";
+  out.dataset =
+      fmt::format("simulated rooms ({} geometry, pocketsphinx-testdata speech)", o.geometry);
+  out.items = all_err.size();
+  out.protocol = fmt::format(
       "image-source rooms (5x3x4, 6x2.7x5, 5.5x3.2x4.5 m), RT60 {} s, pink noise at SNR {} dB "
       "(speech-active power); azimuths {}:{}:{} deg, {} seeded placements each (1 s of noise, then "
       "the clip; distance {}-{} m, height +-{} m, seed {}); utterance estimate = peak of the "
@@ -287,7 +287,7 @@ Result<json> run_doa_eval(const DoaEvalOptions& o, const std::function<void(doub
       "within_10deg over all items); frame metrics over voiced frames inside the speech extent",
       o.rt60_s, o.snr_db, o.azimuth_from_deg, o.azimuth_to_deg, o.azimuth_step_deg, o.placements,
       o.distance_min_m, o.distance_max_m, o.height_m, o.seed);
-  out["metrics"] = {
+  out.metrics = {
       {"mae_deg", utt_err.empty() ? json(nullptr) : json(mean(utt_err))},
       {"within_10deg", fraction_within(all_err, 10)},
       {"items_without_estimate", missing},
@@ -296,13 +296,13 @@ Result<json> run_doa_eval(const DoaEvalOptions& o, const std::function<void(doub
       {"voiced_fraction", speech_frames ? static_cast<double>(voiced) / speech_frames : 0.0},
       {"confident_frames_within_10deg", confident[1]},
       {"confident_frame_fraction", voiced ? confident[0] / static_cast<double>(voiced) : 0.0}};
-  out["timing"] = {{"cpu_fraction", audio_s > 0 ? cpu_s / audio_s : 0.0},
-                   {"cpu_seconds", cpu_s},
-                   {"audio_seconds", audio_s},
-                   {"simulation_cpu_seconds", sim_s}};
-  out["per_class"] = per_class;
-  out["confidence_calibration"] = calibration;
-  out["items"] = items;
+  out.timing = {{"cpu_fraction", audio_s > 0 ? cpu_s / audio_s : 0.0},
+                {"cpu_seconds", cpu_s},
+                {"audio_seconds", audio_s},
+                {"simulation_cpu_seconds", sim_s}};
+  out.per_class = per_class;
+  out.extra["confidence_calibration"] = calibration;
+  out.extra["items"] = items;
   return out;
 }
 

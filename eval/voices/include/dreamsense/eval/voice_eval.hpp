@@ -10,6 +10,7 @@
 //    speaker's recordings in file-name order.
 // Enrolment is deterministic: the first N recordings of each speaker; the rest are tests.
 
+#include "dreamsense/eval/report.hpp"
 #include "dreamsense/voice_id/voice_model.hpp"
 
 #include <nlohmann/json.hpp>
@@ -71,7 +72,7 @@ struct VoiceEvalOptions {
 // (known test recordings called unknown), unknown_reject_rate (the unknown speakers' recordings
 // called unknown; only with unknown speakers). per_class: recall per speaker; confusion (rows =
 // truth, closed-set answers); timing: ms_per_utterance_median, train_s.
-Result<nlohmann::json> run_voice_eval(const VoiceEvalOptions& options,
-                                      const std::function<void(double)>& progress = {});
+Result<eval::EvalReport> run_voice_eval(const VoiceEvalOptions& options,
+                                        const std::function<void(double)>& progress = {});
 
 }  // namespace dreamsense::voice_id

@@ -4,6 +4,8 @@
 
 #include "dreamsense/speech/acoustic_adaptation.hpp"
 
+#include "dreamsense/eval/speech_eval.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,8 +16,7 @@
 #include <unistd.h>
 #include <vector>
 
-#include "../src/sendump.hpp"
-#include "speech_eval.hpp"
+#include "sendump.hpp"  // training library internals (include dir set in CMake)
 
 namespace dreamsense::speech {
 namespace {
@@ -206,7 +207,7 @@ double digit_accuracy(const fs::path& data, const FsddSelection& sel, const std:
   eo.list_items = false;
   auto r = run_speech_eval(eo);
   EXPECT_TRUE(r) << r.error().to_string();
-  return r ? (*r)["metrics"]["accuracy"].get<double>() : -1;
+  return r ? r->to_json()["metrics"]["accuracy"].get<double>() : -1;
 }
 
 // One espeak-ng talker (fixture speech_synth_talker): adapting the TIDIGITS model on 10 of their

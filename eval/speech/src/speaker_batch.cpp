@@ -1,4 +1,4 @@
-#include "speaker_batch.hpp"
+#include "dreamsense/eval/speaker_batch.hpp"
 
 #include <algorithm>
 #include <cmath>

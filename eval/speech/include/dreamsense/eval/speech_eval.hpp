@@ -5,6 +5,9 @@
 
 #include "dreamsense/audio/speech_presence.hpp"
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/eval/report.hpp"
+#include "dreamsense/eval/speaker_batch.hpp"
+#include "dreamsense/eval/speech_datasets.hpp"
 #include "dreamsense/speech/acoustic_adaptation.hpp"
 #include "dreamsense/speech/recognizer.hpp"
 
@@ -13,9 +16,6 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
-
-#include "speaker_batch.hpp"
-#include "speech_datasets.hpp"
 
 namespace dreamsense::speech {
 
@@ -107,7 +107,7 @@ inline constexpr double kCommandsMinConfidence = 0.56;
 // Metrics: grammar_sentence_accuracy (in-grammar utterances decoded exactly and accepted),
 // false_accept_rate (out-of-grammar items given any result), accuracy (all items handled
 // correctly: in-grammar exact, out-of-grammar rejected); timing.rtf = decode time / audio time.
-Result<nlohmann::json> run_speech_eval(const SpeechEvalOptions& options,
-                                       const std::function<void(double)>& progress = {});
+Result<eval::EvalReport> run_speech_eval(const SpeechEvalOptions& options,
+                                         const std::function<void(double)>& progress = {});
 
 }  // namespace dreamsense::speech

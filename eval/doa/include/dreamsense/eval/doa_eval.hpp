@@ -14,6 +14,7 @@
 // seconds of multichannel audio given to it (simulation excluded).
 
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/eval/report.hpp"
 #include "dreamsense/sound_direction/direction_finder.hpp"
 
 #include <nlohmann/json.hpp>
@@ -44,8 +45,9 @@ Status parse_azimuth_grid(const std::string& text, DoaEvalOptions& options);
 
 // The eval JSON of docs (cli.md): task, dataset, protocol, metrics (mae_deg, within_10deg,
 // frame_mae_deg, frame_within_10deg, voiced_fraction), timing (cpu_fraction, ...), per_class
-// (per azimuth) and confidence_calibration (per confidence bin: frames, within_10deg).
-Result<nlohmann::json> run_doa_eval(const DoaEvalOptions& options,
-                                    const std::function<void(double)>& progress = nullptr);
+// (per azimuth), and extra keys confidence_calibration (per confidence bin: frames,
+// within_10deg) and items.
+Result<eval::EvalReport> run_doa_eval(const DoaEvalOptions& options,
+                                      const std::function<void(double)>& progress = nullptr);
 
 }  // namespace dreamsense::sound_direction

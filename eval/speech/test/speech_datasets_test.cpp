@@ -1,5 +1,7 @@
 // Layout loaders of `eval speech` (fsdd, speech-commands), including bad input.
-#include "speech_datasets.hpp"
+#include "dreamsense/eval/speech_datasets.hpp"
+
+#include "dreamsense/eval/speech_eval.hpp"
 
 #include <gtest/gtest.h>
 #include <sndfile.h>
@@ -8,8 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <unistd.h>
-
-#include "speech_eval.hpp"
 
 namespace dreamsense::speech {
 namespace {

@@ -1,6 +1,8 @@
 // Batch speaker adaptation pieces (eval/speaker_batch.hpp): DTW features and distance, the
 // neighbour vote; and the fsdd runner's use of them on a tiny synthetic layout.
-#include "speaker_batch.hpp"
+#include "dreamsense/eval/speaker_batch.hpp"
+
+#include "dreamsense/eval/speech_eval.hpp"
 
 #include <gtest/gtest.h>
 #include <sndfile.h>
@@ -10,8 +12,6 @@
 #include <limits>
 #include <numbers>
 #include <unistd.h>
-
-#include "speech_eval.hpp"
 
 namespace dreamsense::speech {
 namespace {
@@ -149,23 +149,24 @@ TEST(SpeechFsddRunner, ReportsPerUtteranceAndVotedResultsAndAppliesTheWarp) {
   o.fsdd_speaker_adapt = true;  // opt-in (--speaker-adapt)
   auto r = run_speech_eval(o);
   ASSERT_TRUE(r) << r.error().to_string();
-  const auto& m = (*r)["metrics"];
+  const auto m = r->to_json()["metrics"];
   ASSERT_TRUE(m.contains("per_utterance")) << m.dump(1);
   EXPECT_EQ(m["per_utterance"]["per_speaker"].size(), 2u);
-  ASSERT_EQ((*r)["items"].size(), 4u);
-  for (const auto& it : (*r)["items"]) {
+  ASSERT_EQ(r->to_json()["items"].size(), 4u);
+  for (const auto& it : r->to_json()["items"]) {
     ASSERT_EQ(it["digit_scores"].size(), 10u);
     EXPECT_TRUE(it.contains("hypothesis_per_utterance"));
   }
-  EXPECT_NE((*r)["protocol"].get<std::string>().find("speaker adaptation"), std::string::npos);
+  EXPECT_NE(r->to_json()["protocol"].get<std::string>().find("speaker adaptation"),
+            std::string::npos);
 
   o.fsdd_speaker_adapt = false;
   auto plain = run_speech_eval(o);
   ASSERT_TRUE(plain) << plain.error().to_string();
-  EXPECT_FALSE((*plain)["metrics"].contains("per_utterance"));
-  auto scores = [](const nlohmann::json& r) {
+  EXPECT_FALSE(plain->to_json()["metrics"].contains("per_utterance"));
+  auto scores = [](const eval::EvalReport& r) {
     std::vector<double> v;
-    for (const auto& it : r["items"]) v.push_back(it["score_per_frame"].get<double>());
+    for (const auto& it : r.extra.at("items")) v.push_back(it["score_per_frame"].get<double>());
     return v;
   };
   o.frequency_warp = kFsddTidigitsWarp;  // the default, explicitly: same decode
@@ -199,10 +200,11 @@ TEST(SpeechFsddRunner, ModelFolderDecodesLikeThePackagedModel) {
   o.fsdd_model = (t.path() / "model").string();
   auto folder = run_speech_eval(o);
   ASSERT_TRUE(folder) << folder.error().to_string();
-  ASSERT_EQ((*folder)["items"].size(), 2u);
+  ASSERT_EQ(folder->to_json()["items"].size(), 2u);
   for (size_t i = 0; i < 2; ++i)
-    EXPECT_EQ((*folder)["items"][i]["hypothesis"], (*packaged)["items"][i]["hypothesis"]);
-  EXPECT_NE((*folder)["protocol"].get<std::string>().find((t.path() / "model").string()),
+    EXPECT_EQ(folder->to_json()["items"][i]["hypothesis"],
+              packaged->to_json()["items"][i]["hypothesis"]);
+  EXPECT_NE(folder->to_json()["protocol"].get<std::string>().find((t.path() / "model").string()),
             std::string::npos);
   o.fsdd_model = "tidigitz";
   auto bad = run_speech_eval(o);

@@ -1,6 +1,7 @@
-#include "speech_eval.hpp"
+#include "dreamsense/eval/speech_eval.hpp"
 
 #include "dreamsense/audio/audio_file.hpp"
+#include "dreamsense/eval/speaker_batch.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -11,8 +12,6 @@
 #include <map>
 #include <random>
 #include <regex>
-
-#include "speaker_batch.hpp"
 
 namespace dreamsense::speech {
 namespace {
@@ -60,8 +59,8 @@ struct GrammarSet {
   std::vector<std::pair<fs::path, std::string>> utterances;  // file, reference
 };
 
-Result<json> run_pocketsphinx(const SpeechEvalOptions& o,
-                              const std::function<void(double)>& progress) {
+Result<eval::EvalReport> run_pocketsphinx(const SpeechEvalOptions& o,
+                                          const std::function<void(double)>& progress) {
   RecognizerOptions ro = o.recognizer;
   if (o.garbage_phone_weight) ro.garbage_phone_weight = *o.garbage_phone_weight;
   if (o.min_confidence) ro.min_confidence = *o.min_confidence;
@@ -182,23 +181,25 @@ Result<json> run_pocketsphinx(const SpeechEvalOptions& o,
     oog_accepted += s_fa;
   }
   const size_t n = in_items + oog_items;
-  json j;
-  j["task"] = "speech";
-  j["dataset"] = {{"name", "pocketsphinx"}, {"items", n}, {"dir", fs::absolute(d).string()}};
-  j["protocol"] =
+  eval::EvalReport j;
+  j.task = "speech";
+  j.dataset = "pocketsphinx";
+  j.items = n;
+  j.extra["dataset_dir"] = fs::absolute(d).string();
+  j.protocol =
       "grammar recognition, PocketSphinx en-us + phone-loop garbage rejection; in-grammar: "
       "cards/*.wav under cards.gram, goforward.raw under goforward.gram; out-of-grammar per "
       "grammar: the other grammar's utterances, numbers.raw, something.raw, librivox/*.wav, 3 s "
       "silence, 3 s white noise";
-  j["metrics"] = {
+  j.metrics = {
       {"grammar_sentence_accuracy", in_items ? static_cast<double>(in_correct) / in_items : 0.0},
       {"false_accept_rate", oog_items ? static_cast<double>(oog_accepted) / oog_items : 0.0},
       {"accuracy", n ? static_cast<double>(in_correct + oog_items - oog_accepted) / n : 0.0},
       {"in_grammar_items", in_items},
       {"out_of_grammar_items", oog_items}};
-  j["timing"] = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0}, {"audio_seconds", audio_s}};
-  j["per_class"] = per_class;
-  if (o.list_items) j["items"] = items;
+  j.timing = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0}, {"audio_seconds", audio_s}};
+  j.per_class = per_class;
+  if (o.list_items) j.extra["items"] = items;
   return j;
 }
 
@@ -380,7 +381,8 @@ Result<std::vector<AdaptationUtterance>> list_enrolment(const fs::path& list) {
 
 namespace {
 
-Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(double)>& progress) {
+Result<eval::EvalReport> run_fsdd(const SpeechEvalOptions& o,
+                                  const std::function<void(double)>& progress) {
   auto items = load_fsdd(o.dir, o.fsdd);
   if (!items) return tl::unexpected(items.error());
   auto setup = fsdd_recognizer(o);
@@ -532,13 +534,15 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
       records.push_back(std::move(r));
     }
   }
-  json j;
-  j["task"] = "speech";
-  j["dataset"] = {{"name", "fsdd"}, {"items", n}, {"dir", fs::absolute(o.dir).string()}};
+  eval::EvalReport j;
+  j.task = "speech";
+  j.dataset = "fsdd";
+  j.items = n;
+  j.extra["dataset_dir"] = fs::absolute(o.dir).string();
   std::string speakers, vocabulary;
   for (const auto& [s, _] : per_speaker) speakers += (speakers.empty() ? "" : ",") + s;
   for (const auto& w : words) vocabulary += (vocabulary.empty() ? "" : "|") + w;
-  j["protocol"] = fmt::format(
+  j.protocol = fmt::format(
       "isolated digits, closed set, no training on FSDD: {}; words {}; each trimmed clip padded "
       "with {} s of -70 dBFS noise at both ends; {}; speakers {}; take indices {}-{}",
       model_note, vocabulary, pad_s,
@@ -555,23 +559,23 @@ Result<json> run_fsdd(const SpeechEvalOptions& o, const std::function<void(doubl
     spk[s] = {{"accuracy", ratio(c.first, c.second)}, {"items", c.second}};
   for (const auto& [s, c] : per_speaker_utt)
     spk_utt[s] = {{"accuracy", ratio(c.first, c.second)}, {"items", c.second}};
-  j["metrics"] = {{"accuracy", ratio(correct, n)},
-                  {"no_result_rate", ratio(no_result, n)},
-                  {"per_speaker", spk},
-                  {"confusion", confusion_json(labels, conf)}};
+  j.metrics = {{"accuracy", ratio(correct, n)},
+               {"no_result_rate", ratio(no_result, n)},
+               {"per_speaker", spk},
+               {"confusion", confusion_json(labels, conf)}};
   // Each clip decoded alone (before the speaker vote): the per-utterance recogniser.
   if (o.fsdd_speaker_adapt)
-    j["metrics"]["per_utterance"] = {{"accuracy", ratio(correct_utt, n)}, {"per_speaker", spk_utt}};
-  j["timing"] = timing_json(decode_s, audio_s, ms);
-  j["timing"]["adaptation_seconds"] = adapt_s;
-  j["timing"]["rtf_with_adaptation"] = audio_s > 0 ? (decode_s + adapt_s) / audio_s : 0.0;
-  j["per_class"] = per_class_json(labels, per_digit);
-  if (o.list_items) j["items"] = records;
+    j.metrics["per_utterance"] = {{"accuracy", ratio(correct_utt, n)}, {"per_speaker", spk_utt}};
+  j.timing = timing_json(decode_s, audio_s, ms);
+  j.timing["adaptation_seconds"] = adapt_s;
+  j.timing["rtf_with_adaptation"] = audio_s > 0 ? (decode_s + adapt_s) / audio_s : 0.0;
+  j.per_class = per_class_json(labels, per_digit);
+  if (o.list_items) j.extra["items"] = records;
   return j;
 }
 
-Result<json> run_speech_commands(const SpeechEvalOptions& o,
-                                 const std::function<void(double)>& progress) {
+Result<eval::EvalReport> run_speech_commands(const SpeechEvalOptions& o,
+                                             const std::function<void(double)>& progress) {
   if (auto st = o.presence.check(); !st) return tl::unexpected(st.error());
   auto items = load_speech_commands(o.dir);
   if (!items) return tl::unexpected(items.error());
@@ -653,30 +657,32 @@ Result<json> run_speech_commands(const SpeechEvalOptions& o,
                          {"correct", ok}});
     if (progress) progress(static_cast<double>(i + 1) / items->size());
   }
-  json j;
-  j["task"] = "speech";
-  j["dataset"] = {
-      {"name", "speech-commands"}, {"items", items->size()}, {"dir", fs::absolute(o.dir).string()}};
-  j["protocol"] = fmt::format(
+  eval::EvalReport j;
+  j.task = "speech";
+  j.dataset = "speech-commands";
+  j.items = items->size();
+  j.extra["dataset_dir"] = fs::absolute(o.dir).string();
+  j.protocol = fmt::format(
       "12 classes (10 words, _unknown_, _silence_): voiced-energy silence check, then "
       "PocketSphinx en-us under the 10-word grammar with phone-loop rejection (garbage weight "
       "{}) and confidence >= {}; rejected -> _unknown_; no training",
       ro.garbage_phone_weight, ro.min_confidence);
-  j["metrics"] = {
+  j.metrics = {
       {"accuracy", ratio(correct, items->size())},
       {"false_accept_rate", ratio(false_accepts, negatives)},
       {"unknown_false_accept_rate", ratio(fa_by[kUnknownLabel].first, fa_by[kUnknownLabel].second)},
       {"silence_false_accept_rate", ratio(fa_by[kSilenceLabel].first, fa_by[kSilenceLabel].second)},
       {"confusion", confusion_json(labels, conf)}};
-  j["timing"] = timing_json(decode_s, audio_s, ms);
-  j["per_class"] = per_class_json(labels, per_label);
-  if (o.list_items) j["items"] = records;
+  j.timing = timing_json(decode_s, audio_s, ms);
+  j.per_class = per_class_json(labels, per_label);
+  if (o.list_items) j.extra["items"] = records;
   return j;
 }
 
 // Own recordings: a list of utterances with their words (or "-" = must be rejected), all
 // decoded under one grammar, with the out-of-grammar rejection as in the session pipeline.
-Result<json> run_list(const SpeechEvalOptions& o, const std::function<void(double)>& progress) {
+Result<eval::EvalReport> run_list(const SpeechEvalOptions& o,
+                                  const std::function<void(double)>& progress) {
   if (o.grammar.empty())
     return make_error(ErrorCode::kInvalidArgument,
                       "eval speech: --dataset list needs --grammar FILE (JSGF or SRGS)");
@@ -729,30 +735,32 @@ Result<json> run_list(const SpeechEvalOptions& o, const std::function<void(doubl
   auto rate = [](size_t num, size_t den) -> json {
     return den ? json(static_cast<double>(num) / den) : json(nullptr);
   };
-  json r;
-  r["task"] = "speech";
-  r["dataset"] = {{"name", "list"}, {"items", list->size()}, {"path", o.dir.string()}};
-  r["protocol"] = fmt::format(
+  eval::EvalReport r;
+  r.task = "speech";
+  r.dataset = "list";
+  r.items = list->size();
+  r.extra["dataset_path"] = o.dir.string();
+  r.protocol = fmt::format(
       "each listed utterance decoded once under {} with out-of-grammar rejection (phone-loop "
       "weight {}, min confidence {}); model {}; in-grammar items must give exactly their words, "
       "'-' items must give nothing",
       o.grammar.string(), ro.garbage_phone_weight, ro.min_confidence, ro.model_dir.string());
-  r["metrics"] = {{"accuracy", rate(in_correct + oog_items - oog_accepted, list->size())},
-                  {"grammar_sentence_accuracy", rate(in_correct, in_items)},
-                  {"false_reject_rate", rate(in_rejected, in_items)},
-                  {"false_accept_rate", rate(oog_accepted, oog_items)},
-                  {"in_grammar_items", in_items},
-                  {"out_of_grammar_items", oog_items}};
-  r["timing"] = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0}, {"audio_seconds", audio_s}};
-  r["per_class"] = json::object();
-  if (o.list_items) r["items"] = std::move(items);
+  r.metrics = {{"accuracy", rate(in_correct + oog_items - oog_accepted, list->size())},
+               {"grammar_sentence_accuracy", rate(in_correct, in_items)},
+               {"false_reject_rate", rate(in_rejected, in_items)},
+               {"false_accept_rate", rate(oog_accepted, oog_items)},
+               {"in_grammar_items", in_items},
+               {"out_of_grammar_items", oog_items}};
+  r.timing = {{"rtf", audio_s > 0 ? decode_s / audio_s : 0.0}, {"audio_seconds", audio_s}};
+  r.per_class = json::object();
+  if (o.list_items) r.extra["items"] = std::move(items);
   return r;
 }
 
 }  // namespace
 
-Result<json> run_speech_eval(const SpeechEvalOptions& options,
-                             const std::function<void(double)>& progress) {
+Result<eval::EvalReport> run_speech_eval(const SpeechEvalOptions& options,
+                                         const std::function<void(double)>& progress) {
   SpeechEvalOptions o = options;
   // A model folder from `train speech` is decoded with the front end it was adapted with
   // (fsdd: its --fsdd-model folder, handled by fsdd_recognizer).

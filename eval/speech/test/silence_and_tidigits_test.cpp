@@ -1,6 +1,7 @@
 // Silence check (detect_speech), the libsoxr resampler, and the recogniser with PocketSphinx's
 // TIDIGITS model (another phone set for the garbage loop, an 8 kHz front end).
 #include "dreamsense/audio/speech_presence.hpp"
+#include "dreamsense/eval/speech_eval.hpp"
 #include "dreamsense/speech/recognizer.hpp"
 
 #include <gtest/gtest.h>
@@ -9,8 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
-
-#include "speech_eval.hpp"
 
 namespace dreamsense::speech {
 namespace {

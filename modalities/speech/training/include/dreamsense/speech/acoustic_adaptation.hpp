@@ -16,9 +16,13 @@
 //    weights and transitions as well was worse on held-out takes, README);
 // 5. the output folder is a copy of the model with the new `means` and `adaptation.yaml`
 //    (what it was adapted from, on how much speech, with which front end). Decode with it by
-//    setting RecognizerOptions::model_dir (same front-end options as here).
+//    setting RecognizerOptions::model_dir (same front-end options as here), or use_acoustic_model.
+//
+// Library dreamsense::speech_training (training spawns sphinxtrain; the analyser library
+// dreamsense::speech only decodes).
 
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/speech/acoustic_model.hpp"  // kAdaptationFileName, use_acoustic_model
 #include "dreamsense/speech/recognizer.hpp"
 
 #include <cstdint>
@@ -69,14 +73,5 @@ struct AdaptationReport {
 Result<AdaptationReport> adapt_acoustic_model(
     std::span<const AdaptationUtterance> utterances, const AcousticAdaptationOptions& options,
     const std::filesystem::path& out_dir, const std::function<void(double)>& progress = nullptr);
-
-// Name of the provenance file in an adapted model folder.
-inline constexpr const char* kAdaptationFileName = "adaptation.yaml";
-
-// Decode with the model in `dir`: sets options.model_dir and, when the folder was written by
-// adapt_acoustic_model, the front end it was adapted with (frequency warp, noise and silence
-// removal), so decoding sees the same features as training. Errors: no model there, an
-// unreadable adaptation.yaml, or a front-end rate other than the recogniser's.
-Status use_acoustic_model(RecognizerOptions& options, const std::filesystem::path& dir);
 
 }  // namespace dreamsense::speech

@@ -2,11 +2,11 @@
 // of the held-out "test" half, written by the speech_synth fixture into the build tree).
 // Synthetic speech is not the real test: the thresholds here only guard the plumbing, the
 // silence check and the rejection of other words. Skips without espeak-ng.
+#include "dreamsense/eval/speech_eval.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
-
-#include "speech_eval.hpp"
 
 namespace dreamsense::speech {
 namespace {
@@ -23,18 +23,19 @@ TEST(SpeechCommandsSynthetic, TwelveClassJsonAndSaneNumbers) {
   o.dir = dir;
   auto r = run_speech_eval(o);
   ASSERT_TRUE(r) << r.error().to_string();
-  EXPECT_EQ((*r)["task"], "speech");
-  EXPECT_EQ((*r)["dataset"]["name"], "speech-commands");
-  const auto& m = (*r)["metrics"];
+  EXPECT_EQ(r->to_json()["task"], "speech");
+  EXPECT_EQ(r->to_json()["dataset"]["name"], "speech-commands");
+  const auto m = r->to_json()["metrics"];
   ASSERT_TRUE(m.contains("accuracy") && m.contains("false_accept_rate"));
-  EXPECT_EQ((*r)["per_class"].size(), 12u);
+  EXPECT_EQ(r->to_json()["per_class"].size(), 12u);
   for (const char* l : {"yes", "go", "_unknown_", "_silence_"})
-    EXPECT_TRUE((*r)["per_class"][l].contains("recall")) << l;
-  EXPECT_GE((*r)["per_class"]["_silence_"]["recall"].get<double>(), 0.99) << (*r)["items"].dump(1);
-  EXPECT_LE(m["false_accept_rate"].get<double>(), 0.2) << (*r)["items"].dump(1);
-  EXPECT_GE(m["accuracy"].get<double>(), 0.35) << (*r)["items"].dump(1);
-  EXPECT_GT((*r)["timing"]["rtf"].get<double>(), 0.0);
-  EXPECT_LT((*r)["timing"]["rtf"].get<double>(), 1.0);
+    EXPECT_TRUE(r->to_json()["per_class"][l].contains("recall")) << l;
+  EXPECT_GE(r->to_json()["per_class"]["_silence_"]["recall"].get<double>(), 0.99)
+      << r->to_json()["items"].dump(1);
+  EXPECT_LE(m["false_accept_rate"].get<double>(), 0.2) << r->to_json()["items"].dump(1);
+  EXPECT_GE(m["accuracy"].get<double>(), 0.35) << r->to_json()["items"].dump(1);
+  EXPECT_GT(r->to_json()["timing"]["rtf"].get<double>(), 0.0);
+  EXPECT_LT(r->to_json()["timing"]["rtf"].get<double>(), 1.0);
 }
 
 }  // namespace
