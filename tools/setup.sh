@@ -28,6 +28,8 @@ packages=(
   python3 python3-jsonschema espeak-ng
   # batch --slurm: the test starts a single-node Slurm cluster on 127.0.0.1 (label slurm)
   slurm-wlm munge
+  # SRGS grammars (XML, modalities/speech); clang-tidy for tools/tidy.sh (CI, issue 19)
+  libtinyxml2-dev clang-tidy
 )
 
 missing=()

@@ -1,8 +1,10 @@
 #pragma once
-// A tiny XML reader for the SRGS subset: elements, attributes, character data, comments,
-// CDATA, processing instructions and a DOCTYPE without an internal subset; the five predefined
-// entities and numeric character references. Every element and text records its source line.
-// Not a validating parser: enough for hand-written grammars, with line-numbered errors.
+// The XML of SRGS grammars, parsed by tinyxml2 (Debian libtinyxml2-dev) into a small tree that
+// records every element's and text's source line: elements, attributes, character data (the
+// five predefined entities and numeric character references decoded; CDATA kept verbatim);
+// comments, processing instructions and the DOCTYPE are skipped. Errors are one line,
+// "<source>:<line>: <problem>", also for an entity XML does not define (&nbsp;), which
+// tinyxml2 itself would pass through as text.
 
 #include "dreamsense/core/status.hpp"
 
