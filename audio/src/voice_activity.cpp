@@ -1,11 +1,13 @@
 #include "dreamsense/audio/voice_activity.hpp"
 
+#include "dreamsense/audio/energy_gate.hpp"
 #include "dreamsense/audio/fft.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
 
 namespace dreamsense::audio {
@@ -47,7 +49,7 @@ struct VoiceActivityDetector::Impl {
   int block_frames = 0, frames_in_block = 0;
   size_t next_block = 0;
   int64_t frames_seen = 0;
-  double gate_floor_db = 0;  // kEnergyGate
+  std::optional<EnergyGate> gate;  // kEnergyGate
   double a_smooth = 0, a_adapt = 0, a_fall = 0;
 };
 
@@ -82,6 +84,12 @@ Result<std::unique_ptr<VoiceActivityDetector>> VoiceActivityDetector::create(
   auto vad =
       std::unique_ptr<VoiceActivityDetector>(new VoiceActivityDetector(options, std::move(impl)));
   vad->frame_len_ = len;
+  if (options.method == VoiceActivityMethod::kEnergyGate) {
+    EnergyGateOptions g;
+    g.threshold_db = options.gate_threshold_db;
+    g.floor_rise_db_per_s = options.gate_floor_rise_db_per_s;
+    vad->impl_->gate.emplace(g, static_cast<double>(len) / options.sample_rate);
+  }
   vad->reset();
   return vad;
 }
@@ -97,7 +105,7 @@ void VoiceActivityDetector::reset() {
   m.frames_in_block = 0;
   m.next_block = 0;
   m.frames_seen = 0;
-  m.gate_floor_db = 0;
+  if (m.gate) m.gate->reset();
   pushed_ = 0;
 }
 
@@ -128,14 +136,11 @@ VoiceActivityFrame VoiceActivityDetector::analyse_frame() {
   }
   for (int i = frame_len_; i < m.fft.size(); ++i) x[i] = 0;
   f.level_dbfs = 10 * std::log10(sum2 / frame_len_ + 1e-12);
-  if (options_.method == VoiceActivityMethod::kEnergyGate) {
-    const double frame_s = static_cast<double>(frame_len_) / options_.sample_rate;
-    m.gate_floor_db =
-        std::min(f.level_dbfs, m.gate_floor_db + options_.gate_floor_rise_db_per_s * frame_s);
-    f.energy_snr_db = f.level_dbfs - m.gate_floor_db;
-    const double margin = f.energy_snr_db - options_.gate_threshold_db;
-    f.speech = margin > 0;
-    f.probability = static_cast<float>(1.0 / (1.0 + std::exp(-margin / 3.0)));
+  if (m.gate) {
+    const EnergyGate::Decision d = m.gate->push(f.level_dbfs);
+    f.speech = d.speech;
+    f.energy_snr_db = d.margin_db + options_.gate_threshold_db;
+    f.probability = static_cast<float>(1.0 / (1.0 + std::exp(-d.margin_db / 3.0)));
     ++m.frames_seen;
     return f;
   }
