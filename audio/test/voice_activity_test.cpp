@@ -2,6 +2,8 @@
 
 #include "dreamsense/audio/voice_activity.hpp"
 
+#include "dreamsense/audio/energy_gate.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -139,6 +141,31 @@ TEST(VoiceActivity, EnergyGateKeepsALongUtteranceWhole) {
   EXPECT_LT(spectral_speech, inside * 3 / 4);  // why voice_id uses the gate
   // Near the end the floor has risen by at most 3 dB/s x 5 s = 15 dB over the noise.
   EXPECT_GT(g[static_cast<size_t>(6.9 * rate / 320)].energy_snr_db, 30.0 - 15.0 - 0.5);
+}
+
+TEST(EnergyGate, FloorFollowsDropsRisesSlowlyAndHangoverAndMinLevelApply) {
+  EnergyGateOptions o;
+  o.threshold_db = 6;
+  o.floor_rise_db_per_s = 1;
+  o.min_level_dbfs = -70;
+  o.hangover_frames = 2;
+  ASSERT_TRUE(o.check());
+  EnergyGate g(o, 0.5);              // the floor may rise 0.5 dB per frame
+  EXPECT_FALSE(g.push(-60).speech);  // first frame: the floor
+  EXPECT_TRUE(g.push(-50).speech);   // 10 dB over -60
+  EXPECT_TRUE(g.push(-50).speech);   // floor -59.5
+  EXPECT_TRUE(g.push(-60).speech);   // hangover 1
+  EXPECT_TRUE(g.push(-60).speech);   // hangover 2
+  EXPECT_FALSE(g.push(-60).speech);
+  EXPECT_FALSE(g.push(-90).speech);  // drop: the floor follows at once
+  EXPECT_FALSE(g.push(-80).speech);  // 10 dB over the floor but below min_level_dbfs
+  const auto d = g.push(-40);
+  EXPECT_TRUE(d.speech);
+  EXPECT_NEAR(d.margin_db, -40 - (-89.5 + 6), 1e-9);  // floor -90, then +0.5 dB at -80
+  g.reset();
+  EXPECT_FALSE(g.push(-40).speech);  // forgotten: -40 is the new floor
+  o.threshold_db = -1;
+  EXPECT_FALSE(o.check());
 }
 
 }  // namespace
