@@ -29,6 +29,8 @@ packages=(
   # batch --slurm: the test starts a single-node Slurm cluster on 127.0.0.1 (label slurm)
   slurm-wlm munge
   chromium  # tests: report.html opened in a headless browser (apps/test/video_cli_test.cpp)
+  # SRGS grammars (XML, modalities/speech); clang-tidy for tools/tidy.sh (CI, issue 19)
+  libtinyxml2-dev clang-tidy
 )
 
 missing=()

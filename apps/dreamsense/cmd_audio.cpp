@@ -1,12 +1,12 @@
 // `dreamsense eval doa [--geometry kinect1] [--rt60 S] [--snr DB] [--azimuths FROM:TO:STEP]
 //                      [--placements N] [--seed N] [--json FILE|-]`
 
+#include "dreamsense/eval/doa_eval.hpp"
 #include "dreamsense/sound_direction/direction_finder.hpp"
 
 #include <cstdio>
 
 #include "commands.hpp"
-#include "doa_eval.hpp"
 #include "progress.hpp"
 
 namespace dreamsense::app {
@@ -51,16 +51,15 @@ void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
       exit_code = fail(r.error());
       return;
     }
-    const auto& m = (*r)["metrics"];
+    const auto& m = r->metrics;
     if (!g.quiet)
       std::fprintf(stderr,
                    "doa: %zu items, mae %.2f deg, within 10 deg %.3f, frame mae %.2f deg, "
                    "cpu_fraction %.4f\n",
-                   (*r)["dataset"]["items"].get<size_t>(),
-                   m["mae_deg"].is_null() ? -1.0 : m["mae_deg"].get<double>(),
+                   r->items, m["mae_deg"].is_null() ? -1.0 : m["mae_deg"].get<double>(),
                    m["within_10deg"].get<double>(), m["frame_mae_deg"].get<double>(),
-                   (*r)["timing"]["cpu_fraction"].get<double>());
-    if (auto s = write_json(flags->json, *r); !s) exit_code = fail(s.error());
+                   r->timing["cpu_fraction"].get<double>());
+    if (auto s = eval::write_report(*r, flags->json); !s) exit_code = fail(s.error());
   });
 }
 

@@ -3,18 +3,17 @@
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
-#include "dreamsense/geometry/calibration_eval.hpp"
+#include "dreamsense/eval/calibration_eval.hpp"
 #include "dreamsense/geometry/calibration_io.hpp"
+#include "dreamsense/geometry/calibration_tasks.hpp"
 #include "dreamsense/geometry/correspondences.hpp"
 #include "dreamsense/geometry/dream_import.hpp"
 #include "dreamsense/geometry/intrinsics.hpp"
 #include "dreamsense/geometry/plane.hpp"
 #include "dreamsense/geometry/pnp.hpp"
-#include "dreamsense/sim/demo_session.hpp"
 
 #include <algorithm>
 #include <cstdio>
-#include <regex>
 
 #include "commands.hpp"
 
@@ -36,34 +35,6 @@ json to_json(const cv::Mat& m) {
   m.convertTo(d, CV_64F);
   for (int i = 0; i < static_cast<int>(d.total()); ++i) a.push_back(d.at<double>(i));
   return a;
-}
-
-Result<cv::Size> parse_size(const std::string& text, const char* what) {
-  std::smatch m;
-  static const std::regex re(R"(^\s*(\d+)\s*[xX]\s*(\d+)\s*$)");
-  if (!std::regex_match(text, m, re))
-    return make_error(ErrorCode::kInvalidArgument, "{} '{}': expected WxH, e.g. 9x6", what, text);
-  return cv::Size(std::stoi(m[1]), std::stoi(m[2]));
-}
-
-// Length with an optional unit: "0.03", "0.03m", "30mm", "3cm" -> metres.
-Result<double> parse_length(const std::string& text, const char* what) {
-  std::smatch m;
-  static const std::regex re(R"(^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(mm|cm|m)?\s*$)");
-  if (!std::regex_match(text, m, re))
-    return make_error(ErrorCode::kInvalidArgument, "{} '{}': expected a length like 0.03 or 30mm",
-                      what, text);
-  double v = std::stod(m[1]);
-  if (m[2] == "mm") v *= 0.001;
-  if (m[2] == "cm") v *= 0.01;
-  if (!(v > 0)) return make_error(ErrorCode::kInvalidArgument, "{} must be > 0", what);
-  return v;
-}
-
-Result<double> unit_scale(const std::string& unit) {
-  if (unit == "m") return 1.0;
-  if (unit == "mm") return 0.001;
-  return make_error(ErrorCode::kInvalidArgument, "--unit '{}': expected m or mm", unit);
 }
 
 // ---------------------------------------------------------------- calibrate intrinsics
@@ -99,7 +70,7 @@ void add_intrinsics(CLI::App& cal, int& exit_code) {
   cmd->add_option("--json", f->json, "Also write a JSON report to FILE (- for stdout)");
   cmd->callback([f, &exit_code] {
     IntrinsicsOptions o;
-    auto board = parse_size(f->board, "--board");
+    auto board = parse_board_size(f->board, "--board");
     if (!board) return void(exit_code = fail(board.error()));
     auto square = parse_length(f->square, "--square");
     if (!square) return void(exit_code = fail(square.error()));
@@ -118,21 +89,7 @@ void add_intrinsics(CLI::App& cal, int& exit_code) {
     if (!r) return void(exit_code = fail(r.error()));
     r->camera.frame = f->frame;
     const auto& views = r->views;
-    auto s = write_camera_yaml(f->out, r->camera, [&](cv::FileStorage& fs) {
-      fs << "rms_px" << r->rms_px;
-      fs << "distortion_model" << to_string(o.model);
-      fs << "calibration_flags" << r->flags;
-      fs << "board_cols" << o.board.width << "board_rows" << o.board.height;
-      fs << "square_size_m" << o.square_size;
-      fs << "views"
-         << "[";
-      for (const auto& v : views)
-        fs << "{"
-           << "file" << v.name << "board_found" << static_cast<int>(v.board_found) << "used"
-           << static_cast<int>(v.used) << "rms_px" << v.rms_px << "}";
-      fs << "]";
-    });
-    if (!s) return void(exit_code = fail(s.error()));
+    if (auto s = write_intrinsics_yaml(f->out, *r, o); !s) return void(exit_code = fail(s.error()));
     const cv::Matx33d& K = r->camera.K;
     std::fprintf(stderr,
                  "intrinsics: %d of %zu views used, RMS %.3f px, fx %.2f fy %.2f cx %.2f cy "
@@ -214,79 +171,43 @@ void add_extrinsics(CLI::App& cal, int& exit_code) {
       ->required();
   cmd->add_option("--json", f->json, "Also write a JSON report to FILE (- for stdout)");
   cmd->callback([f, &exit_code] {
-    auto cam = read_camera_model(f->intrinsics);
-    if (!cam) return void(exit_code = fail(cam.error()));
-    auto scale = unit_scale(f->unit);
+    ExtrinsicsRequest q;
+    q.intrinsics = f->intrinsics;
+    q.points = f->points;
+    q.front = f->front;
+    q.depth = f->depth;
+    auto scale = parse_unit_scale(f->unit);
     if (!scale) return void(exit_code = fail(scale.error()));
+    q.unit_to_m = *scale;
     auto method = parse_pnp_method(f->method);
     if (!method) return void(exit_code = fail(method.error()));
-    auto table = read_numeric_csv(f->points, {4, 5});
-    if (!table) return void(exit_code = fail(table.error()));
-    std::optional<CameraModel> front;
-    cv::Mat depth;
-    if (table->columns == 4) {
-      if (f->front.empty() || f->depth.empty())
-        return void(exit_code = fail(f->points +
-                                     ": 4 columns (u,v,u_front,v_front) need --front and --depth"));
-      auto fr = read_camera_model(f->front);
-      if (!fr) return void(exit_code = fail(fr.error()));
-      front = *fr;
-      auto d = read_depth_image(f->depth);
-      if (!d) return void(exit_code = fail(d.error()));
-      depth = *d;
-    }
-    auto corr = make_correspondences(*table, *scale, depth.empty() ? nullptr : &depth,
-                                     front ? &*front : nullptr);
-    if (!corr) return void(exit_code = fail(f->points + ": " + corr.error().message));
-    PnpOptions o;
-    o.method = *method;
-    o.inlier_threshold_px = f->threshold;
-    o.max_iterations = f->max_iterations;
-    o.refine_lm = !f->no_refine;
-    o.seed = f->seed;
-    if (auto s = o.check(); !s) return void(exit_code = fail(s.error()));
-    auto r = estimate_pose(corr->world, corr->pixels, cam->K, cam->distortion, o);
-    if (!r) return void(exit_code = fail(f->points + ": " + r.error().message));
-    json others = json::array();
-    if (f->compare) {
-      for (PnpMethod m :
-           {PnpMethod::kRansacEpnp, PnpMethod::kSeedDownsample, PnpMethod::kEpnpAll}) {
-        if (m == o.method) continue;
-        PnpOptions om = o;
-        om.method = m;
-        om.require_consensus = false;
-        auto rm = estimate_pose(corr->world, corr->pixels, cam->K, cam->distortion, om);
-        if (!rm) continue;
-        json jm = pnp_json(*rm, m);
-        jm["rotation_diff_deg"] = rotation_angle_deg(rm->R, r->R);
-        jm["centre_diff_m"] = cv::norm(rm->centre_world() - r->centre_world());
-        others.push_back(jm);
-      }
-    }
-    CameraModel out = *cam;
-    out.R = r->R;
-    out.t = r->t;
-    if (!f->frame.empty()) out.frame = f->frame;
-    const int n = static_cast<int>(corr->pixels.size());
-    auto s = write_camera_yaml(f->out, out, [&](cv::FileStorage& fs) {
-      fs << "world_frame"
-         << "world";
-      fs << "extrinsics_method" << to_string(o.method);
-      fs << "correspondences" << n << "inliers" << r->inlier_count;
-      fs << "inlier_threshold_px" << o.inlier_threshold_px;
-      fs << "reprojection_rms_px" << r->rms_px;
-      fs << "correspondence_file" << f->points;
-    });
-    if (!s) return void(exit_code = fail(s.error()));
-    const cv::Vec3d c = r->centre_world();
+    q.pnp.method = *method;
+    q.pnp.inlier_threshold_px = f->threshold;
+    q.pnp.max_iterations = f->max_iterations;
+    q.pnp.refine_lm = !f->no_refine;
+    q.pnp.seed = f->seed;
+    q.compare = f->compare;
+    q.frame = f->frame;
+    auto c = calibrate_extrinsics(q);
+    if (!c) return void(exit_code = fail(c.error()));
+    if (auto s = write_extrinsics_yaml(f->out, *c, q); !s) return void(exit_code = fail(s.error()));
+    const PnpResult& r = c->pose;
+    const cv::Vec3d centre = r.centre_world();
     std::fprintf(stderr,
                  "extrinsics (%s): %d of %d inliers, RMS %.2f px, camera centre in world (%.3f, "
                  "%.3f, %.3f) m -> %s\n",
-                 to_string(o.method), r->inlier_count, n, r->rms_px, c[0], c[1], c[2],
-                 f->out.c_str());
-    json j = pnp_json(*r, o.method);
-    j["correspondences"] = n;
-    j["lifted_through_depth"] = corr->lifted;
+                 to_string(q.pnp.method), r.inlier_count, c->correspondences, r.rms_px, centre[0],
+                 centre[1], centre[2], f->out.c_str());
+    json others = json::array();
+    for (const auto& m : c->compared) {
+      json jm = pnp_json(m.pose, m.method);
+      jm["rotation_diff_deg"] = m.rotation_diff_deg;
+      jm["centre_diff_m"] = m.centre_diff_m;
+      others.push_back(jm);
+    }
+    json j = pnp_json(r, q.pnp.method);
+    j["correspondences"] = c->correspondences;
+    j["lifted_through_depth"] = c->lifted;
     j["convention"] = "camera_from_world: X_cam = R * X_world + t (metres)";
     j["compared"] = others;
     j["out"] = f->out;
@@ -312,34 +233,19 @@ void add_desk(CLI::App& cal, int& exit_code) {
   cmd->add_option("--out", f->out, "Output table YAML")->required();
   cmd->add_option("--json", f->json, "Also write a JSON report to FILE (- for stdout)");
   cmd->callback([f, &exit_code] {
-    auto scale = unit_scale(f->unit);
+    DeskRequest q;
+    q.points = f->points;
+    q.front = f->front;
+    q.depth = f->depth;
+    auto scale = parse_unit_scale(f->unit);
     if (!scale) return void(exit_code = fail(scale.error()));
-    auto table = read_numeric_csv(f->points, {2, 3});
-    if (!table) return void(exit_code = fail(table.error()));
-    std::vector<cv::Vec3d> pts;
-    if (table->columns == 2) {
-      if (f->front.empty() || f->depth.empty())
-        return void(exit_code = fail(f->points + ": 2 columns (u,v) need --front and --depth"));
-      auto front = read_camera_model(f->front);
-      if (!front) return void(exit_code = fail(front.error()));
-      auto depth = read_depth_image(f->depth);
-      if (!depth) return void(exit_code = fail(depth.error()));
-      for (size_t i = 0; i < table->rows.size(); ++i) {
-        auto X = lift_front_pixel(*depth, *front, {table->rows[i][0], table->rows[i][1]});
-        if (!X)
-          return void(exit_code = fail(
-                          fmt::format("{}:{}: {}", f->points, table->lines[i], X.error().message)));
-        pts.push_back(*X);
-      }
-    } else {
-      for (const auto& r : table->rows)
-        pts.emplace_back(r[0] * *scale, r[1] * *scale, r[2] * *scale);
-    }
-    auto tf = table_frame_from_points(pts);
-    if (!tf) return void(exit_code = fail(f->points + ": " + tf.error().message));
+    q.unit_to_m = *scale;
+    auto d = calibrate_desk(q);
+    if (!d) return void(exit_code = fail(d.error()));
+    const TableFrame* tf = &d->table;
+    const auto& pts = d->points;
+    const double worst = d->max_point_plane_distance_m;
     if (auto s = write_table_frame(f->out, *tf); !s) return void(exit_code = fail(s.error()));
-    double worst = 0;
-    for (const auto& p : pts) worst = std::max(worst, tf->plane.distance(p));
     std::fprintf(stderr,
                  "desk: normal (%.3f, %.3f, %.3f), sensor %.3f m above the table, %zu points "
                  "(max off-plane %.4f m) -> %s\n",
@@ -382,7 +288,7 @@ void add_import(CLI::App& cal, int& exit_code) {
       return void(exit_code = fail("import-dream: --out needs --intrinsics and --image-size"));
     std::optional<cv::Size> size;
     if (!f->image_size.empty()) {
-      auto s = parse_size(f->image_size, "--image-size");
+      auto s = parse_board_size(f->image_size, "--image-size");
       if (!s) return void(exit_code = fail(s.error()));
       size = *s;
     }
@@ -444,65 +350,6 @@ struct EvalFlags {
   double noise_px = 1.0, outliers = 0.2;
 };
 
-json eval_zhang(const ZhangDataset& d, const ZhangEval& e) {
-  json per = json::object();
-  for (const auto& v : e.views)
-    per[v.name] = {{"rms_px", v.rms_px},
-                   {"published_rms_px", v.published_rms_px},
-                   {"rot_err_deg", v.rot_err_deg},
-                   {"trans_rel_err", v.trans_rel_err}};
-  const auto& c = e.calibration.camera;
-  return {{"task", "calibration"},
-          {"dataset", {{"name", "zhang"}, {"items", d.views.size()}}},
-          {"protocol",
-           "intrinsics from Zhang's published corners (dataN.txt) and model points (Model.txt) "
-           "with cv::calibrateCamera, k1 k2 only (CALIB_ZERO_TANGENT_DIST | CALIB_FIX_K3, no "
-           "skew), compared with completecalibration.txt; rms_px over all points"},
-          {"metrics",
-           {{"rms_px", e.rms_px},
-            {"fx_rel_err", e.fx_rel_err},
-            {"rot_err_deg_max", e.rot_err_deg_max},
-            {"trans_rel_err_max", e.trans_rel_err_max},
-            {"fy_rel_err", e.fy_rel_err},
-            {"cx_err_px", e.cx_err_px},
-            {"cy_err_px", e.cy_err_px},
-            {"published_rms_px", e.published_rms_px}}},
-          {"timing", {{"seconds", e.seconds}}},
-          {"per_class", per},
-          {"estimate",
-           {{"camera_matrix", to_json(c.K)}, {"distortion_coefficients", to_json(c.distortion)}}},
-          {"published",
-           {{"alpha", d.alpha},
-            {"gamma", d.gamma},
-            {"beta", d.beta},
-            {"u0", d.u0},
-            {"v0", d.v0},
-            {"k1", d.k1},
-            {"k2", d.k2}}}};
-}
-
-Result<std::vector<CameraModel>> session_cameras(const fs::path& session) {
-  const fs::path dir = session / "calib";
-  if (!fs::is_directory(dir))
-    return make_error(ErrorCode::kNotFound, "{}: no calib/ folder (not a session?)",
-                      session.string());
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".yaml" && e.path().stem() != "mic_array")
-      files.push_back(e.path());
-  std::sort(files.begin(), files.end());
-  std::vector<CameraModel> cams;
-  for (const auto& p : files) {
-    auto m = read_camera_model(p);
-    if (!m) return tl::unexpected(m.error());
-    if (m->frame.empty()) m->frame = p.stem().string();
-    cams.push_back(*m);
-  }
-  if (cams.empty())
-    return make_error(ErrorCode::kNotFound, "{}: no camera calibration files", dir.string());
-  return cams;
-}
-
 }  // namespace
 
 void add_calibrate(CLI::App& app, const GlobalFlags& g, int& exit_code) {
@@ -533,86 +380,26 @@ void add_eval_calibration(CLI::App& eval, const GlobalFlags& g, int& exit_code) 
       ->capture_default_str();
   cmd->callback([f, &g, &exit_code] {
     const std::string name = f->dataset.front();
+    Result<eval::EvalReport> r;
     if (name == "zhang") {
       if (f->dataset.size() < 2) return void(exit_code = fail("--dataset zhang needs DIR"));
-      auto d = read_zhang_dataset(f->dataset[1]);
-      if (!d) return void(exit_code = fail(d.error()));
-      auto e = evaluate_zhang(*d);
-      if (!e) return void(exit_code = fail(e.error()));
-      const json j = eval_zhang(*d, *e);
-      if (!g.quiet)
-        for (const auto& [k, v] : j["metrics"].items())
-          std::fprintf(stderr, "  %-20s %s\n", k.c_str(), v.dump().c_str());
-      if (auto w = write_json(f->json, j); !w) exit_code = fail(w.error());
-      return;
-    }
-    if (name != "demo")
-      return void(exit_code = fail("--dataset '" + name + "': expected zhang or demo"));
-    if (!(f->outliers >= 0 && f->outliers <= 0.5) || f->points < 6 || !(f->noise_px >= 0))
-      return void(exit_code = fail("demo: --points >= 6, --noise >= 0, --outliers in [0, 0.5]"));
-    std::vector<CameraModel> cams;
-    std::string source = "built-in demo cameras (make_demo_cameras)";
-    if (f->dataset.size() > 1) {
-      auto c = session_cameras(f->dataset[1]);
-      if (!c) return void(exit_code = fail(c.error()));
-      cams = *c;
-      source = f->dataset[1];
+      r = eval::run_zhang_calibration_eval(f->dataset[1]);
+    } else if (name == "demo") {
+      eval::DemoExtrinsicsEvalOptions o;
+      if (f->dataset.size() > 1) o.session = f->dataset[1];
+      o.points = f->points;
+      o.noise_px = f->noise_px;
+      o.outliers = f->outliers;
+      o.seed = f->seed;
+      r = eval::run_demo_extrinsics_eval(o);
     } else {
-      cams = sim::make_demo_cameras();
+      return void(exit_code = fail("--dataset '" + name + "': expected zhang or demo"));
     }
-    ExtrinsicsEvalOptions o;
-    o.synthetic.points = f->points;
-    o.synthetic.noise_px = f->noise_px;
-    o.synthetic.outlier_fraction = f->outliers;
-    o.synthetic.seed = f->seed;
-    o.pnp.seed = f->seed;
-    auto r = evaluate_extrinsics_synthetic(cams, o);
     if (!r) return void(exit_code = fail(r.error()));
-    double rot_max = 0, trans_rel_max = 0, trans_max = 0, centre_max = 0, rms_sq = 0;
-    std::vector<double> ms;
-    json per = json::object();
-    for (const auto& c : *r) {
-      rot_max = std::max(rot_max, c.rot_err_deg);
-      trans_rel_max = std::max(trans_rel_max, c.trans_rel_err);
-      trans_max = std::max(trans_max, c.trans_err_m);
-      centre_max = std::max(centre_max, c.centre_err_m);
-      rms_sq += c.rms_px * c.rms_px;
-      ms.push_back(c.ms);
-      per[c.frame] = {{"rot_err_deg", c.rot_err_deg},
-                      {"trans_err_m", c.trans_err_m},
-                      {"trans_rel_err", c.trans_rel_err},
-                      {"centre_err_m", c.centre_err_m},
-                      {"points", c.points},
-                      {"outliers_injected", c.outliers_injected},
-                      {"outliers_rejected", c.true_outliers_rejected},
-                      {"inliers", c.inliers},
-                      {"rms_px", c.rms_px},
-                      {"ms", c.ms}};
-    }
-    std::sort(ms.begin(), ms.end());
-    json j = {
-        {"task", "calibration"},
-        {"dataset", {{"name", "demo"}, {"items", r->size()}, {"source", source}}},
-        {"protocol",
-         fmt::format("per camera: {} points seen by the true model (depth 0.8-3 m), {} px "
-                     "noise, {:.0f} % outliers (seed {}); extrinsics by EPnP+RANSAC+LM with the "
-                     "true intrinsics; compared with the true camera_from_world. fx_rel_err is "
-                     "null: intrinsics are not estimated. trans_rel_err skips cameras at the "
-                     "world origin",
-                     f->points, f->noise_px, 100 * f->outliers, f->seed)},
-        {"metrics",
-         {{"rms_px", std::sqrt(rms_sq / static_cast<double>(r->size()))},
-          {"fx_rel_err", nullptr},
-          {"rot_err_deg_max", rot_max},
-          {"trans_rel_err_max", trans_rel_max},
-          {"trans_err_m_max", trans_max},
-          {"centre_err_m_max", centre_max}}},
-        {"timing", {{"ms_per_camera_median", ms[ms.size() / 2]}}},
-        {"per_class", per}};
     if (!g.quiet)
-      for (const auto& [k, v] : j["metrics"].items())
+      for (const auto& [k, v] : r->metrics.items())
         std::fprintf(stderr, "  %-20s %s\n", k.c_str(), v.dump().c_str());
-    if (auto w = write_json(f->json, j); !w) exit_code = fail(w.error());
+    if (auto w = eval::write_report(*r, f->json); !w) exit_code = fail(w.error());
   });
 }
 

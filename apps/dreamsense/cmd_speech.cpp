@@ -3,6 +3,7 @@
 // `dreamsense train speech --dataset fsdd|list PATH --out DIR`: a talker's acoustic model
 // (MAP adaptation, speech/acoustic_adaptation.hpp).
 
+#include "dreamsense/eval/speech_eval.hpp"
 #include "dreamsense/speech/acoustic_adaptation.hpp"
 
 #include <cstdio>
@@ -10,7 +11,6 @@
 
 #include "commands.hpp"
 #include "progress.hpp"
-#include "speech_eval.hpp"
 
 namespace dreamsense::app {
 namespace {
@@ -48,11 +48,10 @@ std::vector<std::string> split_commas(const std::string& s) {
   return out;
 }
 
-void print_summary(const nlohmann::json& r) {
-  const auto& m = r["metrics"];
-  const std::string name = r["dataset"]["name"];
-  std::fprintf(stderr, "speech %s: %zu items, accuracy %.3f", name.c_str(),
-               r["dataset"]["items"].get<size_t>(), m["accuracy"].get<double>());
+void print_summary(const eval::EvalReport& r) {
+  const auto& m = r.metrics;
+  std::fprintf(stderr, "speech %s: %zu items, accuracy %.3f", r.dataset.c_str(), r.items,
+               m["accuracy"].get<double>());
   if (m.contains("false_accept_rate") && m["false_accept_rate"].is_number())
     std::fprintf(stderr, ", false_accept_rate %.3f", m["false_accept_rate"].get<double>());
   if (m.contains("false_reject_rate") && m["false_reject_rate"].is_number())
@@ -68,7 +67,7 @@ void print_summary(const nlohmann::json& r) {
     for (const auto& [spk, v] : m["per_utterance"]["per_speaker"].items())
       std::fprintf(stderr, ", %s %.3f", spk.c_str(), v["accuracy"].get<double>());
   }
-  std::fprintf(stderr, ", rtf %.3f\n", r["timing"]["rtf"].get<double>());
+  std::fprintf(stderr, ", rtf %.3f\n", r.timing["rtf"].get<double>());
 }
 }  // namespace
 
@@ -186,7 +185,7 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
       return;
     }
     if (!g.quiet) print_summary(*res);
-    if (auto s = write_json(flags->json, *res); !s) exit_code = fail(s.error());
+    if (auto s = eval::write_report(*res, flags->json); !s) exit_code = fail(s.error());
   });
 }
 

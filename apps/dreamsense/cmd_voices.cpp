@@ -3,11 +3,12 @@
 // `dreamsense eval voices --dataset fsdd|folders DIR [--enroll N] [--unknown a,b] [--model M]
 //                        [--json FILE|-]`
 
+#include "dreamsense/eval/voice_eval.hpp"
+
 #include <cstdio>
 
 #include "commands.hpp"
 #include "progress.hpp"
-#include "voice_eval.hpp"
 
 namespace dreamsense::app {
 namespace {
@@ -118,17 +119,16 @@ void add_eval_voices(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
       return;
     }
     if (!g.quiet) {
-      const auto& m = (*r)["metrics"];
+      const auto& m = r->metrics;
       std::string line = fmt::format(
-          "voices: {} tests, accuracy {:.4f}, open-set accuracy {:.4f}",
-          (*r)["dataset"]["items"].get<size_t>(),
+          "voices: {} tests, accuracy {:.4f}, open-set accuracy {:.4f}", r->items,
           m["accuracy"].is_null() ? 0.0 : m["accuracy"].get<double>(),
           m["open_set_accuracy"].is_null() ? 0.0 : m["open_set_accuracy"].get<double>());
       if (m.contains("unknown_reject_rate"))
         line += fmt::format(", unknown_reject_rate {:.4f}", m["unknown_reject_rate"].get<double>());
       std::fprintf(stderr, "%s\n", line.c_str());
     }
-    if (auto s = write_json(flags->json, *r); !s) exit_code = fail(s.error());
+    if (auto s = eval::write_report(*r, flags->json); !s) exit_code = fail(s.error());
   });
 }
 

@@ -1,12 +1,12 @@
 #include "dreamsense/audio/beamformer.hpp"
 
+#include "dreamsense/audio/fft.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <numbers>
 #include <string>
-
-#include "fft.hpp"
 
 namespace dreamsense::audio {
 
@@ -86,7 +86,7 @@ Status BeamformerOptions::check() const {
 
 struct Beamformer::Impl {
   explicit Impl(int n) : fft(n) {}
-  detail::RealFft fft;
+  RealFft fft;
   std::vector<double> window;           // sqrt periodic Hann
   std::vector<std::vector<double>> in;  // per channel, internal samples from the next frame on
   std::vector<double> ola;              // overlap-add accumulator, n samples

@@ -1,12 +1,14 @@
 #include "dreamsense/audio/voice_activity.hpp"
 
+#include "dreamsense/audio/energy_gate.hpp"
+#include "dreamsense/audio/fft.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
-
-#include "fft.hpp"
 
 namespace dreamsense::audio {
 
@@ -26,6 +28,8 @@ Status VoiceActivityOptions::check() const {
   if (!(spectral_threshold_db > 0)) add("spectral_threshold_db must be > 0");
   if (!(noise_adapt_s > 0 && noise_fall_s > 0 && smoothing_s >= 0))
     add("noise_adapt_s and noise_fall_s must be > 0, smoothing_s >= 0");
+  if (!(gate_threshold_db > 0 && gate_floor_rise_db_per_s >= 0))
+    add("gate_threshold_db must be > 0, gate_floor_rise_db_per_s >= 0");
   if (!(noise_window_s >= 4 * frame_s))
     add(fmt::format("noise_window_s must be >= 4 frames (is {} s)", noise_window_s));
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "VoiceActivityOptions: {}", bad);
@@ -34,7 +38,7 @@ Status VoiceActivityOptions::check() const {
 
 struct VoiceActivityDetector::Impl {
   explicit Impl(int fft_size) : fft(fft_size) {}
-  detail::RealFft fft;
+  RealFft fft;
   std::vector<double> window;
   std::vector<float> pending;  // samples of the current partial frame
   int bin_lo = 0, bin_hi = 0;  // in-band bins [lo, hi)
@@ -45,6 +49,7 @@ struct VoiceActivityDetector::Impl {
   int block_frames = 0, frames_in_block = 0;
   size_t next_block = 0;
   int64_t frames_seen = 0;
+  std::optional<EnergyGate> gate;  // kEnergyGate
   double a_smooth = 0, a_adapt = 0, a_fall = 0;
 };
 
@@ -79,6 +84,12 @@ Result<std::unique_ptr<VoiceActivityDetector>> VoiceActivityDetector::create(
   auto vad =
       std::unique_ptr<VoiceActivityDetector>(new VoiceActivityDetector(options, std::move(impl)));
   vad->frame_len_ = len;
+  if (options.method == VoiceActivityMethod::kEnergyGate) {
+    EnergyGateOptions g;
+    g.threshold_db = options.gate_threshold_db;
+    g.floor_rise_db_per_s = options.gate_floor_rise_db_per_s;
+    vad->impl_->gate.emplace(g, static_cast<double>(len) / options.sample_rate);
+  }
   vad->reset();
   return vad;
 }
@@ -94,6 +105,7 @@ void VoiceActivityDetector::reset() {
   m.frames_in_block = 0;
   m.next_block = 0;
   m.frames_seen = 0;
+  if (m.gate) m.gate->reset();
   pushed_ = 0;
 }
 
@@ -124,6 +136,14 @@ VoiceActivityFrame VoiceActivityDetector::analyse_frame() {
   }
   for (int i = frame_len_; i < m.fft.size(); ++i) x[i] = 0;
   f.level_dbfs = 10 * std::log10(sum2 / frame_len_ + 1e-12);
+  if (m.gate) {
+    const EnergyGate::Decision d = m.gate->push(f.level_dbfs);
+    f.speech = d.speech;
+    f.energy_snr_db = d.margin_db + options_.gate_threshold_db;
+    f.probability = static_cast<float>(1.0 / (1.0 + std::exp(-d.margin_db / 3.0)));
+    ++m.frames_seen;
+    return f;
+  }
   m.fft.forward();
   const auto* spec = m.fft.spectrum();
   const size_t nb = m.noise.size();

@@ -2,6 +2,8 @@
 
 #include "dreamsense/audio/voice_activity.hpp"
 
+#include "dreamsense/audio/energy_gate.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -106,6 +108,64 @@ TEST(VoiceActivity, OptionsAreChecked) {
   ASSERT_FALSE(v);
   EXPECT_NE(v.error().message.find("sample_rate"), std::string::npos);
   EXPECT_NE(v.error().message.find("frame_s"), std::string::npos);
+}
+
+// A reader who talks for 5 s without a pause (a steady tone here, 30 dB over the noise): the
+// energy gate's floor rises at most 3 dB/s, so the whole stretch stays speech; the spectral
+// method's adaptive floor learns a steady sound as noise within its window.
+TEST(VoiceActivity, EnergyGateKeepsALongUtteranceWhole) {
+  const int rate = 16000;
+  auto x = noise(rate * 8, 0.001, 4);
+  const double amp = 0.001 * std::pow(10.0, 30.0 / 20) * std::sqrt(2.0);
+  for (int64_t i = 2 * rate; i < 7 * rate; ++i)
+    x[static_cast<size_t>(i)] +=
+        static_cast<float>(amp * std::sin(2 * std::numbers::pi * 500.0 * i / rate));
+  VoiceActivityOptions gate;
+  gate.method = VoiceActivityMethod::kEnergyGate;
+  int gate_speech = 0, spectral_speech = 0, gate_outside = 0, inside = 0;
+  const auto g = run(x, gate);
+  const auto s = run(x);
+  ASSERT_EQ(g.size(), s.size());
+  for (size_t k = 0; k < g.size(); ++k) {
+    const double t = static_cast<double>(g[k].first_sample) / rate;
+    if (t >= 2.02 && t < 6.98) {
+      ++inside;
+      gate_speech += g[k].speech;
+      spectral_speech += s[k].speech;
+    } else if (t < 1.98 || t >= 7.5) {
+      gate_outside += g[k].speech;
+    }
+  }
+  EXPECT_EQ(gate_speech, inside);
+  EXPECT_EQ(gate_outside, 0);
+  EXPECT_LT(spectral_speech, inside * 3 / 4);  // why voice_id uses the gate
+  // Near the end the floor has risen by at most 3 dB/s x 5 s = 15 dB over the noise.
+  EXPECT_GT(g[static_cast<size_t>(6.9 * rate / 320)].energy_snr_db, 30.0 - 15.0 - 0.5);
+}
+
+TEST(EnergyGate, FloorFollowsDropsRisesSlowlyAndHangoverAndMinLevelApply) {
+  EnergyGateOptions o;
+  o.threshold_db = 6;
+  o.floor_rise_db_per_s = 1;
+  o.min_level_dbfs = -70;
+  o.hangover_frames = 2;
+  ASSERT_TRUE(o.check());
+  EnergyGate g(o, 0.5);              // the floor may rise 0.5 dB per frame
+  EXPECT_FALSE(g.push(-60).speech);  // first frame: the floor
+  EXPECT_TRUE(g.push(-50).speech);   // 10 dB over -60
+  EXPECT_TRUE(g.push(-50).speech);   // floor -59.5
+  EXPECT_TRUE(g.push(-60).speech);   // hangover 1
+  EXPECT_TRUE(g.push(-60).speech);   // hangover 2
+  EXPECT_FALSE(g.push(-60).speech);
+  EXPECT_FALSE(g.push(-90).speech);  // drop: the floor follows at once
+  EXPECT_FALSE(g.push(-80).speech);  // 10 dB over the floor but below min_level_dbfs
+  const auto d = g.push(-40);
+  EXPECT_TRUE(d.speech);
+  EXPECT_NEAR(d.margin_db, -40 - (-89.5 + 6), 1e-9);  // floor -90, then +0.5 dB at -80
+  g.reset();
+  EXPECT_FALSE(g.push(-40).speech);  // forgotten: -40 is the new floor
+  o.threshold_db = -1;
+  EXPECT_FALSE(o.check());
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "dreamsense/sim/demo_session.hpp"
 
+#include "dreamsense/audio/audio_file.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
 #include "dreamsense/sim/face_renderer.hpp"
 #include "dreamsense/sim/room_acoustics.hpp"
@@ -74,35 +75,11 @@ Error media_error(const fs::path& file, const char* package) {
 
 Result<std::vector<double>> load_clip(const fs::path& path, int expected_rate) {
   if (!fs::exists(path)) return tl::unexpected(media_error(path, "pocketsphinx-testdata"));
-  std::vector<double> out;
-  if (path.extension() == ".raw") {  // 16-bit little-endian mono at 16 kHz
-    std::ifstream in(path, std::ios::binary);
-    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                     std::istreambuf_iterator<char>());
-    out.resize(bytes.size() / 2);
-    for (size_t i = 0; i < out.size(); ++i) {
-      const auto s = static_cast<int16_t>(static_cast<uint16_t>(bytes[2 * i]) |
-                                          (static_cast<uint16_t>(bytes[2 * i + 1]) << 8));
-      out[i] = s / 32768.0;
-    }
-    if (expected_rate != 16000)
-      return make_error(ErrorCode::kUnsupported, "{}: raw clips are 16 kHz, demo rate is {}",
-                        path.string(), expected_rate);
-    return out;
-  }
-  SF_INFO info{};
-  SNDFILE* f = sf_open(path.string().c_str(), SFM_READ, &info);
-  if (!f) return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), sf_strerror(nullptr));
-  if (info.channels != 1 || info.samplerate != expected_rate) {
-    sf_close(f);
-    return make_error(ErrorCode::kUnsupported, "{}: expected mono {} Hz, got {} channels {} Hz",
-                      path.string(), expected_rate, info.channels, info.samplerate);
-  }
-  out.resize(static_cast<size_t>(info.frames));
-  const sf_count_t got = sf_readf_double(f, out.data(), info.frames);
-  sf_close(f);
-  out.resize(static_cast<size_t>(std::max<sf_count_t>(got, 0)));
-  return out;
+  audio::ReadAudioOptions ro;
+  ro.require_mono = true;
+  ro.expected_sample_rate = expected_rate;  // .raw clips are 16 kHz
+  DS_ASSIGN_OR_RETURN(audio::AudioClip clip, audio::read_audio(path, ro));
+  return std::vector<double>(clip.samples.begin(), clip.samples.end());
 }
 
 // "<s> ten of clubs  </s> (001)" lines -> id -> text.

@@ -1,6 +1,6 @@
 #include "dreamsense/sim/room_acoustics.hpp"
 
-#include <fftw3.h>
+#include "dreamsense/audio/fft.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,11 +12,6 @@
 
 namespace dreamsense::sim {
 namespace {
-
-std::mutex& fftw_planner_mutex() {
-  static std::mutex m;
-  return m;
-}
 
 // Smallest 2^a 3^b 5^c >= n (FFTW is fast on these sizes).
 size_t good_fft_size(size_t n) {
@@ -30,29 +25,6 @@ size_t good_fft_size(size_t n) {
     }
   return best;
 }
-
-struct FftBuffers {
-  explicit FftBuffers(size_t n) : n(n) {
-    real = fftw_alloc_real(n);
-    spec = fftw_alloc_complex(n / 2 + 1);
-    std::lock_guard lock(fftw_planner_mutex());
-    forward = fftw_plan_dft_r2c_1d(static_cast<int>(n), real, spec, FFTW_ESTIMATE);
-    inverse = fftw_plan_dft_c2r_1d(static_cast<int>(n), spec, real, FFTW_ESTIMATE);
-  }
-  ~FftBuffers() {
-    std::lock_guard lock(fftw_planner_mutex());
-    fftw_destroy_plan(forward);
-    fftw_destroy_plan(inverse);
-    fftw_free(real);
-    fftw_free(spec);
-  }
-  FftBuffers(const FftBuffers&) = delete;
-  FftBuffers& operator=(const FftBuffers&) = delete;
-  size_t n;
-  double* real;
-  fftw_complex* spec;
-  fftw_plan forward, inverse;
-};
 
 // Box-Muller on mt19937_64 output: identical on every platform (std distributions are not).
 class GaussianSource {
@@ -257,22 +229,20 @@ std::vector<double> fft_convolve(std::span<const double> a, std::span<const doub
     return out;
   }
   const size_t n = good_fft_size(out_len);
-  FftBuffers fa(n);
+  audio::RealFft fa(static_cast<int>(n));
+  double* real = fa.real();
+  std::complex<double>* spec = fa.spectrum();
   std::vector<std::complex<double>> A(n / 2 + 1);
-  std::fill(fa.real, fa.real + n, 0.0);
-  std::copy(a.begin(), a.end(), fa.real);
-  fftw_execute(fa.forward);
-  for (size_t i = 0; i < A.size(); ++i) A[i] = {fa.spec[i][0], fa.spec[i][1]};
-  std::fill(fa.real, fa.real + n, 0.0);
-  std::copy(b.begin(), b.end(), fa.real);
-  fftw_execute(fa.forward);
-  for (size_t i = 0; i < A.size(); ++i) {
-    const std::complex<double> p = A[i] * std::complex<double>(fa.spec[i][0], fa.spec[i][1]);
-    fa.spec[i][0] = p.real();
-    fa.spec[i][1] = p.imag();
-  }
-  fftw_execute(fa.inverse);
-  std::vector<double> out(fa.real, fa.real + out_len);
+  std::fill(real, real + n, 0.0);
+  std::copy(a.begin(), a.end(), real);
+  fa.forward();
+  std::copy(spec, spec + A.size(), A.begin());
+  std::fill(real, real + n, 0.0);
+  std::copy(b.begin(), b.end(), real);
+  fa.forward();
+  for (size_t i = 0; i < A.size(); ++i) spec[i] = A[i] * spec[i];
+  fa.inverse();
+  std::vector<double> out(real, real + out_len);
   const double scale = 1.0 / static_cast<double>(n);
   for (double& v : out) v *= scale;
   return out;
@@ -298,19 +268,20 @@ Channels make_noise(int channels, size_t frames, NoiseColor color, uint64_t seed
   }
   if (color == NoiseColor::kPink && frames > 1) {
     const size_t n = good_fft_size(frames);
-    FftBuffers f(n);
+    audio::RealFft f(static_cast<int>(n));
+    double* real = f.real();
+    std::complex<double>* spec = f.spectrum();
     for (auto& ch : out) {
-      std::fill(f.real, f.real + n, 0.0);
-      std::copy(ch.begin(), ch.end(), f.real);
-      fftw_execute(f.forward);
-      f.spec[0][0] = f.spec[0][1] = 0;
+      std::fill(real, real + n, 0.0);
+      std::copy(ch.begin(), ch.end(), real);
+      f.forward();
+      spec[0] = 0;
       for (size_t k = 1; k <= n / 2; ++k) {
         const double g = 1.0 / std::sqrt(static_cast<double>(k));  // power ~ 1/f
-        f.spec[k][0] *= g;
-        f.spec[k][1] *= g;
+        spec[k] *= g;  // real and imaginary parts scaled alike
       }
-      fftw_execute(f.inverse);
-      std::copy(f.real, f.real + frames, ch.begin());
+      f.inverse();
+      std::copy(real, real + frames, ch.begin());
     }
   }
   for (auto& ch : out) {  // exact unit power per channel

@@ -1,5 +1,7 @@
 #include "dreamsense/sound_direction/direction_finder.hpp"
 
+#include "dreamsense/audio/energy_gate.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -49,8 +51,7 @@ struct DirectionFinder::Impl {
   int64_t pending_start = 0;
   int64_t next_frame = 0;
 
-  std::optional<double> floor_db;
-  int hangover_left = 0;
+  std::optional<audio::EnergyGate> gate;  // voice activity on the in-band level
   std::vector<float> map, smoothed, utterance;
   bool has_smoothed = false;
   double unvoiced_s = 0;
@@ -76,6 +77,12 @@ Result<std::unique_ptr<DirectionFinder>> DirectionFinder::create(
   m.channels = static_cast<int>(geometry.mics_m.size());
   m.hop_s = static_cast<double>(options.hop) / geometry.sample_rate;
   m.alpha = options.smoothing_s > 0 ? std::exp(-m.hop_s / options.smoothing_s) : 0.0;
+  audio::EnergyGateOptions g;
+  g.threshold_db = options.vad.threshold_db;
+  g.floor_rise_db_per_s = options.vad.floor_rise_db_per_s;
+  g.min_level_dbfs = options.vad.min_level_dbfs;
+  g.hangover_frames = options.vad.hangover_frames;
+  m.gate.emplace(g, m.hop_s);
   return f;
 }
 
@@ -85,8 +92,7 @@ void DirectionFinder::reset() {
   Impl& m = *impl_;
   m.pending.clear();
   m.pending_start = m.next_frame = 0;
-  m.floor_db.reset();
-  m.hangover_left = 0;
+  m.gate->reset();
   m.has_smoothed = false;
   m.unvoiced_s = 0;
   reset_utterance();
@@ -132,25 +138,7 @@ void DirectionFinder::Impl::process_frame(std::span<const float> frame, FrameEst
   const double level = srp->analyse(frame);
   e.level_dbfs = 10 * std::log10(level + 1e-20);
 
-  const VadOptions& v = options.vad;
-  bool above = false;
-  if (!floor_db) {
-    floor_db = e.level_dbfs;
-  } else {
-    above = e.level_dbfs > *floor_db + v.threshold_db;
-    if (e.level_dbfs < *floor_db)
-      floor_db = e.level_dbfs;
-    else
-      *floor_db += v.floor_rise_db_per_s * hop_s;
-  }
-  above = above && e.level_dbfs > v.min_level_dbfs;
-  if (above) {
-    hangover_left = v.hangover_frames;
-    e.voiced = true;
-  } else if (hangover_left > 0 && e.level_dbfs > v.min_level_dbfs) {
-    --hangover_left;
-    e.voiced = true;
-  }
+  e.voiced = gate->push(e.level_dbfs).speech;
   if (!e.voiced) {
     unvoiced_s += hop_s;
     return;

@@ -1,31 +1,15 @@
 #include "dreamsense/sound_direction/srp_phat.hpp"
 
-#include <fftw3.h>
+#include "dreamsense/audio/fft.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
+#include <complex>
 
 namespace dreamsense::sound_direction {
 namespace {
 
-// FFTW's planner is not thread-safe; every plan of this library is made and destroyed under this.
-std::mutex& planner_mutex() {
-  static std::mutex m;
-  return m;
-}
-
-struct FftwFree {
-  void operator()(void* p) const { fftw_free(p); }
-};
-using RealBuf = std::unique_ptr<double[], FftwFree>;
-using CplxBuf = std::unique_ptr<fftw_complex[], FftwFree>;
-RealBuf real_buf(size_t n) {
-  return RealBuf(static_cast<double*>(fftw_malloc(n * sizeof(double))));
-}
-CplxBuf cplx_buf(size_t n) {
-  return CplxBuf(static_cast<fftw_complex*>(fftw_malloc(n * sizeof(fftw_complex))));
-}
+using cd = std::complex<double>;
 
 // Shared machinery: windowed forward FFT of frames, PHAT cross-spectrum, upsampled inverse FFT.
 struct PhatCore {
@@ -34,10 +18,12 @@ struct PhatCore {
   int vad_lo = 1, vad_hi = 0;
   double norm = 1;  // 2 * band bins: a coherent pair correlates to 1
   std::vector<double> window;
-  double window_power = 1;  // sum of w^2
-  RealBuf in, out;
-  CplxBuf spec, cross;
-  fftw_plan forward = nullptr, inverse = nullptr;
+  double window_power = 1;                  // sum of w^2
+  std::unique_ptr<audio::RealFft> forward;  // n: frames -> spectra
+  std::unique_ptr<audio::RealFft> inverse;  // l: cross-spectrum -> upsampled correlation
+  double* in = nullptr;                     // forward's input (n)
+  cd* cross = nullptr;                      // inverse's input (kl bins)
+  double* out = nullptr;                    // inverse's output (l lags)
 
   PhatCore(const PhatOptions& o, int fs) {
     n = o.frame_length;
@@ -57,48 +43,38 @@ struct PhatCore {
       window[static_cast<size_t>(i)] = 0.5 - 0.5 * std::cos(2 * M_PI * i / n);  // periodic Hann
       window_power += window[static_cast<size_t>(i)] * window[static_cast<size_t>(i)];
     }
-    in = real_buf(static_cast<size_t>(l));
-    out = real_buf(static_cast<size_t>(l));
-    spec = cplx_buf(static_cast<size_t>(k));
-    cross = cplx_buf(static_cast<size_t>(kl));
-    std::lock_guard lock(planner_mutex());
-    forward = fftw_plan_dft_r2c_1d(n, in.get(), spec.get(), FFTW_ESTIMATE);
-    inverse = fftw_plan_dft_c2r_1d(l, cross.get(), out.get(), FFTW_ESTIMATE);
-  }
-  ~PhatCore() {
-    std::lock_guard lock(planner_mutex());
-    fftw_destroy_plan(forward);
-    fftw_destroy_plan(inverse);
+    forward = std::make_unique<audio::RealFft>(n);
+    inverse = std::make_unique<audio::RealFft>(l);
+    in = forward->real();
+    cross = inverse->spectrum();
+    out = inverse->real();
   }
   PhatCore(const PhatCore&) = delete;
   PhatCore& operator=(const PhatCore&) = delete;
 
   // Windowed FFT of samples x[i * stride] into `dst` (k bins); returns the in-band mean power.
-  double transform(const float* x, int stride, fftw_complex* dst) {
+  double transform(const float* x, int stride, cd* dst) {
     for (int i = 0; i < n; ++i)
       in[static_cast<size_t>(i)] =
           window[static_cast<size_t>(i)] * x[static_cast<size_t>(i) * stride];
-    fftw_execute_dft_r2c(forward, in.get(), dst);
+    forward->forward(in, dst);
     double p = 0;
-    for (int b = vad_lo; b <= vad_hi; ++b) p += dst[b][0] * dst[b][0] + dst[b][1] * dst[b][1];
+    for (int b = vad_lo; b <= vad_hi; ++b)
+      p += dst[b].real() * dst[b].real() + dst[b].imag() * dst[b].imag();
     return 2.0 * p / (n * window_power);
   }
 
   // PHAT-weighted cross-correlation of spectra a and b into `out` (l lags, lag t at index
   // t * u mod l), normalised so that a coherent pair peaks at 1.
-  void correlate(const fftw_complex* a, const fftw_complex* b) {
-    std::fill(reinterpret_cast<double*>(cross.get()),
-              reinterpret_cast<double*>(cross.get()) + 2 * static_cast<size_t>(kl), 0.0);
+  void correlate(const cd* a, const cd* b) {
+    std::fill(cross, cross + kl, cd(0, 0));
     for (int i = band_lo; i <= band_hi; ++i) {
-      const double re = a[i][0] * b[i][0] + a[i][1] * b[i][1];  // a * conj(b)
-      const double im = a[i][1] * b[i][0] - a[i][0] * b[i][1];
+      const double re = a[i].real() * b[i].real() + a[i].imag() * b[i].imag();  // a * conj(b)
+      const double im = a[i].imag() * b[i].real() - a[i].real() * b[i].imag();
       const double mag = std::sqrt(re * re + im * im);
-      if (mag > 1e-20) {
-        cross[i][0] = re / (mag * norm);
-        cross[i][1] = im / (mag * norm);
-      }
+      if (mag > 1e-20) cross[i] = cd(re / (mag * norm), im / (mag * norm));
     }
-    fftw_execute(inverse);
+    inverse->inverse();
   }
   // Correlation at a fractional lag (samples), linear interpolation on the upsampled grid.
   double at(double lag_samples) const {
@@ -150,10 +126,10 @@ Status SrpGridOptions::check() const {
 struct GccPhat::Impl {
   Impl(const PhatOptions& o, int fs)
       : core(o, fs),
-        sa(cplx_buf(static_cast<size_t>(core.k))),
-        sb(cplx_buf(static_cast<size_t>(core.k))) {}
+        sa(audio::aligned_complex(static_cast<size_t>(core.k))),
+        sb(audio::aligned_complex(static_cast<size_t>(core.k))) {}
   PhatCore core;
-  CplxBuf sa, sb;
+  audio::AlignedComplex sa, sb;
 };
 
 Result<std::unique_ptr<GccPhat>> GccPhat::create(const PhatOptions& options, int sample_rate) {
@@ -239,7 +215,7 @@ struct SrpPhat::Impl {
   bool linear = false;
   double az_step = 1;
   int channels = 0;
-  std::vector<CplxBuf> spectra;
+  std::vector<audio::AlignedComplex> spectra;
   std::vector<std::pair<int, int>> pairs;
   // Per pair, per grid direction: upsampled lag index (mod l) and interpolation fraction.
   std::vector<std::vector<std::pair<size_t, float>>> taps;
@@ -260,7 +236,8 @@ Result<std::unique_ptr<SrpPhat>> SrpPhat::create(const MicArrayGeometry& geometr
   m.linear = geometry.rank() <= 1;
   m.az_step = grid.azimuth_step_deg;
   m.channels = static_cast<int>(geometry.mics_m.size());
-  for (int c = 0; c < m.channels; ++c) m.spectra.push_back(cplx_buf(static_cast<size_t>(m.core.k)));
+  for (int c = 0; c < m.channels; ++c)
+    m.spectra.push_back(audio::aligned_complex(static_cast<size_t>(m.core.k)));
   for (int i = 0; i < m.channels; ++i)
     for (int j = i + 1; j < m.channels; ++j) m.pairs.emplace_back(i, j);
   const double fs = geometry.sample_rate;
@@ -307,7 +284,7 @@ void SrpPhat::power_map(std::vector<float>& map) {
     const auto [i, j] = m.pairs[p];
     m.core.correlate(m.spectra[static_cast<size_t>(i)].get(),
                      m.spectra[static_cast<size_t>(j)].get());
-    const double* r = m.core.out.get();
+    const double* r = m.core.out;
     const auto& taps = m.taps[p];
     for (size_t g = 0; g < taps.size(); ++g) {
       const size_t i0 = taps[g].first;

@@ -8,8 +8,8 @@
 //   BM_DecodeDigitTidigits  a 1 s clip under the digit grammar, TIDIGITS model at 8 kHz (fsdd)
 //   BM_Resample8to16        3 s of audio, soxr | sinc
 //   BM_DetectSpeech         the silence check on 1 s
+#include "dreamsense/audio/speech_presence.hpp"
 #include "dreamsense/speech/recognizer.hpp"
-#include "dreamsense/speech/voice_activity.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -126,7 +126,7 @@ void BM_DetectSpeech(benchmark::State& state) {
   if (!have(state, kData / "goforward.raw")) return;
   auto audio = read_raw(kData / "goforward.raw");
   audio.resize(16000);
-  for (auto _ : state) benchmark::DoNotOptimize(detect_speech(audio, 16000));
+  for (auto _ : state) benchmark::DoNotOptimize(dreamsense::audio::detect_speech(audio, 16000));
   set_rtf(state, 1.0);
 }
 BENCHMARK(BM_DetectSpeech)->Unit(benchmark::kMicrosecond);

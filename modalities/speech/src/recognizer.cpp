@@ -1,5 +1,6 @@
 #include "dreamsense/speech/recognizer.hpp"
 
+#include "dreamsense/audio/audio_file.hpp"
 #include "dreamsense/perception/speech.hpp"
 
 #include <algorithm>
@@ -9,7 +10,6 @@
 #include <cstdio>
 #include <fstream>
 #include <numbers>
-#include <soxr.h>
 #include <sstream>
 
 #include "ps_backend.hpp"
@@ -26,9 +26,6 @@ std::string read_text(const fs::path& p, bool& ok) {
   ss << in.rdbuf();
   return ss.str();
 }
-
-std::vector<int16_t> resample_sinc(std::span<const int16_t> in, int from_hz, int to_hz);
-std::vector<int16_t> resample_soxr(std::span<const int16_t> in, int from_hz, int to_hz);
 
 }  // namespace
 
@@ -223,65 +220,9 @@ Result<std::optional<RecognizedSpeech>> Recognizer::recognize(std::span<const fl
 
 std::vector<int16_t> resample(std::span<const int16_t> in, int from_hz, int to_hz,
                               Resampler method) {
-  if (from_hz == to_hz || in.empty() || from_hz <= 0 || to_hz <= 0) return {in.begin(), in.end()};
-  return method == Resampler::kSoxr ? resample_soxr(in, from_hz, to_hz)
-                                    : resample_sinc(in, from_hz, to_hz);
+  return audio::resample_pcm16(
+      in, from_hz, to_hz,
+      method == Resampler::kSoxr ? audio::Pcm16Resampler::kSoxr : audio::Pcm16Resampler::kSinc);
 }
-
-namespace {
-
-std::vector<int16_t> resample_soxr(std::span<const int16_t> in, int from_hz, int to_hz) {
-  const size_t n_out =
-      static_cast<size_t>(std::floor(static_cast<double>(in.size()) * to_hz / from_hz));
-  std::vector<int16_t> out(n_out + 64);
-  size_t done = 0;
-  // Very high quality, linear phase; soxr_oneshot compensates the filter delay and flushes.
-  soxr_io_spec_t io = soxr_io_spec(SOXR_INT16_I, SOXR_INT16_I);
-  io.flags |= SOXR_NO_DITHER;  // deterministic output
-  const soxr_quality_spec_t q = soxr_quality_spec(SOXR_VHQ | SOXR_LINEAR_PHASE, 0);
-  const soxr_error_t err = soxr_oneshot(from_hz, to_hz, 1, in.data(), in.size(), nullptr,
-                                        out.data(), out.size(), &done, &io, &q, nullptr);
-  if (err) done = 0;  // only on allocation failure; never for valid rates
-  out.resize(done);
-  out.resize(n_out, 0);
-  return out;
-}
-
-std::vector<int16_t> resample_sinc(std::span<const int16_t> in, int from_hz, int to_hz) {
-  constexpr int kZeros = 32;
-  constexpr double kBeta = 8.0;
-  const double ratio = static_cast<double>(to_hz) / from_hz;
-  const double cutoff = std::min(1.0, ratio);  // fraction of the input Nyquist
-  const size_t n_out = static_cast<size_t>(std::floor(in.size() * ratio));
-  auto bessel_i0 = [](double x) {
-    double sum = 1, term = 1;
-    for (int k = 1; k < 30; ++k) {
-      term *= (x / (2 * k)) * (x / (2 * k));
-      sum += term;
-    }
-    return sum;
-  };
-  const double i0_beta = bessel_i0(kBeta);
-  const double half_width = kZeros / cutoff;  // in input samples
-  std::vector<int16_t> out(n_out);
-  for (size_t i = 0; i < n_out; ++i) {
-    const double t = i / ratio;  // position in input samples
-    const long lo = static_cast<long>(std::ceil(t - half_width));
-    const long hi = static_cast<long>(std::floor(t + half_width));
-    double acc = 0;
-    for (long j = std::max(0L, lo); j <= std::min<long>(static_cast<long>(in.size()) - 1, hi);
-         ++j) {
-      const double x = (t - j) * cutoff;
-      const double sinc = x == 0 ? 1.0 : std::sin(std::numbers::pi * x) / (std::numbers::pi * x);
-      const double r = (t - j) / half_width;
-      const double w = bessel_i0(kBeta * std::sqrt(std::max(0.0, 1 - r * r))) / i0_beta;
-      acc += in[j] * cutoff * sinc * w;
-    }
-    out[i] = static_cast<int16_t>(std::clamp(std::lround(acc), -32768L, 32767L));
-  }
-  return out;
-}
-
-}  // namespace
 
 }  // namespace dreamsense::speech

@@ -2,7 +2,7 @@
 
 #include "dreamsense/audio/mic_array.hpp"
 #include "dreamsense/perception/analyzer_registry.hpp"
-#include "dreamsense/speech/acoustic_adaptation.hpp"
+#include "dreamsense/speech/acoustic_model.hpp"
 #include "dreamsense/speech/speech_analyzer.hpp"
 
 #include <fmt/format.h>

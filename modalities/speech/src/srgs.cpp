@@ -7,7 +7,7 @@
 #include <set>
 #include <sstream>
 
-#include "xml_lite.hpp"
+#include "xml_dom.hpp"
 
 namespace dreamsense::speech {
 namespace {

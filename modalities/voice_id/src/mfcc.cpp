@@ -1,11 +1,11 @@
 #include "dreamsense/voice_id/mfcc.hpp"
 
-#include <fftw3.h>
+#include "dreamsense/audio/fft.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <memory>
-#include <mutex>
 #include <vector>
 
 namespace dreamsense::voice_id {
@@ -37,16 +37,6 @@ double hz_to_mel(double hz) { return 2595.0 * std::log10(1.0 + hz / 700.0); }
 double mel_to_hz(double mel) { return 700.0 * (std::pow(10.0, mel / 2595.0) - 1.0); }
 
 namespace {
-
-struct FftwFree {
-  void operator()(void* p) const { fftw_free(p); }
-};
-
-// FFTW's planner is not thread-safe; execution with fftw_execute_dft_r2c is.
-std::mutex& planner_mutex() {
-  static std::mutex m;
-  return m;
-}
 
 // Triangular mel filters over FFT bins 0..nfft/2: weights[f][bin].
 std::vector<std::vector<double>> mel_filters(const MfccOptions& o, int rate, int nfft) {
@@ -116,14 +106,9 @@ Status analyse_frames(std::span<const float> samples, int sample_rate, const Mfc
   while (nfft < len) nfft *= 2;
   const int bins = nfft / 2 + 1;
 
-  std::unique_ptr<double[], FftwFree> in(static_cast<double*>(fftw_malloc(sizeof(double) * nfft)));
-  std::unique_ptr<fftw_complex[], FftwFree> spec(
-      static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * bins)));
-  fftw_plan plan;
-  {
-    std::lock_guard<std::mutex> lock(planner_mutex());
-    plan = fftw_plan_dft_r2c_1d(nfft, in.get(), spec.get(), FFTW_ESTIMATE);
-  }
+  audio::RealFft fft(nfft);
+  double* in = fft.real();
+  const std::complex<double>* spec = fft.spectrum();
   const auto filters = mel_filters(o, sample_rate, nfft);
   std::vector<double> window(static_cast<size_t>(len));
   for (int i = 0; i < len; ++i) window[i] = 0.54 - 0.46 * std::cos(2 * CV_PI * i / (len - 1));
@@ -144,8 +129,9 @@ Status analyse_frames(std::span<const float> samples, int sample_rate, const Mfc
       }
       in[i] = v;
     }
-    fftw_execute_dft_r2c(plan, in.get(), spec.get());
-    for (int k = 0; k < bins; ++k) power[k] = spec[k][0] * spec[k][0] + spec[k][1] * spec[k][1];
+    fft.forward();
+    for (int k = 0; k < bins; ++k)
+      power[k] = spec[k].real() * spec[k].real() + spec[k].imag() * spec[k].imag();
     double* logmel = logmel_out.ptr<double>(t);
     for (int m = 0; m < M; ++m) {
       double e = 0;
@@ -154,10 +140,6 @@ Status analyse_frames(std::span<const float> samples, int sample_rate, const Mfc
       logmel[m] = std::log(std::max(e, 1e-10));
     }
     log_energy_out.at<double>(t, 0) = std::log(std::max(energy, 1e-10));
-  }
-  {
-    std::lock_guard<std::mutex> lock(planner_mutex());
-    fftw_destroy_plan(plan);
   }
   return ok_status();
 }

@@ -1,8 +1,10 @@
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
 
+#include "dreamsense/audio/stamped_audio.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
 #include "dreamsense/perception/voice_id.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <optional>
@@ -36,7 +38,7 @@ Status VoiceIdAnalyzerOptions::check() const {
                       "VoiceIdAnalyzerOptions: method gmm_ubm needs a voice model (model or "
                       "model_file)");
   if (auto s = direction.check(); !s) return s;
-  return gate.check();
+  return segmenter.check();  // the stream's rate replaces vad.sample_rate when it starts
 }
 
 namespace {
@@ -67,30 +69,42 @@ class VoiceIdAnalyzer : public Analyzer {
       if (c == nullptr || c->channels <= 0)
         return make_error(ErrorCode::kInvalidArgument, "voice_id: '{}' is not an audio stream",
                           options_.audio_sensor);
-      if (!gate_) {
+      if (!segmenter_) {
         if (model_ && c->sample_rate / 2.0 < model_->features.high_hz)
           return make_error(ErrorCode::kUnsupported,
                             "voice_id: '{}' is sampled at {} Hz, the voice model needs >= {} Hz",
                             options_.audio_sensor, c->sample_rate,
                             static_cast<int>(std::ceil(2 * model_->features.high_hz)));
-        gate_.emplace(options_.gate, c->sample_rate);
-      } else if (c->sample_rate != gate_->sample_rate()) {
+        audio::UtteranceSegmenterOptions so = options_.segmenter;
+        so.vad.sample_rate = c->sample_rate;
+        so.channels = 1;  // channel 0 is pushed
+        so.vad_channel = 0;
+        auto seg = audio::UtteranceSegmenter::create(so);
+        if (!seg)
+          return make_error(seg.error().code, "voice_id: stream '{}': {}", options_.audio_sensor,
+                            seg.error().message);
+        segmenter_ = std::move(*seg);
+        rate_ = c->sample_rate;
+      } else if (c->sample_rate != rate_) {
         return make_error(ErrorCode::kInvalidArgument,
                           "voice_id: '{}' changed sample rate from {} to {} Hz",
-                          options_.audio_sensor, gate_->sample_rate(), c->sample_rate);
+                          options_.audio_sensor, rate_, c->sample_rate);
       }
       // Mono = channel 0 (averaging the array's microphones would comb-filter the speech).
       std::vector<float> mono(static_cast<size_t>(c->frames()));
       for (size_t i = 0; i < mono.size(); ++i)
         mono[i] = c->samples[i * static_cast<size_t>(c->channels)];
-      for (Utterance& u : gate_->push(mono, f->stamp))
+      utterances_.clear();
+      if (auto s = segmenter_->push(mono, f->stamp, utterances_); !s)
+        return make_error(s.error().code, "voice_id: {}", s.error().message);
+      for (const audio::Utterance& u : utterances_)
         if (auto s = decide(u, in.stamp, out); !s) return s;
     }
     return ok_status();
   }
 
   void reset() override {
-    if (gate_) gate_->reset();
+    if (segmenter_) segmenter_->reset();
     heard_.clear();
   }
 
@@ -100,23 +114,28 @@ class VoiceIdAnalyzer : public Analyzer {
     if (!e || !e->present()) return;
     if (!heard_.empty() && heard_.back().stamp >= e->stamp) return;  // already seen
     heard_.push_back({e->stamp, e->value->azimuth_deg, e->confidence});
-    const Duration keep = Duration::from_seconds(options_.gate.max_utterance_s + 5.0);
+    const Duration keep = Duration::from_seconds(options_.segmenter.max_utterance_s + 5.0);
     while (!heard_.empty() && e->stamp - heard_.front().stamp > keep) heard_.pop_front();
   }
 
-  Status decide(const Utterance& u, Timestamp tick, BlackboardWriter& out) {
+  Status decide(const audio::Utterance& u, Timestamp tick, BlackboardWriter& out) {
     SpeakerIdentity id;
-    id.start = u.start;
-    id.end = u.end;
+    id.start = u.speech_start;
+    id.end = u.speech_end;
     id.sensor = options_.audio_sensor;
     id.method = to_string(options_.method);
     if (options_.method == VoiceIdMethod::kGmmUbm) {
-      // The loud part only (+-50 ms): the padding and the hangover are the room's noise.
-      const size_t margin = static_cast<size_t>(0.05 * gate_->sample_rate());
-      const size_t b = u.loud_begin > margin ? u.loud_begin - margin : 0;
-      const size_t e = std::min(u.samples.size(), u.loud_end + margin);
-      auto r = identify(*model_, std::span<const float>(u.samples).subspan(b, e - b),
-                        gate_->sample_rate());
+      // The speech part only (+-50 ms): the pre-roll and the hangover are the room's noise.
+      const int64_t margin = static_cast<int64_t>(0.05 * rate_);
+      const int64_t n = static_cast<int64_t>(u.samples.size());
+      const int64_t b = std::clamp(
+          audio::duration_to_frames(u.speech_start - u.start, rate_) - margin, int64_t{0}, n);
+      const int64_t e =
+          std::clamp(audio::duration_to_frames(u.speech_end - u.start, rate_) + margin, b, n);
+      auto r = identify(*model_,
+                        std::span<const float>(u.samples).subspan(static_cast<size_t>(b),
+                                                                  static_cast<size_t>(e - b)),
+                        rate_);
       if (!r) return tl::unexpected(r.error());
       if (r->frames == 0) return ok_status();  // nothing speech-like in it
       id.speaker_id = r->speaker_id;
@@ -131,11 +150,11 @@ class VoiceIdAnalyzer : public Analyzer {
   }
 
   // DREAM's rule on every direction heard during the utterance (none heard: unknown).
-  void direction_rule(const Utterance& u, SpeakerIdentity& id) const {
+  void direction_rule(const audio::Utterance& u, SpeakerIdentity& id) const {
     int votes[2] = {0, 0}, heard = 0;  // 0 therapist, 1 child
     const auto& d = options_.direction;
     for (const auto& h : heard_) {
-      if (h.stamp < u.start || h.stamp > u.end) continue;
+      if (h.stamp < u.speech_start || h.stamp > u.speech_end) continue;
       ++heard;
       if (!(h.confidence > d.min_confidence)) continue;
       const double a = std::abs(h.azimuth_deg);
@@ -156,8 +175,10 @@ class VoiceIdAnalyzer : public Analyzer {
 
   VoiceIdAnalyzerOptions options_;
   std::shared_ptr<const VoiceModel> model_;
-  std::optional<UtteranceGate> gate_;
-  std::deque<Heard> heard_;  // directions of the last seconds (direction rule)
+  std::unique_ptr<audio::UtteranceSegmenter> segmenter_;
+  int rate_ = 0;
+  std::vector<audio::Utterance> utterances_;  // scratch
+  std::deque<Heard> heard_;                   // directions of the last seconds (direction rule)
 };
 
 }  // namespace

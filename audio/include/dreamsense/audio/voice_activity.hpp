@@ -13,6 +13,11 @@
 // noise_adapt_s), falls fast (noise_fall_s) wherever a bin is below it, and never stays below
 // twice the minimum of the smoothed power over the last noise_window_s (so a lasting rise of the
 // noise is accepted as noise after that window). Absence of speech is a decision, not an error.
+//
+// Method kEnergyGate (DREAM's energy gate, the voice_id analyser's measured choice): speech when
+// the frame's RMS level is gate_threshold_db above a floor that follows drops at once and rises
+// gate_floor_rise_db_per_s (the floor cannot be talked up during a long utterance, which the
+// adaptive floor above can when a reader speaks for seconds without a pause).
 
 #include "dreamsense/core/status.hpp"
 
@@ -23,7 +28,10 @@
 
 namespace dreamsense::audio {
 
+enum class VoiceActivityMethod { kSpectral, kEnergyGate };
+
 struct VoiceActivityOptions {
+  VoiceActivityMethod method = VoiceActivityMethod::kSpectral;
   int sample_rate = 16000;
   double frame_s = 0.02;                          // frame (and hop) length
   double band_low_hz = 150, band_high_hz = 4000;  // band of the features (clipped to Nyquist)
@@ -33,6 +41,8 @@ struct VoiceActivityOptions {
   double noise_fall_s = 0.1;                      // ... where the power is below the floor
   double noise_window_s = 3.0;                    // minimum-statistics window
   double smoothing_s = 0.04;                      // power smoothing for the spectral feature
+  double gate_threshold_db = 10.0;                // kEnergyGate: level above the floor
+  double gate_floor_rise_db_per_s = 3.0;          // kEnergyGate: the floor's fastest rise
   Status check() const;                           // lists every bad field
 };
 
@@ -40,7 +50,7 @@ struct VoiceActivityFrame {
   int64_t first_sample = 0;  // stream sample index of the frame's first sample
   bool speech = false;
   float probability = 0.f;     // monotone in the margin over the thresholds; 0.5 at threshold
-  double energy_snr_db = 0;    // in-band energy over the noise floor's
+  double energy_snr_db = 0;    // in-band energy over the noise floor's (gate: level - floor)
   double spectral_snr_db = 0;  // mean over in-band bins of max(0, 10 log10(P / N))
   double level_dbfs = -120;    // frame RMS, dB re full scale
 };

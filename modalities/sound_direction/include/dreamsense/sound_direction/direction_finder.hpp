@@ -24,6 +24,8 @@
 
 namespace dreamsense::sound_direction {
 
+// The finder's voice activity: audio::EnergyGate (the tree's one energy gate) on the in-band
+// (300-4000 Hz) level of the SRP frames.
 struct VadOptions {
   double threshold_db = 6.0;         // voiced if in-band power exceeds the noise floor by this
   double min_level_dbfs = -70.0;     // and is above this absolute level (digital silence: never)

@@ -1,7 +1,7 @@
 #pragma once
-// Reading enrolment and evaluation audio: WAV/FLAC/... through libsndfile (first channel) and
-// headerless 16 kHz s16le ".raw" files (the pocketsphinx test data), and the one-folder-per-
-// speaker layout that `train voices --dataset folders` and the demo's enrolment use.
+// Enrolment and evaluation audio as labelled clips (first channel, read by audio::read_audio:
+// WAV/FLAC/... and headerless 16 kHz s16le ".raw" files), and the one-folder-per-speaker layout
+// that `train voices --dataset folders` and the demo's enrolment use.
 
 #include "dreamsense/voice_id/voice_model.hpp"
 
@@ -13,9 +13,6 @@ namespace dreamsense::voice_id {
 // Samples in [-1, 1] of the first channel; sample_rate set. Error names the file.
 Result<LabelledAudio> read_audio_file(const std::filesystem::path& path,
                                       const std::string& speaker = {});
-
-// Audio files (.wav, .flac, .ogg, .raw) directly under `dir`, sorted by file name.
-std::vector<std::filesystem::path> audio_files_in(const std::filesystem::path& dir);
 
 // DIR/<speaker>/<files>: every subfolder holding audio is one speaker (sorted by name), its
 // recordings sorted by file name. `max_per_speaker` > 0 keeps only the first that many.

@@ -1,7 +1,7 @@
 #pragma once
 // Voice identification analyser (F21 identifyVoice): cuts the audio stream into utterances with
-// the energy gate (utterance_gate.hpp) and writes keys::kSpeakerIdentity once per utterance.
-// Two methods, chosen explicitly (never as a silent fallback):
+// the shared utterance segmenter (audio/utterance_segmenter.hpp) and writes keys::kSpeakerIdentity
+// once per utterance. Two methods, chosen explicitly (never as a silent fallback):
 //  - kGmmUbm: the GMM-UBM speaker models of a trained VoiceModel (voice_model.hpp); an
 //    utterance whose best log-likelihood ratio is below the model's threshold is "unknown".
 //  - kDirectionRule: DREAM's identifyVoice rule on keys::kSoundDirection (original-dream.md
@@ -14,8 +14,8 @@
 // The entry is written at the tick the utterance ends (hangover_s after its last loud frame);
 // start/end are the loud part's stamps.
 
+#include "dreamsense/audio/utterance_segmenter.hpp"
 #include "dreamsense/core/analyzer.hpp"
-#include "dreamsense/voice_id/utterance_gate.hpp"
 #include "dreamsense/voice_id/voice_model.hpp"
 
 #include <filesystem>
@@ -33,6 +33,16 @@ struct DirectionRuleOptions {
   Status check() const;
 };
 
+// The segmenter's settings for voice identification: the shared segmenter's timing (0.15 s of
+// speech opens, 0.25 s pre-roll, 0.5 s hangover, 10 s at most) with the energy-gate decision
+// (10 dB over a floor rising at most 3 dB/s), which keeps a reader's long sentence in one piece
+// (the spectral VAD's adaptive floor splits it; measured in README.md).
+inline audio::UtteranceSegmenterOptions default_voice_segmenter() {
+  audio::UtteranceSegmenterOptions o;
+  o.vad.method = audio::VoiceActivityMethod::kEnergyGate;
+  return o;
+}
+
 struct VoiceIdAnalyzerOptions {
   SensorId audio_sensor = "mic_array";
   VoiceIdMethod method = VoiceIdMethod::kGmmUbm;
@@ -40,7 +50,9 @@ struct VoiceIdAnalyzerOptions {
   std::shared_ptr<const VoiceModel> model;
   std::filesystem::path model_file;
   DirectionRuleOptions direction;
-  UtteranceGateOptions gate;
+  // Utterances (audio::UtteranceSegmenter, as the speech analyser) on channel 0; the stream's
+  // rate is filled in from the first chunk.
+  audio::UtteranceSegmenterOptions segmenter = default_voice_segmenter();
   Status check() const;
 };
 
