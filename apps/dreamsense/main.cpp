@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   app::add_record(app, g, exit_code);
   app::add_live(app, g, exit_code);
   app::add_calibrate(app, g, exit_code);
+  app::add_enroll(app, g, exit_code);  // cmd_faces.cpp
   CLI::App* train =
       app.add_subcommand("train", "Train a model from a dataset (writes a versioned model file)");
   train->require_subcommand(1);
@@ -60,6 +61,7 @@ int main(int argc, char** argv) {
   app::add_train_face(*train, g, exit_code);
   app::add_train_gaze(*train, g, exit_code);
   app::add_train_speech(*train, g, exit_code);
+  app::add_train_expression(*train, g, exit_code);  // cmd_faces.cpp
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug
                    : g.quiet ? log::Level::kWarn
