@@ -73,6 +73,10 @@ Result<IdentityMethod> identity_method(const std::string& spec) {
     m.default_threshold = 0.8;
   } else if (parts.front() == "face_api") {
     m.face_api = true;
+    // The geometry the descriptor network was trained on (dlib's 150 px chips, padding 0.25).
+    m.alignment.size = vision::kFaceApiRecognitionInputPx;
+    m.alignment.dlib_template = true;
+    m.alignment.template_padding = 0.25;
     m.matcher = IdentityMethod::Matcher::kNearestEuclidean;
     m.default_threshold = -0.6;  // dlib's same-person distance
   } else {
