@@ -72,11 +72,14 @@ std::vector<std::string> ordered_labels(const std::set<std::string>& present) {
 
 std::string block_key(const ExpressionMethod& m, const std::string& block) {
   const auto& f = m.features;
+  const auto& a = f.alignment;
+  const std::string geometry = fmt::format("{}/{}/{}/{}/{}|", a.size, a.eye_distance, a.eye_row,
+                                           a.dlib_template, a.template_padding);
   if (block == "lbp1" || block == "lbp2")
-    return fmt::format("{}/{}/{}", block, f.lbp_grid, f.lbp_sqrt);
-  if (block == "hog") return fmt::format("hog/{}/{}", f.hog.cell_px, f.hog.bins);
-  if (block == "face_api") return fmt::format("face_api/{}", f.face_api_flip);
-  return block;
+    return geometry + fmt::format("{}/{}/{}", block, f.lbp_grid, f.lbp_sqrt);
+  if (block == "hog") return geometry + fmt::format("hog/{}/{}", f.hog.cell_px, f.hog.bins);
+  if (block == "face_api") return geometry + fmt::format("face_api/{}", f.face_api_flip);
+  return geometry + block;
 }
 
 std::optional<double> median(std::vector<double> v) {
@@ -116,8 +119,6 @@ Result<std::vector<ExpressionMethod>> methods_of(const std::vector<std::string>&
   for (const std::string& n : names) {
     auto m = expression::expression_method(n);
     if (!m) return tl::unexpected(m.error());
-    if (!out.empty() && !(m->features.alignment == out.front().features.alignment))
-      return make_error(ErrorCode::kInvalidArgument, "methods with different alignments");
     out.push_back(std::move(*m));
   }
   if (out.empty()) return make_error(ErrorCode::kInvalidArgument, "no expression method given");
@@ -188,8 +189,26 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
 
   auto methods = methods_of(o.methods);
   if (!methods) return tl::unexpected(methods.error());
-  auto faces = prepare(*items, o.crop, methods->front().features.alignment, progress, 0.0, 0.4);
-  if (!faces) return tl::unexpected(faces.error());
+  // Every image aligned once per distinct alignment geometry (the crop path's decisions, and so
+  // which images have a face, do not depend on the geometry).
+  std::vector<std::pair<vision::AlignmentOptions, std::vector<PreparedFace>>> aligned;
+  std::vector<size_t> geometry_of(methods->size());
+  for (size_t mi = 0; mi < methods->size(); ++mi) {
+    const auto& a = (*methods)[mi].features.alignment;
+    auto it =
+        std::find_if(aligned.begin(), aligned.end(), [&](const auto& p) { return p.first == a; });
+    if (it == aligned.end()) {
+      auto prepared = prepare(*items, o.crop, a, progress, 0.0, 0.4);
+      if (!prepared) return tl::unexpected(prepared.error());
+      aligned.emplace_back(a, std::move(*prepared));
+      it = aligned.end() - 1;
+    }
+    geometry_of[mi] = static_cast<size_t>(it - aligned.begin());
+  }
+  const std::vector<PreparedFace>* faces = &aligned.front().second;
+  auto faces_of = [&](size_t mi) -> const std::vector<PreparedFace>& {
+    return aligned[geometry_of[mi]].second;
+  };
 
   // Descriptor blocks, computed once per image and shared by the methods that use them.
   std::vector<ExpressionFeatureExtractor> extractors;
@@ -209,7 +228,7 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
         if (!column.empty()) continue;
         column.resize(items->size());
         for (size_t i = 0; i < items->size(); ++i) {
-          const auto& f = (*faces)[i];
+          const auto& f = faces_of(mi)[i];
           if (!f.face) continue;
           column[i] =
               extractors[mi].block(b, f.grey, mirrored ? vision::mirror_face(*f.face) : *f.face);
@@ -269,7 +288,7 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
       if (fi + 1 == folds.size()) {  // timing of the full per-face path on the last fold
         auto r = expression::ExpressionRecognizer::create(std::move(*model));
         if (!r) return tl::unexpected(r.error());
-        ms[mi] = time_recognizer(*r, *faces, test, 300);
+        ms[mi] = time_recognizer(*r, faces_of(mi), test, 300);
       }
     }
     if (progress) progress(0.8 + 0.2 * (fi + 1.0) / folds.size());
