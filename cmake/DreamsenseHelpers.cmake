@@ -30,13 +30,21 @@ function(ds_add_test name)
     DREAMSENSE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     DREAMSENSE_BINARY_DIR="${PROJECT_BINARY_DIR}")
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
-  # A list property must reach set_tests_properties as one argument: escape its semicolons.
-  string(REPLACE ";" "\\;" labels "${ARG_LABELS}")
-  string(REPLACE ";" "\\;" fixtures "${ARG_FIXTURES}")
+  # gtest_discover_tests() passes PROPERTIES through a generated script that splits lists, so a
+  # second label (or a fixture) would be lost: the labels and fixtures are set by a small script
+  # of ours that ctest runs after the discovered tests are defined.
   gtest_discover_tests(${name}
     WORKING_DIRECTORY ${PROJECT_BINARY_DIR}
-    PROPERTIES LABELS "${labels}" FIXTURES_REQUIRED "${fixtures}"
+    TEST_LIST ${name}_TESTS
     DISCOVERY_TIMEOUT 60)
+  set(props "LABELS \"${ARG_LABELS}\"")
+  if(ARG_FIXTURES)
+    string(APPEND props " FIXTURES_REQUIRED \"${ARG_FIXTURES}\"")
+  endif()
+  set(script ${CMAKE_CURRENT_BINARY_DIR}/${name}_properties.cmake)
+  file(WRITE ${script}
+       "foreach(t IN LISTS ${name}_TESTS)\n  set_tests_properties(\"\${t}\" PROPERTIES ${props})\nendforeach()\n")
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${script})
 endfunction()
 
 # ds_add_bench(<name> SOURCES ... DEPS ...)
@@ -48,4 +56,35 @@ function(ds_add_bench name)
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} benchmark::benchmark)
   target_compile_options(${name} PRIVATE ${DREAMSENSE_WARNINGS})
+endfunction()
+
+# ds_add_analyzer(<name>): adds modalities/<name> and registers its analyser factories: the
+# library dreamsense::<name> defines dreamsense::<name>::register_analyzers(AnalyzerRegistry&)
+# (perception/analyzer_registry.hpp). The order of these lines is the registration order, which
+# breaks ties when the runner orders analysers by their contracts.
+function(ds_add_analyzer name)
+  add_subdirectory(${name})
+  set_property(GLOBAL APPEND PROPERTY DREAMSENSE_ANALYZERS ${name})
+endfunction()
+
+# ds_generate_analyzer_registry(): after the ds_add_analyzer() lines; writes the registry source
+# and the library dreamsense::analyzers that links every registered analyser.
+function(ds_generate_analyzer_registry)
+  get_property(names GLOBAL PROPERTY DREAMSENSE_ANALYZERS)
+  set(DS_ANALYZER_DECLARATIONS "")
+  set(DS_ANALYZER_CALLS "")
+  foreach(n ${names})
+    string(APPEND DS_ANALYZER_DECLARATIONS
+           "namespace dreamsense::${n} {\nvoid register_analyzers(AnalyzerRegistry& registry);\n}\n")
+    string(APPEND DS_ANALYZER_CALLS "    ${n}::register_analyzers(r);\n")
+  endforeach()
+  set(out ${PROJECT_BINARY_DIR}/generated/analyzer_registry.cpp)
+  configure_file(${PROJECT_SOURCE_DIR}/cmake/analyzer_registry.cpp.in ${out} @ONLY)
+  add_library(dreamsense_analyzers STATIC ${out})
+  add_library(dreamsense::analyzers ALIAS dreamsense_analyzers)
+  target_link_libraries(dreamsense_analyzers PUBLIC dreamsense::perception)
+  foreach(n ${names})
+    target_link_libraries(dreamsense_analyzers PUBLIC dreamsense::${n})
+  endforeach()
+  target_compile_options(dreamsense_analyzers PRIVATE ${DREAMSENSE_WARNINGS})
 endfunction()

@@ -22,8 +22,12 @@ packages=(
   opencv-data opencv-doc libdlib-data pocketsphinx-en-us pocketsphinx-testdata python3-skimage
   # speech enrolment (train speech): sphinxtrain's bw and map_adapt, pocketsphinx_mdef_convert
   sphinxtrain pocketsphinx
+  # skeleton actions (modalities/actions): liblinear and libsvm train the SVMs
+  liblinear-dev libsvm-dev
   # tests: JSON-schema validation of the DREAM export; synthetic spoken words (speech tests)
   python3 python3-jsonschema espeak-ng
+  # batch --slurm: the test starts a single-node Slurm cluster on 127.0.0.1 (label slurm)
+  slurm-wlm munge
 )
 
 missing=()

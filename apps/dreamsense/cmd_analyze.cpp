@@ -31,9 +31,13 @@ struct AnalyzeFlags {
   std::string grammar;
   bool overlay = false;
   SubjectFlags subject;
-  std::string mutual_mode = "3d";
+  std::string mutual_mode;
   std::vector<double> robot_head;
-  std::string voice_method = "gmm_ubm", voice_model;
+  std::string voice_method, voice_model;
+  std::string pipeline;          // pipeline.yaml
+  std::vector<std::string> set;  // ANALYSER.KEY=VALUE
+  std::vector<std::string> enable, disable;
+  bool print_pipeline = false;  // analyze: show the graph and stop
 };
 
 void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path& out) {
@@ -56,10 +60,20 @@ void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path
   if (!out.empty()) std::fprintf(stderr, "outputs in %s\n", out.string().c_str());
 }
 
-// Analysis flags shared by analyze and live.
+// Analysis flags shared by analyze and live. Each analyser option flag is a shorthand for one
+// option of the declared pipeline (docs/pipeline.md), set over pipeline.yaml's value.
 void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
+  cmd.add_option("--pipeline", flags.pipeline,
+                 "pipeline.yaml: analysers on/off, their options, stream roles (docs/pipeline.md)")
+      ->check(CLI::ExistingFile);
+  cmd.add_option("--set", flags.set,
+                 "Set an analyser option, ANALYSER.KEY=VALUE (YAML value; repeatable), e.g. "
+                 "gaze.mutual.radius_m=0.25");
+  cmd.add_option("--enable", flags.enable, "Run these analysers (names as --print-pipeline shows)");
+  cmd.add_option("--disable", flags.disable, "Do not run these analysers");
   cmd.add_option("--grammar", flags.grammar,
-                 "Speech grammar (JSGF or SRGS .grxml); default: the session's own, if any")
+                 "Speech grammar (JSGF or SRGS .grxml); default: the session's own, if any "
+                 "(= --set speech.grammar=FILE)")
       ->check(CLI::ExistingFile);
   cmd.add_flag("--overlay", flags.overlay,
                "Also write overlay.mp4: the selected camera with face boxes, landmarks, head "
@@ -83,18 +97,42 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
       ->check(CLI::ExistingFile);
 }
 
-void apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& o) {
+Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& o) {
   o.overlay = flags.overlay;
   apply_subject_flags(flags.subject, o);
-  if (flags.mutual_mode == "camera-plane") o.mutual_gaze.mode = gaze::MutualGazeMode::kCameraPlane;
-  if (flags.robot_head.size() == 3) {
-    o.mutual_gaze.robot_head_m = {flags.robot_head[0], flags.robot_head[1], flags.robot_head[2]};
-    o.robot_head_from_session = false;
-  }
   o.policy = flags.policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
-  o.speech_grammar = flags.grammar;
-  o.voice_method = flags.voice_method;
-  o.voice_model = flags.voice_model;
+  runner::PlanOptions& plan = o.plan;
+  plan.pipeline_file = flags.pipeline;
+  auto set = [&plan](std::string analyzer, std::string key, std::string value) {
+    plan.overrides.push_back({std::move(analyzer), std::move(key), std::move(value)});
+  };
+  auto quoted_path = [](const std::string& p) {
+    return nlohmann::json(std::filesystem::absolute(p).string()).dump();  // YAML accepts JSON
+  };
+  if (!flags.mutual_mode.empty())
+    set("gaze", "mutual.mode", flags.mutual_mode == "camera-plane" ? "camera_plane" : "3d");
+  if (flags.robot_head.size() == 3)
+    set("gaze", "mutual.robot_head_m",
+        fmt::format("[{}, {}, {}]", flags.robot_head[0], flags.robot_head[1], flags.robot_head[2]));
+  if (!flags.grammar.empty()) set("speech", "grammar", quoted_path(flags.grammar));
+  if (flags.voice_method == "off")
+    plan.enable["voice_id"] = false;
+  else if (!flags.voice_method.empty())
+    set("voice_id", "method", flags.voice_method);
+  if (!flags.voice_model.empty()) set("voice_id", "model", quoted_path(flags.voice_model));
+  for (const auto& kv : flags.set) {
+    const auto eq = kv.find('=');
+    const auto dot = kv.find('.');
+    if (eq == std::string::npos || dot == std::string::npos || dot > eq || dot == 0 ||
+        eq == dot + 1)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "--set {}: expected ANALYSER.KEY=VALUE (e.g. gaze.mutual.radius_m=0.25)",
+                        kv);
+    set(kv.substr(0, dot), kv.substr(dot + 1, eq - dot - 1), kv.substr(eq + 1));
+  }
+  for (const auto& n : flags.enable) plan.enable[n] = true;
+  for (const auto& n : flags.disable) plan.enable[n] = false;
+  return ok_status();
 }
 
 }  // namespace
@@ -126,12 +164,12 @@ void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
 
 void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o) {
   if (flags.subject == "none")
-    o.subject_from_session = false;
+    o.plan.subject_from_session = false;
   else
-    o.subject_dir = flags.subject;
-  o.face_model = flags.face_model;
-  o.gaze_model = flags.gaze_model;
-  o.speech_model = flags.speech_model;
+    o.plan.subject_dir = flags.subject;
+  o.plan.face_model = flags.face_model;
+  o.plan.gaze_model = flags.gaze_model;
+  o.plan.speech_model = flags.speech_model;
 }
 
 void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
@@ -140,16 +178,36 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       "analyze",
       "Offline analysis of a recorded session: primitives.jsonl, events.log, dream.json");
   cmd->add_option("session", flags->session, "Session folder (with session.yaml)")->required();
-  cmd->add_option("--out", flags->out, "Output folder (created if needed)")->required();
+  cmd->add_option("--out", flags->out,
+                  "Output folder (created if needed; required unless --print-pipeline)");
   cmd->add_option("--policy", flags->policy,
                   "Synchronisation: settled (deterministic replay) or live (real-time, drops)")
       ->check(CLI::IsMember({"settled", "live"}));
+  cmd->add_flag("--print-pipeline", flags->print_pipeline,
+                "Print the analysis graph this session gets (streams and roles, analysers in "
+                "order with their inputs, reads, writes and options) and stop");
   add_analysis_flags(*cmd, *flags);
   cmd->callback([flags, &g, &exit_code] {
     runner::AnalysisOptions o;
     o.session_dir = flags->session;
     o.out_dir = flags->out;
-    apply_analysis_flags(*flags, o);
+    if (auto s = apply_analysis_flags(*flags, o); !s) {
+      exit_code = fail(s.error());
+      return;
+    }
+    if (flags->print_pipeline) {
+      auto plan = runner::plan_session(o);
+      if (!plan) {
+        exit_code = fail(plan.error());
+        return;
+      }
+      std::fputs(plan->describe().c_str(), stdout);
+      return;
+    }
+    if (flags->out.empty()) {
+      exit_code = fail("analyze: --out DIR is required");
+      return;
+    }
     auto r = run_analysis_with_progress(o, g.quiet);
     if (!r) {
       exit_code = fail(r.error());
@@ -216,7 +274,10 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     }
     runner::AnalysisOptions o;
     o.out_dir = flags->out;
-    apply_analysis_flags(*flags, o);
+    if (auto s = apply_analysis_flags(*flags, o); !s) {
+      exit_code = fail(s.error());
+      return;
+    }
     std::unique_ptr<ui::OperatorPage> page;
     if (flags->ui_port >= 0) {
       ui::OperatorPageOptions uo;

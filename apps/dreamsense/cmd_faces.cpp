@@ -106,11 +106,9 @@ Status enroll_faces(const EnrollFacesFlags& f, bool quiet) {
 
 }  // namespace
 
-void add_enroll(CLI::App& app, const GlobalFlags& g, int& exit_code) {
-  CLI::App* enroll = app.add_subcommand("enroll", "Enrol people for identification");
-  enroll->require_subcommand(1);
+void add_enroll_faces(CLI::App& enroll, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<EnrollFacesFlags>();
-  CLI::App* cmd = enroll->add_subcommand(
+  CLI::App* cmd = enroll.add_subcommand(
       "faces", "Add face images of one person to a face gallery (descriptors, not photos)");
   cmd->add_option("--person", flags->person, "Person id (>= 0; identifyFace answers it)")
       ->required()

@@ -104,8 +104,8 @@ void add_train_gaze(CLI::App& train, const GlobalFlags& g, int& exit_code) {
         o.session_dir = in.session_dir;
         o.out_dir = in.session_dir / "analysis-for-gaze-fit";
         // Built-in gaze constants and no head-model offset: the fit measures both afresh.
-        o.subject_from_session = false;
-        o.face_model = flags->face_model;
+        o.plan.subject_from_session = false;
+        o.plan.face_model = flags->face_model;
         if (auto r = run_analysis_with_progress(o, g.quiet); !r) {
           exit_code = fail(r.error());
           return;

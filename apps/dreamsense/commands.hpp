@@ -38,6 +38,7 @@ void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code);
 void add_bench(CLI::App& app, const GlobalFlags& g, int& exit_code);
 void add_record(CLI::App& app, const GlobalFlags& g, int& exit_code);  // cmd_record.cpp
 void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code);    // cmd_analyze.cpp
+void add_batch(CLI::App& app, const GlobalFlags& g, int& exit_code);   // cmd_batch.cpp
 
 // Verbs of other modules, each in its own file (cmd_<module>.cpp).
 void add_calibrate(CLI::App& app, const GlobalFlags& g, int& exit_code);  // cmd_calibrate.cpp
@@ -47,16 +48,25 @@ void add_eval_doa(CLI::App& eval, const GlobalFlags& g, int& exit_code);       /
 void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code);    // cmd_speech.cpp
 void add_train_speech(CLI::App& train, const GlobalFlags& g, int& exit_code);  // cmd_speech.cpp
 void add_eval_eyes(CLI::App& eval, const GlobalFlags& g, int& exit_code);      // cmd_eyes.cpp
+// cmd_objects.cpp: `eval tracking`, `eval objects` and `enroll objects` (toys on the table).
+void add_eval_tracking(CLI::App& eval, const GlobalFlags& g, int& exit_code);
+void add_enroll_objects(CLI::App& enroll, const GlobalFlags& g, int& exit_code);
+void add_eval_objects(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 
 // cmd_voices.cpp: `train voices` (under the `train` verb of main.cpp) and `eval voices`.
 void add_train_voices(CLI::App& train, const GlobalFlags& g, int& exit_code);
 void add_eval_voices(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 
+// cmd_actions.cpp: `train actions`, `train gestures` (under `train`) and `eval actions`.
+void add_train_actions(CLI::App& train, const GlobalFlags& g, int& exit_code);
+void add_train_gestures(CLI::App& train, const GlobalFlags& g, int& exit_code);
+void add_eval_actions(CLI::App& eval, const GlobalFlags& g, int& exit_code);
+
 // cmd_faces.cpp: `train expression`, `eval expression`, `enroll faces`, `eval faces`.
 void add_train_expression(CLI::App& train, const GlobalFlags& g, int& exit_code);
 void add_eval_expression(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 void add_eval_faces(CLI::App& eval, const GlobalFlags& g, int& exit_code);
-void add_enroll(CLI::App& app, const GlobalFlags& g, int& exit_code);
+void add_enroll_faces(CLI::App& enroll, const GlobalFlags& g, int& exit_code);
 
 // The child's calibration for analyses (cmd_analyze.cpp): --subject DIR|none, --face-model,
 // --gaze-model, --speech-model.

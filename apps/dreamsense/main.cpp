@@ -48,12 +48,12 @@ int main(int argc, char** argv) {
   int exit_code = app::kExitOk;
   app::add_demo(app, g, exit_code);
   app::add_analyze(app, g, exit_code);
+  app::add_batch(app, g, exit_code);  // cmd_batch.cpp
   app::add_eval(app, g, exit_code);
   app::add_bench(app, g, exit_code);
   app::add_record(app, g, exit_code);
   app::add_live(app, g, exit_code);
   app::add_calibrate(app, g, exit_code);
-  app::add_enroll(app, g, exit_code);  // cmd_faces.cpp
   CLI::App* train =
       app.add_subcommand("train", "Train a model from a dataset (writes a versioned model file)");
   train->require_subcommand(1);
@@ -62,6 +62,13 @@ int main(int argc, char** argv) {
   app::add_train_gaze(*train, g, exit_code);
   app::add_train_speech(*train, g, exit_code);
   app::add_train_expression(*train, g, exit_code);  // cmd_faces.cpp
+  app::add_train_actions(*train, g, exit_code);  // cmd_actions.cpp
+  app::add_train_gestures(*train, g, exit_code);
+  CLI::App* enroll = app.add_subcommand(
+      "enroll", "Add known people / toys to a gallery (writes a versioned file)");
+  enroll->require_subcommand(1);
+  app::add_enroll_objects(*enroll, g, exit_code);
+  app::add_enroll_faces(*enroll, g, exit_code);  // cmd_faces.cpp
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug
                    : g.quiet ? log::Level::kWarn

@@ -23,6 +23,62 @@ std::set<SensorId> ids_of(const std::vector<StreamSpec>& specs) {
 }
 }  // namespace
 
+Result<std::vector<std::unique_ptr<Analyzer>>> order_by_contracts(
+    std::vector<std::unique_ptr<Analyzer>> analyzers) {
+  const size_t n = analyzers.size();
+  std::vector<AnalyzerContract> contracts;
+  std::map<std::string, size_t> writer;
+  for (size_t i = 0; i < n; ++i) {
+    contracts.push_back(analyzers[i]->contract());
+    for (const auto& k : contracts[i].writes) writer.emplace(k, i);
+  }
+  std::vector<std::set<size_t>> after(n);  // after[i]: analysers that must run after i
+  std::vector<int> pending(n, 0);
+  auto edge = [&](size_t first, size_t second) {
+    if (first != second && after[first].insert(second).second) pending[second]++;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    for (const auto& k : contracts[i].reads)
+      if (auto w = writer.find(k); w != writer.end()) edge(w->second, i);
+    for (const auto& k : contracts[i].reads_previous)
+      if (auto w = writer.find(k); w != writer.end()) edge(i, w->second);
+  }
+  std::vector<std::unique_ptr<Analyzer>> out;
+  std::vector<bool> done(n, false);
+  for (size_t round = 0; round < n; ++round) {
+    size_t next = n;
+    for (size_t i = 0; i < n && next == n; ++i)
+      if (!done[i] && pending[i] == 0) next = i;
+    if (next == n) {
+      std::string names;
+      for (size_t i = 0; i < n; ++i)
+        if (!done[i]) names += (names.empty() ? "" : ", ") + std::string(analyzers[i]->name());
+      return make_error(ErrorCode::kFailedPrecondition,
+                        "pipeline: analysers {} read each other's keys in a cycle", names);
+    }
+    done[next] = true;
+    for (size_t j : after[next]) pending[j]--;
+    out.push_back(std::move(analyzers[next]));
+  }
+  return out;
+}
+
+std::map<std::string, std::vector<SensorId>, std::less<>> key_sensors(
+    const std::vector<std::unique_ptr<Analyzer>>& analyzers, const SourceInfo& source) {
+  std::map<std::string, std::vector<SensorId>, std::less<>> out;
+  for (const auto& a : analyzers) {
+    const AnalyzerContract c = a->contract();
+    std::set<SensorId> sensors(c.required_inputs.begin(), c.required_inputs.end());
+    for (const auto& o : c.optional_inputs)
+      if (source.find(o) != nullptr) sensors.insert(o);
+    for (const auto& k : c.reads)
+      if (auto it = out.find(k); it != out.end())
+        sensors.insert(it->second.begin(), it->second.end());
+    for (const auto& k : c.writes) out[k] = std::vector<SensorId>(sensors.begin(), sensors.end());
+  }
+  return out;
+}
+
 Status PipelineOptions::check() const {
   if (auto s = sync.check(); !s) return s;
   return blackboard.check();

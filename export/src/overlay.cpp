@@ -1,7 +1,12 @@
 #include "dreamsense/export/overlay.hpp"
 
-#include "dreamsense/core/perception.hpp"
-#include "dreamsense/export/output_file.hpp"
+#include "dreamsense/core/output_file.hpp"
+#include "dreamsense/dream/legacy.hpp"
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/gaze.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -212,11 +217,11 @@ cv::Mat draw_overlay(const cv::Mat& image, const SensorId& camera, const MultiFr
 
   // Header: shown camera, selection, time.
   const int line = static_cast<int>(std::lround(28 * st.font / 0.5));
-  label(canvas, fmt::format("{} (DREAM {})", camera, dream_camera_id(camera)), {8, line},
+  label(canvas, fmt::format("{} (DREAM {})", camera, dream::camera_id(camera)), {8, line},
         {255, 255, 255}, {40, 40, 40}, st);
   const std::string sel_text = sel == nullptr ? std::string("selected: none")
                                               : fmt::format("selected: {} (DREAM {})", sel->camera,
-                                                            dream_camera_id(sel->camera));
+                                                            dream::camera_id(sel->camera));
   label(canvas, sel_text, {8, 2 * line},
         sel != nullptr && sel->camera == camera ? cv::Scalar(0, 0, 0) : cv::Scalar(255, 255, 255),
         sel != nullptr && sel->camera == camera ? overlay_colors::kSelectedFaceBox

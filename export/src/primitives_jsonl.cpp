@@ -1,3 +1,4 @@
+#include "dreamsense/export/primitive_json.hpp"
 #include "dreamsense/export/writers.hpp"
 
 namespace dreamsense::exporters {
@@ -5,7 +6,7 @@ namespace dreamsense::exporters {
 Status PrimitivesJsonlWriter::write(const std::vector<primitives::PrimitiveRecord>& records) {
   std::string text;
   for (const auto& r : records) {
-    text += primitives::to_json(r).dump();
+    text += to_json(r).dump();
     text += '\n';
   }
   return file_.write(text);

@@ -1,6 +1,7 @@
 #include "dreamsense/export/report.hpp"
 
-#include "dreamsense/export/output_file.hpp"
+#include "dreamsense/core/output_file.hpp"
+#include "dreamsense/dream/legacy.hpp"
 
 #include <fmt/format.h>
 
@@ -79,8 +80,8 @@ void HtmlReport::add(const std::vector<primitives::PrimitiveRecord>& records) {
     if (first_stamp_ns_ < 0) first_stamp_ns_ = r.stamp.ns();
     Series& s = series_[id];
     s.t_s.push_back(static_cast<double>(r.stamp.ns() - first_stamp_ns_) * 1e-9);
-    s.values.push_back(r.status == primitives::PrimitiveStatus::kOk && r.legacy
-                           ? *r.legacy
+    s.values.push_back(r.status == primitives::PrimitiveStatus::kOk
+                           ? dream::legacy_vector(r).value_or(std::vector<double>{})
                            : std::vector<double>{});
   }
 }

@@ -1,99 +1,81 @@
-#include "dreamsense/export/writers.hpp"
+#include "dreamsense/export/primitive_json.hpp"
+#include "dreamsense/export/report.hpp"
 
 #include <gtest/gtest.h>
 
-#include <fstream>
-
 namespace dreamsense::exporters {
 namespace {
-namespace fs = std::filesystem;
+using namespace primitives;
 
-fs::path temp_dir(const std::string& name) {
-  auto d = fs::temp_directory_path() / ("ds_export_" + name + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+TEST(PrimitiveJson, RecordHasTheContractFields) {
+  PrimitiveRecord r;
+  r.stamp = Timestamp::from_ns(40'000'000);
+  r.id = PrimitiveId::kGetHeadGazePlane;
+  auto j = to_json(r);
+  EXPECT_EQ(j["stamp_ns"], 40'000'000);
+  EXPECT_EQ(j["primitive"], "getHeadGaze (plane)");
+  EXPECT_EQ(j["id"], "F12");
+  EXPECT_EQ(j["status"], "disabled");
+  for (const char* k : {"confidence", "value", "legacy", "source"}) EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_FALSE(j.contains("query")) << "no query unless one was answered";
 }
 
-TEST(OutputFile, IsInvisibleUntilCommitted) {
-  auto d = temp_dir("commit");
-  {
-    OutputFile f;
-    ASSERT_TRUE(f.open(d / "a.txt"));
-    ASSERT_TRUE(f.write("hello"));
-    EXPECT_FALSE(fs::exists(d / "a.txt"));
-    ASSERT_TRUE(f.commit());
+// Every typed value goes to JSON and back unchanged, with DREAM's legacy vector beside it.
+TEST(PrimitiveJson, TypedRecordsRoundTrip) {
+  std::vector<PrimitiveRecord> records;
+  auto add = [&](PrimitiveId id, PrimitiveValue v, PrimitiveQuery q = {}) {
+    PrimitiveRecord r;
+    r.stamp = Timestamp::from_ns(80'000'000);
+    r.id = id;
+    r.status = PrimitiveStatus::kOk;
+    r.confidence = 0.75;
+    r.value = std::move(v);
+    r.query = std::move(q);
+    r.source = "camera_left";
+    r.data_stamp = Timestamp::from_ns(40'000'000);
+    records.push_back(r);
+  };
+  FacesValue faces;
+  faces.faces.push_back({{0.1, -0.05, 1.1}, 0.9f, "camera_left", {{"camera_left", {1, 2, 3, 4}}}});
+  faces.cameras["camera_left"] = {{{1, 2, 3, 4}, 0.9f, 0.8f}};
+  faces.selected_camera = "camera_left";
+  add(PrimitiveId::kGetFaces, faces);
+  add(PrimitiveId::kGetHeadGazePlane, HeadGazePlaneValue{{0.1, 0.2, 0.0}, 1.1, "camera_left"},
+      PlaneQuery{});
+  add(PrimitiveId::kTrackHand, TrackValue{{0.1, 0.2, 0.3}, {0.5, 0, 0}, -1, "right", 7},
+      TrackQuery{{0.1, 0.2, 0.3}, 0.2});
+  add(PrimitiveId::kIdentifyTrajectory, ClassLabelValue{"wave", 1, {{"wave", 0.9}}},
+      WindowQuery{1.5});
+  add(PrimitiveId::kGetObjects,
+      ObjectsValue{{{0, "car", {0.1, 0.3, 0.6}, 0.95, 2}, {3, "plane", {-0.1, 0.3, 0.6}, 0.9, 4}}});
+  SoundDirectionValue sd;
+  sd.azimuth_deg = 20;
+  sd.confidence = 0.6;
+  add(PrimitiveId::kGetSoundDirection, sd, ThresholdQuery{0.5});
+  for (const auto& r : records) {
+    const auto j = to_json(r);
+    auto back = record_from_json(nlohmann::json::parse(j.dump()));
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_EQ(to_json(*back), j) << j.dump();
+    EXPECT_EQ(back->value.index(), r.value.index());
+    EXPECT_EQ(back->query.index(), r.query.index());
   }
-  EXPECT_TRUE(fs::exists(d / "a.txt"));
-  {
-    OutputFile f;
-    ASSERT_TRUE(f.open(d / "b.txt"));
-    ASSERT_TRUE(f.write("half"));
-  }  // abandoned: a failed run leaves nothing that looks complete
-  EXPECT_FALSE(fs::exists(d / "b.txt"));
-  EXPECT_FALSE(fs::exists(d / "b.txt.partial"));
-  fs::remove_all(d);
+  EXPECT_EQ(to_json(records[0])["legacy"].size(), 16u) << "DREAM's getFaces layout";
+  EXPECT_DOUBLE_EQ(to_json(records[4])["legacy"][4].get<double>(), 0) << "car = 0";
 }
 
-TEST(OutputFile, UnwritableFolderIsAClearError) {
-  auto d = temp_dir("unwritable");
-  std::ofstream(d / "file") << "x";
-  auto s = ensure_writable_dir(d / "file" / "sub");
-  ASSERT_FALSE(s);
-  EXPECT_NE(s.error().message.find("file/sub"), std::string::npos);
-  fs::remove_all(d);
-}
-
-TEST(EventLog, OkRecordsPublishLegacyValuesStatusChangesOnce) {
-  auto d = temp_dir("events");
-  EventLogWriter w;
-  ASSERT_TRUE(w.open(d / "events.log", 0));
-  for (int t = 0; t < 3; ++t) {
-    primitives::PrimitiveRecord ok, off;
-    ok.stamp = off.stamp = Timestamp::from_ns(t * 40'000'000LL);
-    ok.id = primitives::PrimitiveId::kGetBody;
-    ok.status = primitives::PrimitiveStatus::kOk;
-    ok.legacy = std::vector<double>{1, 2, 3};
-    off.id = primitives::PrimitiveId::kGetFaces;
-    off.status = primitives::PrimitiveStatus::kDisabled;
-    ASSERT_TRUE(w.write({ok, off}));
-  }
-  ASSERT_TRUE(w.commit());
-  std::ifstream in(d / "events.log");
-  std::vector<std::string> lines;
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  ASSERT_EQ(lines.size(), 4u);
-  EXPECT_EQ(lines[0].rfind("getBody:o;", 0), 0u);
-  EXPECT_NE(lines[0].find(";1.000000;2.000000;3.000000"), std::string::npos);
-  EXPECT_NE(lines[1].find("getFaces:o;"), std::string::npos);
-  EXPECT_NE(lines[1].find(";disabled"), std::string::npos);
-  fs::remove_all(d);
-}
-
-TEST(DreamExport, FrameAlignedArraysWithNullsAndDreamJointNames) {
-  DreamExport e;
-  SkeletonBody b;
-  b.joint(JointId::kHead) = {{0.1, -0.2, 1.1}, 1.f};
-  e.add({b, cv::Vec3d(0, 0, -2), std::nullopt});
-  e.add({std::nullopt, std::nullopt, std::nullopt});
-  sources::SessionManifest m;
-  m.participant.id = 3;
-  m.condition = "RET";
-  m.task = "TT";
-  auto j = e.build(m);
-  EXPECT_EQ(j["skeleton"]["head"]["x"][0], 100.0);
-  EXPECT_TRUE(j["skeleton"]["head"]["x"][1].is_null());
-  EXPECT_TRUE(j["skeleton"].contains("sholder_left"));
-  EXPECT_EQ(j["head_gaze"]["rz"][0], -1.0) << "unit vector";
-  EXPECT_TRUE(j["eye_gaze"]["rx"][0].is_null());
-  EXPECT_EQ(j["participant"]["id"], 3);
-  EXPECT_EQ(j["skeleton"]["hand_right"]["confidence"].size(), 2u);
+TEST(PrimitiveJson, MalformedRecordsAreErrorsNamingTheMember) {
+  auto r = record_from_json(nlohmann::json::parse(
+      R"({"primitive":"getHead","stamp_ns":0,"status":"ok","value":{"position_m":[1,2]}})"));
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("value"), std::string::npos) << r.error().message;
+  EXPECT_FALSE(record_from_json(nlohmann::json::parse(R"({"primitive":"getNothing"})")));
+  EXPECT_FALSE(record_from_json(
+      nlohmann::json::parse(R"({"primitive":"getHead","stamp_ns":0,"status":"fine"})")));
 }
 
 }  // namespace
 }  // namespace dreamsense::exporters
-
-#include "dreamsense/export/report.hpp"
 
 namespace dreamsense::exporters {
 namespace {
@@ -105,7 +87,7 @@ TEST(HtmlReport, HasStatusTableAndTimelinesOfEnabledPrimitivesOnly) {
     ok.stamp = off.stamp = Timestamp::from_ns(t * 40'000'000LL);
     ok.id = primitives::PrimitiveId::kGetBody;
     ok.status = t == 5 ? primitives::PrimitiveStatus::kNoData : primitives::PrimitiveStatus::kOk;
-    ok.legacy = std::vector<double>{1.0 * t, 2, 3};
+    ok.value = primitives::BodyValue{{0.001 * t, 0.002, 0.003}, 1};
     off.id = primitives::PrimitiveId::kGetFaces;
     off.status = primitives::PrimitiveStatus::kDisabled;
     report.add({ok, off});

@@ -3,7 +3,11 @@
 
 #include "dreamsense/export/overlay.hpp"
 
-#include "dreamsense/core/perception.hpp"
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/gaze.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>

@@ -1,5 +1,8 @@
-#include "dreamsense/core/perception.hpp"
-#include "dreamsense/primitives/body_primitives.hpp"
+#include "dreamsense/perception/body.hpp"
+#include "dreamsense/perception/sound_direction.hpp"
+#include "dreamsense/perception/voice_id.hpp"
+#include "dreamsense/primitives/audio.hpp"
+#include "dreamsense/primitives/body.hpp"
 #include "dreamsense/primitives/evaluator.hpp"
 
 #include <fmt/format.h>
@@ -53,20 +56,20 @@ TEST(PredictHand, ConstantVelocityIsExtrapolated) {
 }
 
 TEST(Evaluator, DisabledPrimitivesCarryNoValues) {
-  Evaluator ev({}, "");
+  Evaluator ev({}, {});
   MultiFrame tick;
   tick.stamp = ms(0);
   auto recs = ev.evaluate(tick, BlackboardView());
   ASSERT_EQ(recs.size(), 25u);
   for (const auto& r : recs) {
     EXPECT_EQ(r.status, PrimitiveStatus::kDisabled);
-    EXPECT_TRUE(r.value.is_null());
-    EXPECT_FALSE(r.legacy.has_value());
+    EXPECT_TRUE(std::holds_alternative<std::monostate>(r.value));
+    EXPECT_TRUE(std::holds_alternative<std::monostate>(r.query));
   }
 }
 
 TEST(Evaluator, BodyPrimitivesOkNoDataStaleAndOffline) {
-  Evaluator ev({}, "skel");
+  Evaluator ev({}, {{"body.child", {"skel"}}});
   Blackboard bb;
   auto tick = [&](int64_t t, bool with_frame) {
     MultiFrame mf;
@@ -88,14 +91,16 @@ TEST(Evaluator, BodyPrimitivesOkNoDataStaleAndOffline) {
   EXPECT_EQ(status(r, PrimitiveId::kGetBody), PrimitiveStatus::kOk);
   EXPECT_EQ(status(r, PrimitiveId::kGetFaces), PrimitiveStatus::kDisabled);
   const auto& pose = r[static_cast<int>(PrimitiveId::kGetBodyPose) - 1];
-  ASSERT_TRUE(pose.legacy);
-  EXPECT_EQ(pose.legacy->size(), 30u);
-  EXPECT_NEAR((*pose.legacy)[2], 1100.0, 1e-9) << "legacy is millimetres";
+  ASSERT_NE(pose.value_as<BodyPoseValue>(), nullptr);
+  EXPECT_EQ(pose.value_as<BodyPoseValue>()->joints.size(), 10u);
+  EXPECT_NEAR(pose.value_as<BodyPoseValue>()->joints[0].position_m[2], 1.1, 1e-9) << "metres";
+  EXPECT_EQ(pose.source, "skel");
   EXPECT_NEAR(*pose.confidence, 0.9, 1e-6);
   // 200 ms later without a new observation: stale, and no value is repeated.
   r = ev.evaluate(tick(240, true), bb.snapshot());
   EXPECT_EQ(status(r, PrimitiveId::kGetHands), PrimitiveStatus::kStale);
-  EXPECT_TRUE(r[static_cast<int>(PrimitiveId::kGetHands) - 1].value.is_null());
+  EXPECT_TRUE(std::holds_alternative<std::monostate>(
+      r[static_cast<int>(PrimitiveId::kGetHands) - 1].value));
   // The analyser looked and found nobody.
   w.set_absent(keys::kChildBody, ms(280));
   bb.commit(w, ms(280));
@@ -106,9 +111,8 @@ TEST(Evaluator, BodyPrimitivesOkNoDataStaleAndOffline) {
   EXPECT_EQ(status(r, PrimitiveId::kGetBody), PrimitiveStatus::kSensorOffline);
 }
 
-TEST(Evaluator, IdentifyVoiceIsOkOnceAtTheUtteranceWithDreamsLegacy) {
-  Evaluator ev({}, "", "mic");
-  ev.enable_voice("mic");
+TEST(Evaluator, IdentifyVoiceIsOkOnceAtTheUtterance) {
+  Evaluator ev({}, {{"audio.speaker", {"mic"}}});
   Blackboard bb;
   auto tick = [&](int64_t t) {
     MultiFrame mf;
@@ -120,35 +124,68 @@ TEST(Evaluator, IdentifyVoiceIsOkOnceAtTheUtteranceWithDreamsLegacy) {
     return r[static_cast<int>(PrimitiveId::kIdentifyVoice) - 1];
   };
   EXPECT_EQ(voice(ev.evaluate(tick(0), bb.snapshot())).status, PrimitiveStatus::kNoData);
-  const std::pair<const char*, double> cases[] = {{"child", 1}, {"therapist", 0}, {"unknown", -1}};
   int64_t t = 40;
-  for (const auto& [who, legacy] : cases) {
+  for (const char* who : {"child", "therapist", "unknown"}) {
     BlackboardWriter w("voice_id");
     w.set(keys::kSpeakerIdentity,
           SpeakerIdentity{who, who, 0.8, ms(t - 1000), ms(t - 500), "mic", "gmm_ubm"}, ms(t), 0.8f);
     bb.commit(w, ms(t));
     const auto r = voice(ev.evaluate(tick(t), bb.snapshot()));
     ASSERT_EQ(r.status, PrimitiveStatus::kOk) << who;
-    EXPECT_EQ(r.value["speaker_id"], who);
-    EXPECT_EQ(r.value["method"], "gmm_ubm");
-    EXPECT_EQ(r.value["start_ns"], ms(t - 1000).ns());
-    ASSERT_TRUE(r.legacy);
-    EXPECT_EQ(*r.legacy, std::vector<double>{legacy});
+    const VoiceValue* v = r.value_as<VoiceValue>();
+    ASSERT_NE(v, nullptr);
+    EXPECT_EQ(v->speaker_id, who);
+    EXPECT_EQ(v->method, "gmm_ubm");
+    EXPECT_EQ(v->start_ns, ms(t - 1000).ns());
+    EXPECT_EQ(r.source, "mic");
     // The next tick repeats nothing.
     EXPECT_EQ(voice(ev.evaluate(tick(t + 40), bb.snapshot())).status, PrimitiveStatus::kNoData);
     t += 80;
   }
 }
 
-TEST(Evaluator, RecordJsonHasTheContractFields) {
-  Evaluator ev({}, "");
-  MultiFrame tick;
-  tick.stamp = ms(40);
-  auto j = to_json(ev.evaluate(tick, BlackboardView())[11]);
-  EXPECT_EQ(j["stamp_ns"], 40'000'000);
-  EXPECT_EQ(j["primitive"], "getHeadGaze (plane)");
-  EXPECT_EQ(j["status"], "disabled");
-  for (const char* k : {"confidence", "value", "legacy", "source"}) EXPECT_TRUE(j.contains(k)) << k;
+TEST(Evaluator, EnabledExactlyWhenEveryKeyReadHasAWriter) {
+  const Evaluator none({}, {});
+  const Evaluator faces({}, {{"face.detections", {"cam"}}, {"face.head_pose", {"cam"}}});
+  EXPECT_FALSE(none.enabled(PrimitiveId::kGetFaces));
+  EXPECT_TRUE(faces.enabled(PrimitiveId::kGetFaces));
+  EXPECT_TRUE(faces.enabled(PrimitiveId::kGetHeadGazePlane));
+  EXPECT_FALSE(faces.enabled(PrimitiveId::kCheckMutualGaze)) << "no gaze writer";
+  for (const auto& i : catalogue()) EXPECT_FALSE(keys_read(i.id).empty()) << i.name;
+}
+
+// Parametrised primitives answer any query through the C++ API, not only the evaluator's
+// default one.
+TEST(Evaluator, ParametrisedPrimitivesTakeTheirQuery) {
+  Evaluator ev({}, {{"body.child", {"skel"}}, {"audio.sound_direction", {"mic"}}});
+  Blackboard bb;
+  for (int i = 0; i < 6; ++i) {
+    BlackboardWriter w("body");
+    w.set(keys::kChildBody, BodyState{child_with_right_hand({-0.3 + 0.02 * i, 0, 1})}, ms(40 * i),
+          1.f);
+    bb.commit(w, ms(40 * i));
+  }
+  BlackboardWriter w("sound");
+  w.set(keys::kSoundDirection, SoundDirection{20, std::nullopt, {0, 0, 1}, {0, 0, 1}, 0.3, "mic"},
+        ms(200), 0.6f);
+  bb.commit(w, ms(200));
+  MultiFrame mf;
+  mf.stamp = ms(200);
+  mf.frames["skel"] = make_frame("skel", ms(200), 0, Skeleton{});
+  mf.chunks["mic"].push_back(make_frame("mic", ms(200), 0, AudioChunk{}));
+  const auto records = ev.evaluate(mf, bb.snapshot());
+  const auto ctx = ev.context(bb.snapshot(), ms(200));
+  const auto far = track_hand(ctx, TrackQuery{{-0.2, 0, 1}, 1.0});
+  const auto near = track_hand(ctx, TrackQuery{{-0.2, 0, 1}, 0.0});
+  ASSERT_TRUE(far.ok() && near.ok());
+  EXPECT_NEAR(far.value->position_m[0] - near.value->position_m[0], 0.5, 1e-6)
+      << "0.5 m/s for one more second";
+  EXPECT_TRUE(get_sound_direction(ctx, ThresholdQuery{0.5}).ok());
+  EXPECT_EQ(get_sound_direction(ctx, ThresholdQuery{0.7}).status, PrimitiveStatus::kNoData)
+      << "a stricter threshold";
+  const auto& sd = records[static_cast<int>(PrimitiveId::kGetSoundDirection) - 1];
+  ASSERT_NE(std::get_if<ThresholdQuery>(&sd.query), nullptr) << "the record carries its query";
+  EXPECT_DOUBLE_EQ(std::get<ThresholdQuery>(sd.query).threshold, 0.5);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "dreamsense/publish/dds_publisher.hpp"
 
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/export/primitive_json.hpp"
 
 #include <chrono>
 #include <condition_variable>
@@ -208,7 +209,7 @@ Status DdsPublisher::publish(const std::vector<primitives::PrimitiveRecord>& rec
     if (w == nullptr)
       return make_error(ErrorCode::kIoError, "DDS: cannot create the writer of {}",
                         dds_topic_name(m.options, name));
-    StringMessage msg{primitives::to_json(r).dump()};
+    StringMessage msg{exporters::to_json(r).dump()};
     if (w->write(&msg))
       ++m.stats.published;
     else

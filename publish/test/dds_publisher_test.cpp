@@ -3,6 +3,8 @@
 
 #include "dreamsense/publish/dds_publisher.hpp"
 
+#include "dreamsense/export/primitive_json.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -49,7 +51,9 @@ PrimitiveRecord record(PrimitiveId id, PrimitiveStatus status, int64_t stamp_ns)
   r.status = status;
   r.stamp = Timestamp::from_ns(stamp_ns);
   if (status == PrimitiveStatus::kOk) {
-    r.value = {{"faces", nlohmann::json::array({{{"x", 0.1}, {"y", -0.2}, {"z", 1.1}}})}};
+    primitives::FacesValue faces;
+    faces.faces.push_back({{0.1, -0.2, 1.1}, 0.9f, "camera_left", {}});
+    r.value = faces;
     r.confidence = 0.9;
   }
   return r;
@@ -74,9 +78,9 @@ TEST(DdsPublisher, SubscriberReceivesOkRecordsAsPrimitivesJsonLines) {
   const auto j = nlohmann::json::parse(got.front());
   EXPECT_EQ(j["primitive"], "getFaces");
   EXPECT_EQ(j["status"], "ok");
-  EXPECT_DOUBLE_EQ(j["value"]["faces"][0]["z"].get<double>(), 1.1);
-  EXPECT_EQ(j.dump(), primitives::to_json(record(PrimitiveId::kGetFaces, PrimitiveStatus::kOk,
-                                                 j["stamp_ns"].get<int64_t>()))
+  EXPECT_DOUBLE_EQ(j["value"]["faces"][0]["position_m"][2].get<double>(), 1.1);
+  EXPECT_EQ(j.dump(), exporters::to_json(record(PrimitiveId::kGetFaces, PrimitiveStatus::kOk,
+                                                j["stamp_ns"].get<int64_t>()))
                           .dump());
   // Only ok records by default: getHead's no_data ticks were not published.
   const auto s = (*pub)->stats();

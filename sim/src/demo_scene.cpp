@@ -67,6 +67,14 @@ std::string_view action_label(DemoAction action) {
       return "fly";
     case DemoAction::kHandsOnHead:
       return "hands_on_head";
+    case DemoAction::kCoverEyes:
+      return "cover_eyes";
+    case DemoAction::kDriveCar:
+      return "drive_car";
+    case DemoAction::kDrink:
+      return "drink";
+    case DemoAction::kCustom:
+      return "custom";
   }
   return "none";
 }
@@ -97,13 +105,48 @@ int action_dream_id(DemoAction action) {
       return 4;
     case DemoAction::kHandsOnHead:
       return 3;
+    case DemoAction::kCoverEyes:
+      return 2;
+    case DemoAction::kDriveCar:
+      return 5;
+    case DemoAction::kDrink:
+      return 6;
+    case DemoAction::kCustom:
+      return 7;
   }
   return 0;
 }
 
-std::vector<ActionSegment> make_action_schedule(uint64_t seed, double duration_s) {
+Status DemoScriptOptions::check() const {
+  for (size_t i = 0; i < custom.size(); ++i) {
+    const CustomGesture& g = custom[i];
+    if (g.label.empty() || !(g.period_s > 0.1 && g.period_s < 60))
+      return make_error(ErrorCode::kInvalidArgument,
+                        "custom gesture {}: needs a label and a period in (0.1, 60) s", i);
+  }
+  double t = 0;
+  for (size_t i = 0; i < schedule.size(); ++i) {
+    const ActionSegment& s = schedule[i];
+    if (!(s.end_s > s.start_s) || std::abs(s.start_s - t) > 1e-9)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "schedule segment {}: segments must tile the session in time order "
+                        "([{}, {}) after {})",
+                        i, s.start_s, s.end_s, t);
+    if (s.action == DemoAction::kCustom &&
+        (s.custom < 0 || s.custom >= static_cast<int>(custom.size())))
+      return make_error(ErrorCode::kInvalidArgument,
+                        "schedule segment {}: custom gesture {} is not defined", i, s.custom);
+    t = s.end_s;
+  }
+  return ok_status();
+}
+
+std::vector<ActionSegment> make_action_schedule(uint64_t seed, double duration_s,
+                                                DemoScriptOptions::GestureSet set) {
   std::mt19937_64 rng(sub_seed(seed, "actions"));
   std::vector<DemoAction> order = {DemoAction::kWave, DemoAction::kFly, DemoAction::kHandsOnHead};
+  if (set == DemoScriptOptions::GestureSet::kDream)
+    order.insert(order.end(), {DemoAction::kCoverEyes, DemoAction::kDriveCar, DemoAction::kDrink});
   for (size_t i = order.size() - 1; i > 0; --i)  // Fisher-Yates with our own draws (portable)
     std::swap(order[i], order[static_cast<size_t>(rng() % (i + 1))]);
   std::vector<ActionSegment> out;
@@ -114,7 +157,8 @@ std::vector<ActionSegment> make_action_schedule(uint64_t seed, double duration_s
     out.push_back({t, std::min(duration_s, t + rest), DemoAction::kNone});
     t += rest;
     if (t >= duration_s) break;
-    const DemoAction a = k < order.size() ? order[k] : order[static_cast<size_t>(rng() % 3)];
+    const DemoAction a =
+        k < order.size() ? order[k] : order[static_cast<size_t>(rng() % order.size())];
     ++k;
     const double len = uniform(rng, 2.0, 3.5);
     out.push_back({t, std::min(duration_s, t + len), a});
@@ -148,8 +192,9 @@ double DemoScript::eval(const std::vector<Sinusoid>& s, double t) {
   return v;
 }
 
-DemoScript::DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry)
-    : seed_(seed), duration_s_(duration_s), geometry_(geometry) {
+DemoScript::DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry,
+                       DemoScriptOptions options)
+    : seed_(seed), duration_s_(duration_s), geometry_(geometry), options_(std::move(options)) {
   std::mt19937_64 rng(sub_seed(seed, "head"));
   auto two = [&](double total, double f_lo, double f_hi, double f2_lo, double f2_hi) {
     const double split = uniform(rng, 0.55, 0.75);
@@ -165,10 +210,16 @@ DemoScript::DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry)
   pos_y_ = two(0.015, 0.05, 0.12, 0.15, 0.25);
   pos_z_ = two(0.025, 0.04, 0.10, 0.12, 0.2);
 
-  actions_ = make_action_schedule(seed, duration_s);
+  actions_ = options_.schedule.empty() ? make_action_schedule(seed, duration_s, options_.gestures)
+                                       : options_.schedule;
   std::mt19937_64 arm_rng(sub_seed(seed, "arms"));
   wave_hz_ = uniform(arm_rng, 1.5, 2.2);
   fly_hz_ = uniform(arm_rng, 0.6, 1.0);
+  std::mt19937_64 gesture_rng(sub_seed(seed, "gestures"));
+  drive_hz_ = uniform(gesture_rng, 0.3, 0.6);
+  drive_amp_rad_ = uniform(gesture_rng, 0.3, 0.6);
+  drink_hz_ = uniform(gesture_rng, 0.3, 0.5);
+  cover_hz_ = uniform(gesture_rng, 0.4, 0.8);
 
   // Table objects: one per x band (so paths never overlap), seed-dependent label per band.
   static const char* kNames[] = {"car", "cup", "flower", "plane"};
@@ -422,11 +473,136 @@ DemoAction DemoScript::action_at(double t) const {
   return actions_.empty() ? DemoAction::kNone : actions_.back().action;
 }
 
+const ActionSegment& DemoScript::segment_at(double t) const {
+  static const ActionSegment kRest{};
+  for (const auto& s : actions_)
+    if (t >= s.start_s && t < s.end_s) return s;
+  return actions_.empty() ? kRest : actions_.back();
+}
+
+std::string DemoScript::segment_label(const ActionSegment& s) const {
+  if (s.action == DemoAction::kCustom && s.custom >= 0 &&
+      s.custom < static_cast<int>(options_.custom.size()))
+    return options_.custom[static_cast<size_t>(s.custom)].label;
+  return std::string(action_label(s.action));
+}
+
+int DemoScript::segment_dream_id(const ActionSegment& s) const {
+  if (s.action == DemoAction::kCustom) return 7 + std::max(s.custom, 0);
+  return action_dream_id(s.action);
+}
+
+namespace {
+// Closed Catmull-Rom loop through `p`, u in [0, 1).
+cv::Vec3d loop_point(const std::vector<cv::Vec3d>& p, double u) {
+  const int n = static_cast<int>(p.size());
+  if (n == 1) return p[0];
+  const double x = (u - std::floor(u)) * n;
+  const int i = static_cast<int>(std::floor(x));
+  const double a = x - i;
+  auto at = [&](int k) { return p[static_cast<size_t>(((k % n) + n) % n)]; };
+  const cv::Vec3d p0 = at(i - 1), p1 = at(i), p2 = at(i + 1), p3 = at(i + 2);
+  return 0.5 * (2 * p1 + (p2 - p0) * a + (2 * p0 - 5 * p1 + 4 * p2 - p3) * a * a +
+                (3 * p1 - p0 - 3 * p2 + p3) * a * a * a);
+}
+}  // namespace
+
+// Elbow, wrist, hand for the left arm then the right arm, for the gestures the original demo
+// did not have. Head-relative targets follow the head (its rotation and position).
+std::array<cv::Vec3d, 6> DemoScript::extra_arm_pose(const ActionSegment& segment, double t,
+                                                    const cv::Vec3d& shoulder_l,
+                                                    const cv::Vec3d& shoulder_r) const {
+  const double ty = geometry_.table_top_y_m;
+  const HeadPose hp = head_pose(t);
+  const cv::Matx33d R = hp.rotation();
+  // [left, right]: elbow, wrist, hand.
+  std::array<cv::Vec3d, 6> out{};
+  auto place = [&](bool left, const cv::Vec3d& wrist, const cv::Vec3d& pole,
+                   const cv::Vec3d* hand) {
+    const auto ew = solve_arm(left ? shoulder_l : shoulder_r, wrist, pole);
+    const size_t b = left ? 0 : 3;
+    out[b] = ew.first;
+    out[b + 1] = ew.second;
+    out[b + 2] = hand ? *hand : ew.second + kHand * normalized(ew.second - ew.first);
+  };
+  auto rest = [&](bool left) {
+    const double side = left ? 1.0 : -1.0;
+    const double phase = left ? 0.0 : 1.3;
+    const cv::Vec3d& s = left ? shoulder_l : shoulder_r;
+    const cv::Vec3d hand(s[0] + side * 0.03 + 0.004 * std::sin(kTwoPi * 0.4 * t + phase),
+                         ty - 0.025, 0.86 + 0.005 * std::sin(kTwoPi * 0.3 * t + phase));
+    place(left, hand + cv::Vec3d(0, 0, kHand), cv::Vec3d(side, 1.0, 0.3), &hand);
+  };
+  switch (segment.action) {
+    case DemoAction::kCoverEyes:
+      // Both palms over the eyes (fingers up), the wrists below them; a small peek-a-boo shift.
+      for (bool left : {true, false}) {
+        const double side = left ? 1.0 : -1.0;
+        const double peek = 0.01 * std::sin(kTwoPi * cover_hz_ * t);
+        const cv::Vec3d hand = hp.position_m + R * cv::Vec3d(side * (0.035 + peek), 0.01, -0.05);
+        const cv::Vec3d wrist = hand + R * cv::Vec3d(side * 0.02, kHand, 0.01);
+        place(left, wrist, cv::Vec3d(side, 1.0, 0.3), &hand);
+      }
+      break;
+    case DemoAction::kDriveCar: {
+      // Both hands on a steering wheel in front of the chest, turning it to and fro.
+      const cv::Vec3d sc = 0.5 * (shoulder_l + shoulder_r);
+      const cv::Vec3d centre = sc + cv::Vec3d(0, 0.04, -0.28);
+      const cv::Vec3d u(1, 0, 0), v = normalized(cv::Vec3d(0, -1, -0.3));
+      const double turn = drive_amp_rad_ * std::sin(kTwoPi * drive_hz_ * t);
+      for (bool left : {true, false}) {
+        const double a = turn + (left ? 0.0 : CV_PI) + (left ? 0.35 : -0.35);
+        const cv::Vec3d hand = centre + 0.14 * (std::cos(a) * u + std::sin(a) * v);
+        const cv::Vec3d wrist = hand + cv::Vec3d(0, 0.02, kHand);
+        place(left, wrist, cv::Vec3d(left ? 1.0 : -1.0, 1.0, 0.3), &hand);
+      }
+      break;
+    }
+    case DemoAction::kDrink: {
+      // The right hand holds a cup at the mouth, tilting it a little; the left hand rests.
+      rest(true);
+      const double sip = 0.012 * std::sin(kTwoPi * drink_hz_ * t);
+      const cv::Vec3d hand = hp.position_m + R * cv::Vec3d(-0.01, 0.075 + sip, -0.08);
+      const cv::Vec3d wrist = hand + R * cv::Vec3d(-0.02, 0.05, 0.04);
+      place(false, wrist, cv::Vec3d(-1, 1, 0.2), &hand);
+      break;
+    }
+    case DemoAction::kCustom: {
+      if (segment.custom < 0 || segment.custom >= static_cast<int>(options_.custom.size())) {
+        rest(true);
+        rest(false);
+        break;
+      }
+      const CustomGesture& g = options_.custom[static_cast<size_t>(segment.custom)];
+      const double u = (t - segment.start_s) / g.period_s;
+      for (bool left : {true, false}) {
+        const auto& path = left ? g.left_wrist : g.right_wrist;
+        if (path.empty()) {
+          rest(left);
+          continue;
+        }
+        const cv::Vec3d wrist = (left ? shoulder_l : shoulder_r) + loop_point(path, u);
+        place(left, wrist, cv::Vec3d(left ? 1.0 : -1.0, 1.0, 0.2), nullptr);
+      }
+      break;
+    }
+    default:
+      rest(true);
+      rest(false);
+      break;
+  }
+  return out;
+}
+
 // Returns elbow, wrist, hand for the left arm then the right arm.
-std::array<cv::Vec3d, 6> DemoScript::arm_pose(DemoAction action, double t,
+std::array<cv::Vec3d, 6> DemoScript::arm_pose(const ActionSegment& segment, double t,
                                               const cv::Vec3d& head_centre,
                                               const cv::Vec3d& shoulder_l,
                                               const cv::Vec3d& shoulder_r) const {
+  const DemoAction action = segment.action;
+  if (action == DemoAction::kCoverEyes || action == DemoAction::kDriveCar ||
+      action == DemoAction::kDrink || action == DemoAction::kCustom)
+    return extra_arm_pose(segment, t, shoulder_l, shoulder_r);
   const double ty = geometry_.table_top_y_m;
   auto rest = [&](const cv::Vec3d& s, double side, double phase) {
     // Hands lying on the table in front of the body, with a few mm of fidgeting.
@@ -467,6 +643,8 @@ std::array<cv::Vec3d, 6> DemoScript::arm_pose(DemoAction action, double t,
         (side > 0 ? left : right) = solve_arm(s, wrist, cv::Vec3d(side, 0.3, 0.4));
       }
       break;
+    default:  // the other gestures returned above
+      break;
   }
   auto hand_of = [&](const std::pair<cv::Vec3d, cv::Vec3d>& ew, bool on_head, double side) {
     if (on_head) return ew.second + kHand * normalized(cv::Vec3d(-side * 0.6, -0.8, 0));
@@ -506,12 +684,12 @@ std::array<cv::Vec3d, kJointCount> DemoScript::joints(double t) const {
   }
   const cv::Vec3d sl = at(JointId::kShoulderLeft), sr = at(JointId::kShoulderRight);
   // Blend from the previous segment's pose during the first kTransitionS of a segment.
-  std::array<cv::Vec3d, 6> arms = arm_pose(action_at(t), t, head_centre, sl, sr);
+  std::array<cv::Vec3d, 6> arms = arm_pose(segment_at(t), t, head_centre, sl, sr);
   for (size_t i = 1; i < actions_.size(); ++i) {
     const ActionSegment& s = actions_[i];
     if (t >= s.start_s && t < s.start_s + kTransitionS) {
       const double w = smoothstep((t - s.start_s) / kTransitionS);
-      const auto prev = arm_pose(actions_[i - 1].action, t, head_centre, sl, sr);
+      const auto prev = arm_pose(actions_[i - 1], t, head_centre, sl, sr);
       for (size_t k = 0; k < arms.size(); ++k) arms[k] = (1 - w) * prev[k] + w * arms[k];
       break;
     }

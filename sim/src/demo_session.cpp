@@ -439,7 +439,7 @@ class Generator {
   Generator(const DemoOptions& o, Media media)
       : o_(o),
         media_(std::move(media)),
-        script_(o.seed, o.duration_s),
+        script_(o.seed, o.duration_s, DemoGeometry{}, o.script),
         cameras_(make_demo_cameras()) {
     const auto statics = static_scene(script_.geometry(), media_);
     for (const auto& cam : cameras_) {
@@ -678,6 +678,7 @@ Status DemoOptions::check() const {
     bad += " image_noise_sigma must be in [0, 40];";
   if (jpeg_quality < 1 || jpeg_quality > 100) bad += " jpeg_quality must be in [1, 100];";
   if (threads < 1 || threads > 64) bad += " threads must be in [1, 64];";
+  if (auto s = script.check(); !s) bad += " script: " + s.error().message + ";";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "DemoOptions:{}", bad);
   return ok_status();
 }
@@ -716,6 +717,28 @@ std::vector<CameraModel> make_demo_cameras(const DemoGeometry& g) {
   out.push_back(top);
   return out;
 }
+
+SkeletonBody demo_skeleton_body(const DemoScript& script, uint64_t seed, const std::string& stream,
+                                uint64_t sequence, int64_t stamp, double joint_noise_m) {
+  std::mt19937_64 rng(sub_seed(seed, stream, sequence));
+  const auto j = script.joints(static_cast<double>(stamp) * 1e-9);
+  SkeletonBody body;
+  body.body_id = 0;
+  for (int i = 0; i < kJointCount; ++i) {
+    auto& o = body.joints[static_cast<size_t>(i)];
+    for (int k = 0; k < 3; ++k)
+      o.position_m[k] = j[static_cast<size_t>(i)][k] + joint_noise_m * gaussian(rng);
+    const auto id = static_cast<JointId>(i);
+    // Legs are under the table: reported as "inferred", like a Kinect would.
+    o.confidence = (id >= JointId::kKneeLeft && id <= JointId::kFootLeft) ||
+                           (id >= JointId::kKneeRight && id <= JointId::kFootRight)
+                       ? 0.5f
+                       : 1.0f;
+  }
+  return body;
+}
+
+int64_t demo_stamp_ns(int64_t index, double rate_hz) { return stamp_ns(index, rate_hz); }
 
 FaceState demo_face_state(const DemoScript& script, double t) {
   const HeadPose hp = script.head_pose(t);
@@ -1032,8 +1055,8 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       r["type"] = "action";
       r["start_ns"] = static_cast<int64_t>(std::llround(a.start_s * 1e9));
       r["end_ns"] = static_cast<int64_t>(std::llround(a.end_s * 1e9));
-      r["label"] = std::string(action_label(a.action));
-      r["id"] = action_dream_id(a.action);
+      r["label"] = script.segment_label(a);
+      r["id"] = script.segment_dream_id(a);
       truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});
     }
     for (auto& r : speech_truth) truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});
@@ -1082,23 +1105,9 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
         return make_frame(p.id, ts, seq, DepthImage{depth, true});
       }
       case SensorKind::kSkeleton: {
-        std::mt19937_64 rng(sub_seed(options.seed, p.id, seq));
-        const auto j = script.joints(static_cast<double>(job.stamp) * 1e-9);
         Skeleton sk;
-        SkeletonBody body;
-        body.body_id = 0;
-        for (int i = 0; i < kJointCount; ++i) {
-          auto& o = body.joints[static_cast<size_t>(i)];
-          for (int k = 0; k < 3; ++k)
-            o.position_m[k] = j[static_cast<size_t>(i)][k] + options.joint_noise_m * gaussian(rng);
-          const auto id = static_cast<JointId>(i);
-          // Legs are under the table: reported as "inferred", like a Kinect would.
-          o.confidence = (id >= JointId::kKneeLeft && id <= JointId::kFootLeft) ||
-                                 (id >= JointId::kKneeRight && id <= JointId::kFootRight)
-                             ? 0.5f
-                             : 1.0f;
-        }
-        sk.bodies.push_back(body);
+        sk.bodies.push_back(
+            demo_skeleton_body(script, options.seed, p.id, seq, job.stamp, options.joint_noise_m));
         return make_frame(p.id, ts, seq, std::move(sk));
       }
       case SensorKind::kAudio: {

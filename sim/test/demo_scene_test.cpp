@@ -197,8 +197,115 @@ TEST(DemoScene, SkeletonIsConsistent) {
         EXPECT_LT(cv::norm(hl - J(JointId::kHead)), 0.16);
         EXPECT_LT(cv::norm(hr - J(JointId::kHead)), 0.16);
         break;
+      default:
+        ADD_FAILURE() << "the default demo performs only wave, fly and hands_on_head";
+        break;
     }
   }
+}
+
+TEST(DemoScene, DreamGestureSetHasAllSixGesturesIn30s) {
+  for (uint64_t seed = 0; seed < 100; ++seed) {
+    const auto s = make_action_schedule(seed, 30.0, DemoScriptOptions::GestureSet::kDream);
+    std::set<DemoAction> seen;
+    for (size_t i = 0; i < s.size(); ++i) {
+      if (i > 0) {
+        EXPECT_DOUBLE_EQ(s[i].start_s, s[i - 1].end_s);
+      }
+      if (s[i].end_s - s[i].start_s >= 2.0) seen.insert(s[i].action);
+    }
+    for (DemoAction a : {DemoAction::kWave, DemoAction::kFly, DemoAction::kHandsOnHead,
+                         DemoAction::kCoverEyes, DemoAction::kDriveCar, DemoAction::kDrink})
+      EXPECT_TRUE(seen.count(a)) << "seed " << seed << " " << action_label(a);
+    EXPECT_FALSE(seen.count(DemoAction::kCustom));
+  }
+  EXPECT_EQ(action_dream_id(DemoAction::kCoverEyes), 2);
+  EXPECT_EQ(action_dream_id(DemoAction::kDriveCar), 5);
+  EXPECT_EQ(action_dream_id(DemoAction::kDrink), 6);
+}
+
+TEST(DemoScene, DreamGesturesHaveTheirPosesAndKeepTheBones) {
+  DemoScriptOptions o;
+  o.gestures = DemoScriptOptions::GestureSet::kDream;
+  int checked = 0;
+  for (uint64_t seed : {3, 11}) {
+    const DemoScript s(seed, 40, DemoGeometry{}, o);
+    for (double t = 0.05; t < 40; t += 0.1) {
+      const ActionSegment& seg = s.segment_at(t);
+      if (t < seg.start_s + 0.5) continue;  // blending from the previous pose
+      const auto j = s.joints(t);
+      auto J = [&](JointId id) { return j[static_cast<size_t>(id)]; };
+      for (bool left : {true, false}) {
+        const auto sh = J(left ? JointId::kShoulderLeft : JointId::kShoulderRight);
+        const auto el = J(left ? JointId::kElbowLeft : JointId::kElbowRight);
+        const auto wr = J(left ? JointId::kWristLeft : JointId::kWristRight);
+        EXPECT_NEAR(cv::norm(el - sh), 0.21, 0.005) << t;
+        EXPECT_NEAR(cv::norm(wr - el), 0.19, 0.005) << t;
+      }
+      const HeadPose hp = s.head_pose(t);
+      const auto hl = J(JointId::kHandLeft), hr = J(JointId::kHandRight);
+      const auto sc = J(JointId::kShoulderCenter);
+      const double table = s.geometry().table_top_y_m;
+      switch (seg.action) {
+        case DemoAction::kCoverEyes:  // both palms within a few cm of the eyes
+          EXPECT_LT(cv::norm(hl - hp.position_m), 0.09) << t;
+          EXPECT_LT(cv::norm(hr - hp.position_m), 0.09) << t;
+          ++checked;
+          break;
+        case DemoAction::kDriveCar:  // both hands in front of the chest, off the table
+          EXPECT_LT(hl[2], sc[2] - 0.15) << t;
+          EXPECT_LT(hr[2], sc[2] - 0.15) << t;
+          EXPECT_LT(hl[1], table - 0.05) << t;
+          EXPECT_GT(hl[0], hr[0]) << t;
+          ++checked;
+          break;
+        case DemoAction::kDrink:  // right hand at the mouth, left hand on the table
+          EXPECT_LT(cv::norm(hr - (hp.position_m + cv::Vec3d(0, 0.07, -0.08))), 0.08) << t;
+          EXPECT_NEAR(hl[1], table, 0.05) << t;
+          ++checked;
+          break;
+        default:
+          break;
+      }
+    }
+  }
+  EXPECT_GT(checked, 150);
+}
+
+TEST(DemoScene, CustomGestureFollowsItsScriptedLoop) {
+  DemoScriptOptions o;
+  CustomGesture g;
+  g.label = "circle";
+  g.period_s = 1.0;
+  // Right wrist around a circle in front of the right shoulder.
+  for (int k = 0; k < 8; ++k) {
+    const double a = 2 * CV_PI * k / 8;
+    g.right_wrist.push_back(
+        cv::Vec3d(-0.05 + 0.12 * std::cos(a), -0.05 + 0.12 * std::sin(a), -0.25));
+  }
+  o.custom = {g};
+  o.schedule = {{0.0, 1.0, DemoAction::kNone, -1},
+                {1.0, 4.0, DemoAction::kCustom, 0},
+                {4.0, 5.0, DemoAction::kNone, -1}};
+  ASSERT_TRUE(o.check());
+  const DemoScript s(1, 5, DemoGeometry{}, o);
+  EXPECT_EQ(s.segment_label(s.actions()[1]), "circle");
+  EXPECT_EQ(s.segment_dream_id(s.actions()[1]), 7);
+  for (int k = 0; k < 8; ++k) {
+    const double t = 2.0 + k / 8.0;  // key point k of the loop (u = t - start)
+    const auto j = s.joints(t);
+    const cv::Vec3d wrist = j[static_cast<size_t>(JointId::kWristRight)] -
+                            j[static_cast<size_t>(JointId::kShoulderRight)];
+    EXPECT_LT(cv::norm(wrist - g.right_wrist[static_cast<size_t>(k)]), 1e-6) << k;
+    // The left arm rests on the table.
+    EXPECT_NEAR(j[static_cast<size_t>(JointId::kHandLeft)][1], s.geometry().table_top_y_m, 0.05);
+  }
+  DemoScriptOptions bad = o;
+  bad.schedule[1].custom = 3;
+  EXPECT_FALSE(bad.check());
+  bad = o;
+  bad.schedule[2].start_s = 4.5;  // a hole
+  EXPECT_FALSE(bad.check());
 }
 
 TEST(DemoScene, TableObjectsNeverOverlapAndStayOnTheTable) {

@@ -120,6 +120,25 @@ Result<StreamEntry> parse_stream(const YAML::Node& node, size_t i) {
   DS_ASSIGN(s.start_ns, (optional<int64_t>(node, ctx, "start_ns", "an integer", int64_t{0})));
   DS_ASSIGN(s.calibration, (optional<std::string>(node, ctx, "calibration", "a string", "")));
   DS_ASSIGN(s.frame, (optional<std::string>(node, ctx, "frame", "a string", "")));
+  // role: one name, or roles: a list (docs/session_format.md "Stream roles").
+  for (const char* key : {"role", "roles"}) {
+    const YAML::Node r = node[key];
+    if (!r || r.IsNull()) continue;
+    if (r.IsScalar()) {
+      s.roles.push_back(r.Scalar());
+    } else if (r.IsSequence()) {
+      for (const auto& e : r) {
+        if (!e.IsScalar())
+          return manifest_error(
+              ErrorCode::kCorruptData,
+              fmt::format("key '{}.{}': expected a list of role names", ctx, key));
+        s.roles.push_back(e.Scalar());
+      }
+    } else {
+      return manifest_error(ErrorCode::kCorruptData,
+                            fmt::format("key '{}.{}': expected a role name or a list", ctx, key));
+    }
+  }
   return s;
 }
 
@@ -345,6 +364,65 @@ Status check_manifest(const SessionManifest& m) {
   return ok_status();
 }
 
+Result<std::map<SensorId, std::vector<std::string>>> stream_roles(const SessionManifest& m) {
+  struct RoleRule {
+    const char* role;
+    SensorKind kind;
+    bool exclusive;
+  };
+  static const RoleRule kKnown[] = {
+      {"child_camera", SensorKind::kColor, false}, {"table_camera", SensorKind::kColor, true},
+      {"table_depth", SensorKind::kDepth, true},   {"body", SensorKind::kSkeleton, true},
+      {"mic_array", SensorKind::kAudio, true},     {"robot_audio", SensorKind::kAudio, true},
+  };
+  auto rule = [](const std::string& role) -> const RoleRule* {
+    for (const auto& r : kKnown)
+      if (role == r.role) return &r;
+    return nullptr;
+  };
+  std::map<SensorId, std::vector<std::string>> out;
+  std::map<std::string, SensorId> claimed;  // exclusive role -> stream
+  // Declared roles first, so that a default never takes a role a later stream declares.
+  for (const auto& s : m.streams) {
+    for (const auto& role : s.roles) {
+      const RoleRule* r = rule(role);
+      if (r != nullptr && r->kind != s.kind)
+        return manifest_error(ErrorCode::kInvalidArgument,
+                              fmt::format("stream '{}': role {} needs a {} stream, not {}", s.id,
+                                          role, to_string(r->kind), to_string(s.kind)));
+      if (r != nullptr && r->exclusive && !claimed.emplace(role, s.id).second)
+        return manifest_error(ErrorCode::kInvalidArgument,
+                              fmt::format("streams '{}' and '{}' both claim the role {}, which "
+                                          "only one stream can have",
+                                          claimed[role], s.id, role));
+      out[s.id].push_back(role);
+    }
+  }
+  auto starts_with = [](const std::string& id, const char* prefix) {
+    return id.rfind(prefix, 0) == 0;
+  };
+  for (const auto& s : m.streams) {
+    if (!s.roles.empty()) continue;
+    std::string role;
+    if (s.kind == SensorKind::kColor && starts_with(s.id, "camera")) role = "child_camera";
+    if (s.kind == SensorKind::kColor && starts_with(s.id, "top")) role = "table_camera";
+    if (s.kind == SensorKind::kDepth && starts_with(s.id, "top")) role = "table_depth";
+    if (s.kind == SensorKind::kSkeleton) role = "body";
+    if (s.kind == SensorKind::kAudio) role = "mic_array";
+    if (role.empty()) {
+      out[s.id];
+      continue;
+    }
+    const RoleRule* r = rule(role);
+    if (r->exclusive && !claimed.emplace(role, s.id).second) {
+      out[s.id];  // by convention only the first such stream gets an exclusive role
+      continue;
+    }
+    out[s.id].push_back(role);
+  }
+  return out;
+}
+
 Result<std::map<SensorId, CameraModel>> read_color_calibrations(
     const std::filesystem::path& session_dir, const SessionManifest& manifest) {
   std::map<SensorId, CameraModel> out;
@@ -426,6 +504,8 @@ Status write_manifest(const std::filesystem::path& session_dir, const SessionMan
     }
     if (!s.calibration.empty()) out << YAML::Key << "calibration" << YAML::Value << s.calibration;
     if (!s.frame.empty()) out << YAML::Key << "frame" << YAML::Value << s.frame;
+    if (s.roles.size() == 1) out << YAML::Key << "role" << YAML::Value << s.roles.front();
+    if (s.roles.size() > 1) out << YAML::Key << "roles" << YAML::Value << s.roles;
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;

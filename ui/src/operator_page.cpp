@@ -1,6 +1,7 @@
 #include "dreamsense/ui/operator_page.hpp"
 
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/export/primitive_json.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -181,7 +182,7 @@ Result<std::unique_ptr<OperatorPage>> OperatorPage::start(const OperatorPageOpti
 void OperatorPage::update(const std::vector<primitives::PrimitiveRecord>& records) {
   std::lock_guard lock(impl_->mutex);
   for (const auto& r : records) {
-    impl_->records[primitives::info(r.id).name] = primitives::to_json(r);
+    impl_->records[primitives::info(r.id).name] = exporters::to_json(r);
     impl_->stamp_ns = std::max(impl_->stamp_ns, r.stamp.ns());
   }
 }

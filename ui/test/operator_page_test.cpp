@@ -27,14 +27,14 @@ TEST(OperatorPage, ServesLatestPrimitivesFramesAndStatus) {
   faces.id = PrimitiveId::kGetFaces;
   faces.status = PrimitiveStatus::kOk;
   faces.stamp = Timestamp::from_ns(40'000'000);
-  faces.value = {{"n", 1}};
+  faces.value = primitives::FacesValue{{}, {}, std::string("camera_left")};
   PrimitiveRecord voice;
   voice.id = PrimitiveId::kIdentifyVoice;
   voice.status = PrimitiveStatus::kNoData;
   voice.stamp = faces.stamp;
   (*page)->update({faces, voice});
   faces.stamp = Timestamp::from_ns(80'000'000);
-  faces.value = {{"n", 2}};
+  faces.value = primitives::FacesValue{{}, {}, std::string("camera_middle")};
   (*page)->update({faces});  // the newer record replaces the older one
   (*page)->update_frame("camera_middle",
                         make_frame("camera_middle", faces.stamp, 0,
@@ -51,7 +51,7 @@ TEST(OperatorPage, ServesLatestPrimitivesFramesAndStatus) {
   ASSERT_TRUE(prims);
   const auto j = nlohmann::json::parse(prims->body);
   EXPECT_EQ(j["stamp_ns"], 80'000'000);
-  EXPECT_EQ(j["primitives"]["getFaces"]["value"]["n"], 2);
+  EXPECT_EQ(j["primitives"]["getFaces"]["value"]["selected_camera"], "camera_middle");
   EXPECT_EQ(j["primitives"]["identifyVoice"]["status"], "no_data");
 
   auto status = client.Get("/api/status");

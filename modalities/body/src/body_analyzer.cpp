@@ -1,5 +1,7 @@
 #include "dreamsense/body/body_analyzer.hpp"
 
+#include "dreamsense/perception/body.hpp"
+
 namespace dreamsense::body {
 namespace {
 

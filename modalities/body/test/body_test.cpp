@@ -1,5 +1,7 @@
-#include "dreamsense/body/arm_geometry.hpp"
+#include "dreamsense/perception/body.hpp"
+
 #include "dreamsense/body/body_analyzer.hpp"
+#include "dreamsense/testing/analyzer_runner.hpp"
 
 #include <gtest/gtest.h>
 
@@ -26,32 +28,6 @@ SkeletonBody standing_child(cv::Vec3d offset = {0, 0, 0}) {
   return b;
 }
 
-TEST(ArmGeometry, HangingAndSidewaysArms) {
-  ArmAngles a = arm_angles(standing_child());
-  ASSERT_TRUE(a.left && a.right);
-  EXPECT_NEAR(a.left->elevation_deg, -90, 1e-6);
-  EXPECT_NEAR(a.right->elevation_deg, 0, 1e-6);
-  EXPECT_NEAR(a.right->azimuth_deg, 0, 1e-6);
-}
-
-TEST(ArmGeometry, ArmPointingForwardHasAzimuth90) {
-  SkeletonBody b = standing_child();
-  // Forward for the child is towards the sensor: -z.
-  b.joint(JointId::kElbowLeft).position_m = {0.15, -0.05, 0.85};
-  ArmAngles a = arm_angles(b);
-  ASSERT_TRUE(a.left);
-  EXPECT_NEAR(a.left->azimuth_deg, 90, 1e-6);
-  EXPECT_NEAR(a.left->elevation_deg, 0, 1e-6);
-}
-
-TEST(ArmGeometry, UntrackedShoulderGivesNoAngle) {
-  SkeletonBody b = standing_child();
-  b.joint(JointId::kShoulderLeft).confidence = 0;
-  ArmAngles a = arm_angles(b);
-  EXPECT_FALSE(a.left.has_value());
-  EXPECT_FALSE(a.right.has_value());
-}
-
 TEST(ChildSelection, PrefersPreviousChoiceThenExpectedSeat) {
   std::vector<SkeletonBody> bodies{standing_child({0.8, 0, 0.5}), standing_child()};
   ChildSelectionOptions o;
@@ -72,27 +48,23 @@ TEST(BodyAnalyzer, WritesTheChildInWorldAndAbsenceWhenNobodyIsThere) {
   o.world_from_sensor_t = {0, 0, 0.5};
   auto a = make_body_analyzer(o);
   ASSERT_TRUE(a);
-  Blackboard bb;
-  BlackboardWriter w("body");
-  ASSERT_TRUE(
-      (*a)->process(tick_with(Skeleton{{standing_child({0, 0, -0.5})}}, 0), bb.snapshot(), w));
-  bb.commit(w, Timestamp::from_ns(0));
-  auto e = bb.snapshot().get(keys::kChildBody);
+  testing::AnalyzerRunner runner(std::move(*a));
+  ASSERT_TRUE(runner.run(tick_with(Skeleton{{standing_child({0, 0, -0.5})}}, 0)));
+  auto e = runner.output(keys::kChildBody);
   ASSERT_TRUE(e && e->present());
   EXPECT_NEAR(e->value->body.joint(JointId::kHead).position_m[2], 1.1, 1e-9);
   EXPECT_FLOAT_EQ(e->confidence, 1.f);
   EXPECT_EQ(e->source, "body");
 
   // Negative case: the tracker reports no body.
-  ASSERT_TRUE((*a)->process(tick_with(Skeleton{}, 40), bb.snapshot(), w));
-  bb.commit(w, Timestamp::from_ns(40'000'000));
-  e = bb.snapshot().get(keys::kChildBody);
+  ASSERT_TRUE(runner.run(tick_with(Skeleton{}, 40)));
+  e = runner.output(keys::kChildBody);
   ASSERT_TRUE(e);
   EXPECT_FALSE(e->present());
 
   // No skeleton frame at this tick: nothing is written (no made-up observation).
-  ASSERT_TRUE((*a)->process(tick_with(std::nullopt, 80), bb.snapshot(), w));
-  EXPECT_TRUE(w.empty());
+  ASSERT_TRUE(runner.run(tick_with(std::nullopt, 80)));
+  EXPECT_TRUE(runner.last_writes().empty());
 }
 
 TEST(BodyAnalyzer, ContractNamesItsStream) {

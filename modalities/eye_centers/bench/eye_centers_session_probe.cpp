@@ -7,12 +7,12 @@
 // Run: <build>/bench/eye_centers_session_probe SESSION_DIR OUT.jsonl
 
 #include "dreamsense/core/camera_model.hpp"
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/pipeline.hpp"
 #include "dreamsense/eye_centers/eye_center_locator.hpp"
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
 #include "dreamsense/face_landmarks/face_landmarks_analyzer.hpp"
 #include "dreamsense/head_pose/head_pose_analyzer.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/sources/session.hpp"
 
 #include <fmt/format.h>

@@ -2,6 +2,8 @@
 
 #include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/face_landmarks/landmarker.hpp"
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_detection.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 

@@ -1,5 +1,8 @@
 #include "dreamsense/eye_centers/eye_center_analyzer.hpp"
 
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+
 #include <set>
 
 namespace dreamsense::eye_centers {

@@ -1,5 +1,8 @@
 #include "dreamsense/eye_centers/eye_center_locator.hpp"
 
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+
 namespace dreamsense::eye_centers {
 
 std::string_view to_string(EyeCenterMethod method) {

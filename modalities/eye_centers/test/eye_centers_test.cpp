@@ -1,8 +1,11 @@
 // eye_centers: region geometry, options, the three locators on rendered eyes (accuracy,
 // sub-pixel, eyelid occlusion, rejections) and the analyser's blackboard behaviour.
 
+#include "dreamsense/perception/eye_centers.hpp"
+
 #include "dreamsense/eye_centers/eye_center_analyzer.hpp"
 #include "dreamsense/eye_centers/eye_center_locator.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>

@@ -1,5 +1,7 @@
 #include "dreamsense/face_detection/camera_selection.hpp"
 
+#include "dreamsense/perception/face_detection.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -102,10 +104,6 @@ std::optional<SelectedCamera> CameraSelector::update(const FaceDetections& detec
     challenger_ticks_ = 0;
   }
   return current->second;
-}
-
-int dream_camera_id(const std::optional<SensorId>& camera) {
-  return camera ? dreamsense::dream_camera_id(*camera) : -1;
 }
 
 }  // namespace dreamsense::face_detection

@@ -1,5 +1,8 @@
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
 
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/head_pose.hpp"
+
 #include <opencv2/core/utility.hpp>
 
 #include <set>

@@ -1,5 +1,7 @@
 #include "dreamsense/face_detection/face_detector.hpp"
 
+#include "dreamsense/perception/face_detection.hpp"
+
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
 

@@ -1,5 +1,7 @@
 #include "dreamsense/face_detection/face_tracker.hpp"
 
+#include "dreamsense/perception/face_detection.hpp"
+
 #include <algorithm>
 
 namespace dreamsense::face_detection {

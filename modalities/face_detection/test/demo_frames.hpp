@@ -2,7 +2,7 @@
 // Test/bench support: camera frames and face truth of a demo session (docs/truth_format.md), and
 // the three face metrics that `eval session` reports (README.md "Metrics").
 
-#include "dreamsense/core/perception.hpp"
+#include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/sim/demo_session.hpp"
 #include "dreamsense/sources/session.hpp"
 

@@ -3,6 +3,7 @@
 // --no-analyze`), else a 20 s seed-1 demo generated into a temporary folder (~40 s).
 
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
+#include "dreamsense/perception/face_detection.hpp"
 
 #include <gtest/gtest.h>
 

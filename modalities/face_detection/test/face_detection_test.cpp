@@ -1,7 +1,10 @@
+#include "dreamsense/perception/face_detection.hpp"
+
 #include "dreamsense/face_detection/camera_selection.hpp"
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
 #include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/face_detection/face_tracker.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -270,10 +273,6 @@ TEST(CameraSelector, HysteresisAndImmediateFallback) {
   EXPECT_EQ(s.update(dets({{"camera_left", {face(0.5f, 0.5f)}}, {"camera_middle", {}}}))->camera,
             "camera_left");
   EXPECT_EQ(s.update(dets({{"camera_right", {face(0.5f, 0.5f)}}}))->camera, "camera_right");
-  EXPECT_EQ(dream_camera_id(std::string("camera_middle")), 0);
-  EXPECT_EQ(dream_camera_id(std::string("camera_left")), 1);
-  EXPECT_EQ(dream_camera_id(std::string("camera_right")), 2);
-  EXPECT_EQ(dream_camera_id(std::nullopt), -1);
 }
 
 TEST(CameraSelector, HeadYawHintsOverrideTheProxy) {

@@ -1,5 +1,8 @@
 #include "dreamsense/face_landmarks/face_landmarks_analyzer.hpp"
 
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+
 #include <set>
 
 namespace dreamsense::face_landmarks {

@@ -4,9 +4,10 @@
 // face pipeline face_detection -> face_landmarks run once over it, cached per tick.
 
 #include "dreamsense/core/camera_model.hpp"
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
 #include "dreamsense/face_landmarks/face_landmarks_analyzer.hpp"
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/sim/demo_session.hpp"
 #include "dreamsense/sources/session.hpp"
 

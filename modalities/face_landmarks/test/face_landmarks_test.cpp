@@ -1,8 +1,11 @@
 // face_landmarks: DlibLandmarker unit tests, the analyser's blackboard behaviour, and landmark
 // sanity on a 3 s demo session (eye landmarks vs truth eyes_px).
 
+#include "dreamsense/perception/face_landmarks.hpp"
+
 #include "dreamsense/face_landmarks/face_landmarks_analyzer.hpp"
 #include "dreamsense/face_landmarks/landmarker.hpp"
+#include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/sim/face_renderer.hpp"
 
 #include <gtest/gtest.h>

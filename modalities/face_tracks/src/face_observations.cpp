@@ -1,5 +1,8 @@
 #include "dreamsense/face_tracks/face_observations.hpp"
 
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/head_pose.hpp"
+
 #include <algorithm>
 #include <string>
 

@@ -1,5 +1,9 @@
 #include "dreamsense/face_tracks/face_tracks_analyzer.hpp"
 
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/face_tracks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
+
 namespace dreamsense::face_tracks {
 namespace {
 

@@ -4,6 +4,7 @@
 #include "dreamsense/face_tracks/face_tracker_3d.hpp"
 
 #include "dreamsense/face_tracks/assignment.hpp"
+#include "dreamsense/perception/face_tracks.hpp"
 
 #include <gtest/gtest.h>
 

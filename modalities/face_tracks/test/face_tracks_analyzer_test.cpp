@@ -5,6 +5,9 @@
 
 #include "dreamsense/core/blackboard.hpp"
 #include "dreamsense/face_tracks/face_observations.hpp"
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/face_tracks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,10 @@
 #include "dreamsense/gaze/gaze_analyzer.hpp"
 
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/gaze.hpp"
+#include "dreamsense/perception/head_pose.hpp"
+
 namespace dreamsense::gaze {
 namespace {
 

@@ -1,5 +1,7 @@
 #include "dreamsense/gaze/mutual_gaze.hpp"
 
+#include "dreamsense/perception/gaze.hpp"
+
 #include <algorithm>
 #include <cmath>
 

@@ -1,6 +1,9 @@
 #include "dreamsense/gaze/eye_angles.hpp"
 
 #include "dreamsense/gaze/gaze_estimator.hpp"
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,10 @@
 #include "dreamsense/gaze/gaze_analyzer.hpp"
 
 #include "dreamsense/core/blackboard.hpp"
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/gaze.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <gtest/gtest.h>
 

@@ -188,4 +188,26 @@ Result<FaceModel3d> read_face_model(const std::string& path) {
   return m;
 }
 
+Result<cv::Matx33d> read_model_from_head(const std::filesystem::path& gaze_yaml) {
+  if (!std::ifstream(gaze_yaml))
+    return make_error(ErrorCode::kNotFound, "{}: gaze calibration not found", gaze_yaml.string());
+  try {
+    cv::FileStorage fs(gaze_yaml.string(), cv::FileStorage::READ);
+    if (fs["model_from_head"].empty()) return cv::Matx33d::eye();
+    cv::Mat R;
+    fs["model_from_head"] >> R;
+    if (R.rows != 3 || R.cols != 3 || R.type() != CV_64F)
+      return make_error(ErrorCode::kCorruptData, "{}: model_from_head must be a 3x3 matrix",
+                        gaze_yaml.string());
+    const cv::Matx33d m(R);
+    if (cv::norm(cv::Mat(m * m.t() - cv::Matx33d::eye())) > 1e-6 || cv::determinant(m) < 0)
+      return make_error(ErrorCode::kCorruptData, "{}: model_from_head is not a rotation",
+                        gaze_yaml.string());
+    return m;
+  } catch (const cv::Exception&) {
+    return make_error(ErrorCode::kCorruptData, "{}: not a readable gaze calibration (YAML)",
+                      gaze_yaml.string());
+  }
+}
+
 }  // namespace dreamsense::head_pose

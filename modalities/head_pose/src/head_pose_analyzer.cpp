@@ -1,5 +1,8 @@
 #include "dreamsense/head_pose/head_pose_analyzer.hpp"
 
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
+
 #include <algorithm>
 
 namespace dreamsense::head_pose {

@@ -1,5 +1,8 @@
 #include "dreamsense/head_pose/head_pose_estimator.hpp"
 
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
+
 #include <opencv2/calib3d.hpp>
 
 #include <algorithm>

@@ -2,6 +2,7 @@
 
 #include "dreamsense/core/one_euro.hpp"
 #include "dreamsense/head_pose/head_pose_estimator.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <opencv2/calib3d.hpp>
 

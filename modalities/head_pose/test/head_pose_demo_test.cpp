@@ -6,6 +6,8 @@
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/head_pose/head_pose_analyzer.hpp"
 #include "dreamsense/head_pose/head_pose_estimator.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 #include "dreamsense/sim/face_renderer.hpp"
 
 #include <gtest/gtest.h>

@@ -1,11 +1,14 @@
 // head_pose: synthetic PnP recovery, noise robustness, negative cases, the pose filter and the
 // analyser's blackboard behaviour.
 
+#include "dreamsense/perception/head_pose.hpp"
+
 #include "dreamsense/head_pose/face_model.hpp"
 #include "dreamsense/head_pose/face_shape_fit.hpp"
 #include "dreamsense/head_pose/head_pose_analyzer.hpp"
 #include "dreamsense/head_pose/head_pose_estimator.hpp"
 #include "dreamsense/head_pose/pose_filter.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 
 #include <gtest/gtest.h>
 

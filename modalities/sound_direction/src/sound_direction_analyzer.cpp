@@ -1,6 +1,7 @@
 #include "dreamsense/sound_direction/sound_direction_analyzer.hpp"
 
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/perception/sound_direction.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,5 @@
+#include "dreamsense/perception/sound_direction.hpp"
+
 #include "dreamsense/core/blackboard.hpp"
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/sim/room_acoustics.hpp"

@@ -1,5 +1,7 @@
 #include "dreamsense/speech/recognizer.hpp"
 
+#include "dreamsense/perception/speech.hpp"
+
 #include <algorithm>
 #include <array>
 #include <chrono>

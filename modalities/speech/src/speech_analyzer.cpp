@@ -2,7 +2,8 @@
 
 #include "dreamsense/audio/stamped_audio.hpp"
 #include "dreamsense/core/log.hpp"
-#include "dreamsense/core/perception.hpp"
+#include "dreamsense/perception/sound_direction.hpp"
+#include "dreamsense/perception/speech.hpp"
 
 #include <algorithm>
 #include <cmath>

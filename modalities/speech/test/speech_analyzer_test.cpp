@@ -2,7 +2,8 @@
 
 #include "dreamsense/speech/speech_analyzer.hpp"
 
-#include "dreamsense/core/perception.hpp"
+#include "dreamsense/perception/sound_direction.hpp"
+#include "dreamsense/perception/speech.hpp"
 
 #include <gtest/gtest.h>
 

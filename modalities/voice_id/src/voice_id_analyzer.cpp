@@ -1,6 +1,7 @@
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
 
-#include "dreamsense/core/perception.hpp"
+#include "dreamsense/perception/sound_direction.hpp"
+#include "dreamsense/perception/voice_id.hpp"
 
 #include <cmath>
 #include <deque>

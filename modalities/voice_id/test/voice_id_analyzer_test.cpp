@@ -3,7 +3,8 @@
 
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
 
-#include "dreamsense/core/perception.hpp"
+#include "dreamsense/perception/sound_direction.hpp"
+#include "dreamsense/perception/voice_id.hpp"
 #include "dreamsense/voice_id/audio_files.hpp"
 
 #include <gtest/gtest.h>

@@ -108,6 +108,12 @@ class BlackboardWriter {
   const std::string& source() const { return source_; }
   bool empty() const { return writes_.empty(); }
   size_t size() const { return writes_.size(); }
+  // The keys written so far, in write order (a key written twice appears twice).
+  std::vector<std::string> keys() const {
+    std::vector<std::string> out;
+    for (const auto& w : writes_) out.push_back(w.key);
+    return out;
+  }
 
  private:
   friend class Blackboard;

@@ -8,6 +8,7 @@
 #include "dreamsense/core/synchronizer.hpp"
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,20 @@ struct PipelineStats {
 
 using TickCallback = std::function<Status(const MultiFrame&, const BlackboardView&)>;
 using ProgressCallback = std::function<void(Timestamp)>;
+
+// Orders analysers by their contracts: a key's writer runs before the analysers that read it in
+// the same tick; an analyser that reads a key from earlier ticks (reads_previous) runs before
+// that key's writer, so it always sees the previous tick's value. Among analysers free to run,
+// the earlier one in `analyzers` goes first (deterministic). A cycle is an error naming the
+// analysers in it. Reads without a writer are left for Pipeline::build to report.
+Result<std::vector<std::unique_ptr<Analyzer>>> order_by_contracts(
+    std::vector<std::unique_ptr<Analyzer>> analyzers);
+
+// The sensors behind each blackboard key the analysers write: the writer's required inputs, its
+// optional inputs that the source has, and the sensors behind the keys it reads, transitively.
+// `analyzers` must be in execution order. Sorted, without duplicates.
+std::map<std::string, std::vector<SensorId>, std::less<>> key_sensors(
+    const std::vector<std::unique_ptr<Analyzer>>& analyzers, const SourceInfo& source);
 
 class Pipeline {
  public:

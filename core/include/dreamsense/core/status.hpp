@@ -77,3 +77,20 @@ class CheckFailure : public std::exception {
 #define DS_CHECK_GE(a, b) DS_CHECK_OP(a, >=, b)
 #define DS_CHECK_LT(a, b) DS_CHECK_OP(a, <, b)
 #define DS_CHECK_LE(a, b) DS_CHECK_OP(a, <=, b)
+
+// Error propagation (as MediaPipe's MP_RETURN_IF_ERROR / MP_ASSIGN_OR_RETURN):
+//   DS_RETURN_IF_ERROR(write_header(out));           // returns the error of a Status/Result
+//   DS_ASSIGN_OR_RETURN(auto model, read_model(p));  // declares/assigns the value or returns
+#define DS_STATUS_CONCAT_INNER_(a, b) a##b
+#define DS_STATUS_CONCAT_(a, b) DS_STATUS_CONCAT_INNER_(a, b)
+#define DS_RETURN_IF_ERROR(expr)                                             \
+  do {                                                                       \
+    auto&& ds_status_ = (expr);                                              \
+    if (!ds_status_) return ::tl::unexpected(std::move(ds_status_.error())); \
+  } while (0)
+#define DS_ASSIGN_OR_RETURN_IMPL_(tmp, lhs, expr)            \
+  auto tmp = (expr);                                         \
+  if (!tmp) return ::tl::unexpected(std::move(tmp.error())); \
+  lhs = std::move(*tmp)
+#define DS_ASSIGN_OR_RETURN(lhs, expr) \
+  DS_ASSIGN_OR_RETURN_IMPL_(DS_STATUS_CONCAT_(ds_result_, __LINE__), lhs, expr)

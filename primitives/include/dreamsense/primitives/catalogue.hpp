@@ -2,8 +2,7 @@
 // The 25 perception primitives (D4.2 Table 1; ../shared/spec/primitives.md) and record statuses.
 
 #include "dreamsense/core/timestamp.hpp"
-
-#include <nlohmann/json.hpp>
+#include "dreamsense/primitives/values.hpp"
 
 #include <array>
 #include <optional>
@@ -46,30 +45,37 @@ struct PrimitiveInfo {
   PrimitiveId id;
   const char* code;   // "F1"
   const char* name;   // as in the contract table, e.g. "getHeadGaze (plane)"
-  const char* port;   // DREAM YARP port short name, e.g. "getHeadGaze:o"
   bool parametrised;  // takes query parameters (evaluated with the configured default query)
 };
 
 const std::array<PrimitiveInfo, kPrimitiveCount>& catalogue();
 const PrimitiveInfo& info(PrimitiveId id);
 
+std::optional<PrimitiveId> primitive_from_name(std::string_view name);  // name or code ("F12")
+
 enum class PrimitiveStatus { kOk, kNoData, kStale, kSensorOffline, kDisabled };
 const char* to_string(PrimitiveStatus s);
+std::optional<PrimitiveStatus> status_from_string(std::string_view s);
 
-// One answer of one primitive at one tick (a line of primitives.jsonl).
+// One answer of one primitive at one tick (a line of primitives.jsonl). Typed: the value is the
+// primitive's own type (values.hpp), monostate unless status is ok; the query is the one that was
+// answered (monostate for unparametrised primitives). JSON, CSV, DDS and DREAM's legacy vectors
+// are made from it at the edge (export/, publish/, dream/).
 struct PrimitiveRecord {
   Timestamp stamp;  // the tick
-  PrimitiveId id;
+  PrimitiveId id = PrimitiveId::kCheckMutualGaze;
   PrimitiveStatus status = PrimitiveStatus::kDisabled;
   std::optional<double> confidence;
-  nlohmann::json value;                       // null unless status is ok
-  std::optional<std::vector<double>> legacy;  // DREAM layout, only when ok (or DREAM's "no face")
-  std::optional<std::string> legacy_text;     // DREAM strings (recognizeSpeech's tag) instead
-  std::string source;                         // sensor that produced the data, empty if none
-  Timestamp data_stamp;                       // stamp of the observation used (unset if none)
-  nlohmann::json query;  // parameters of parametrised primitives (null otherwise)
+  PrimitiveValue value;
+  PrimitiveQuery query;
+  std::string source;    // sensor that produced the data, empty if none
+  Timestamp data_stamp;  // stamp of the observation used (unset if none)
+  bool ok() const { return status == PrimitiveStatus::kOk; }
+  // The value as V, or null when the record holds another type (or none).
+  template <typename V>
+  const V* value_as() const {
+    return std::get_if<V>(&value);
+  }
 };
-
-nlohmann::json to_json(const PrimitiveRecord& r);
 
 }  // namespace dreamsense::primitives

@@ -6,6 +6,7 @@
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
+#include "dreamsense/core/status.hpp"
 
 #include <opencv2/core.hpp>
 
@@ -42,19 +43,61 @@ struct DemoGeometry {
   cv::Vec3d room_size_m() const { return room_max_m - room_min_m; }
 };
 
-enum class DemoAction { kNone, kWave, kFly, kHandsOnHead };
-std::string_view action_label(DemoAction action);  // "none", "wave", "fly", "hands_on_head"
-int action_dream_id(DemoAction action);            // identifyTrajectory index: 0, 1, 4, 3
+// kCoverEyes, kDriveCar, kDrink and kCustom appear only when DemoScriptOptions asks for them
+// (the default demo keeps the original three).
+enum class DemoAction {
+  kNone,
+  kWave,
+  kFly,
+  kHandsOnHead,
+  kCoverEyes,
+  kDriveCar,
+  kDrink,
+  kCustom,
+};
+// "none", "wave", "fly", "hands_on_head", "cover_eyes", "drive_car", "drink", "custom"
+std::string_view action_label(DemoAction action);
+// identifyTrajectory index (primitives.md F20): 0, 1, 4, 3, 2, 5, 6; kCustom: 7 (the script's
+// segment_dream_id adds the custom gesture's index).
+int action_dream_id(DemoAction action);
 
 struct ActionSegment {
   double start_s = 0, end_s = 0;
   DemoAction action = DemoAction::kNone;
+  int custom = -1;  // kCustom: index into DemoScriptOptions::custom
 };
 
-// Rests (none, 0.8-1.6 s) alternating with actions (2-3.5 s): the first three actions are a
-// seed-dependent permutation of wave / fly / hands_on_head (so 20 s always contains all three),
-// later ones are drawn at random. Segments tile [0, duration_s).
-std::vector<ActionSegment> make_action_schedule(uint64_t seed, double duration_s);
+// A scripted gesture for tests and new gestures: each wrist follows a closed loop of key points
+// relative to its shoulder (world axes: +x = the child's left, -y = up, -z = forward, towards
+// the robot), one loop per period_s, through a Catmull-Rom spline; the hand extends along the
+// forearm. An empty loop leaves that arm resting on the table.
+struct CustomGesture {
+  std::string label;
+  std::vector<cv::Vec3d> right_wrist, left_wrist;
+  double period_s = 1.5;
+};
+
+// Which gestures the demo child performs. The defaults reproduce the original demo exactly.
+struct DemoScriptOptions {
+  enum class GestureSet {
+    kClassic,  // wave, fly, hands_on_head (the original demo, byte-identical output)
+    kDream,    // all six DREAM gestures: also cover_eyes, drive_car, drink
+  };
+  GestureSet gestures = GestureSet::kClassic;
+  std::vector<CustomGesture> custom;
+  // Non-empty: replaces the random schedule (segments in time order, tiling [0, duration));
+  // kCustom segments name their gesture by ActionSegment::custom.
+  std::vector<ActionSegment> schedule;
+  Status check() const;
+};
+
+// Rests (none, 0.8-1.6 s) alternating with actions (2-3.5 s): the first actions are a
+// seed-dependent permutation of the set's gestures (classic: wave / fly / hands_on_head, so 20 s
+// always contains all three; DREAM: all six, which needs about 25 s), later ones are drawn at
+// random. Segments tile [0, duration_s).
+std::vector<ActionSegment> make_action_schedule(
+    uint64_t seed, double duration_s,
+    DemoScriptOptions::GestureSet set = DemoScriptOptions::GestureSet::kClassic);
 
 // What the child looks at. Fixations tile the session; the eyes jump to each new target at once
 // (a saccade is shorter than a frame), the head follows over head_turn_s (after a short lag) and
@@ -114,7 +157,8 @@ struct TableObjectState {
 
 class DemoScript {
  public:
-  DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry = {});
+  DemoScript(uint64_t seed, double duration_s, DemoGeometry geometry = {},
+             DemoScriptOptions options = {});
 
   const DemoGeometry& geometry() const { return geometry_; }
   uint64_t seed() const { return seed_; }
@@ -134,6 +178,11 @@ class DemoScript {
 
   const std::vector<ActionSegment>& actions() const { return actions_; }
   DemoAction action_at(double t) const;
+  const ActionSegment& segment_at(double t) const;
+  // Truth label and F20 id of a segment (custom gestures: their label, 7 + index).
+  std::string segment_label(const ActionSegment& s) const;
+  int segment_dream_id(const ActionSegment& s) const;
+  const DemoScriptOptions& script_options() const { return options_; }
   // All 20 Kinect joints (world, noise-free), consistent with head_pose(t).
   std::array<cv::Vec3d, kJointCount> joints(double t) const;
 
@@ -147,8 +196,13 @@ class DemoScript {
   static double eval(const std::vector<Sinusoid>& s, double t);
   void make_fixations();
   void make_blinks();
-  std::array<cv::Vec3d, 6> arm_pose(DemoAction action, double t, const cv::Vec3d& head_centre,
-                                    const cv::Vec3d& shoulder_l, const cv::Vec3d& shoulder_r) const;
+  std::array<cv::Vec3d, 6> arm_pose(const ActionSegment& segment, double t,
+                                    const cv::Vec3d& head_centre, const cv::Vec3d& shoulder_l,
+                                    const cv::Vec3d& shoulder_r) const;
+  // The DREAM-set and custom gestures (not in the original demo).
+  std::array<cv::Vec3d, 6> extra_arm_pose(const ActionSegment& segment, double t,
+                                          const cv::Vec3d& shoulder_l,
+                                          const cv::Vec3d& shoulder_r) const;
 
   uint64_t seed_;
   double duration_s_;
@@ -159,6 +213,9 @@ class DemoScript {
   double therapist_side_ = 1;
   std::vector<ActionSegment> actions_;
   double wave_hz_ = 1.8, fly_hz_ = 0.8;
+  DemoScriptOptions options_;
+  // DREAM-set gestures (drawn from their own seed stream, so the classic ones are unchanged).
+  double drive_hz_ = 0.45, drive_amp_rad_ = 0.45, drink_hz_ = 0.4, cover_hz_ = 0.6;
   std::vector<TableObjectSpec> objects_;
   struct ObjectPath {
     double x_centre, z_centre;

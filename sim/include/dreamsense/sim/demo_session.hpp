@@ -43,6 +43,9 @@ struct DemoOptions {
   // (painted eyes: the truth eye gaze is then the head gaze).
   enum class FaceModel { kMesh, kPlanar };  // kMesh: session metadata subject = kDemoSubject
   FaceModel face_model = FaceModel::kMesh;
+  // The child's gestures: by default the original three (wave, fly, hands_on_head); kDream adds
+  // cover_eyes, drive_car and drink; custom gestures and a fixed schedule for tests.
+  DemoScriptOptions script;
   // Media shipped by Debian packages.
   std::filesystem::path portrait =
       "/usr/lib/python3/dist-packages/skimage/data/astronaut.png";  // python3-skimage
@@ -74,6 +77,14 @@ Result<DemoSummary> generate_demo_session(
 // All demo cameras, in manifest order: camera_left, camera_middle, camera_right, front.color,
 // front.depth (same model as front.color: registered depth), top.color.
 std::vector<CameraModel> make_demo_cameras(const DemoGeometry& geometry = {});
+
+// The child's body as the session's skeleton stream `stream` writes it at frame `sequence`
+// (stamp in ns): the script's joints plus seeded Gaussian noise, legs "inferred" (0.5). Lets
+// tools build skeleton streams of any seed without rendering cameras.
+SkeletonBody demo_skeleton_body(const DemoScript& script, uint64_t seed, const std::string& stream,
+                                uint64_t sequence, int64_t stamp_ns, double joint_noise_m);
+// Stamp of frame `index` of a stream at rate_hz (all demo streams start at 0).
+int64_t demo_stamp_ns(int64_t index, double rate_hz);
 
 // The face's state at time t: head pose, eyes fixating the script's gaze target, blinks.
 FaceState demo_face_state(const DemoScript& script, double t);

@@ -46,6 +46,10 @@ struct StreamEntry {
   int64_t start_ns = 0;     // audio: stamp of the first sample
   std::string calibration;  // relative path of the CameraModel file, may be empty
   std::string frame;        // transform-tree frame name (defaults to id)
+  // What the stream is for (docs/session_format.md "Stream roles": child_camera, table_camera,
+  // table_depth, body, mic_array, robot_audio, or a user's own). Empty: the id conventions
+  // decide (stream_roles).
+  std::vector<std::string> roles;
 };
 
 struct Participant {
@@ -78,6 +82,13 @@ Status write_manifest(const std::filesystem::path& session_dir, const SessionMan
 // without one are left out. A calibration file that does not read is an error naming it.
 Result<std::map<SensorId, CameraModel>> read_color_calibrations(
     const std::filesystem::path& session_dir, const SessionManifest& manifest);
+
+// The roles of every stream: its declared ones, or, for a stream without any, the defaults of
+// today's id conventions: colour "camera*" -> child_camera; colour "top*" -> table_camera; depth
+// "top*" -> table_depth; the first skeleton stream -> body; the first audio stream -> mic_array.
+// An exclusive role (table_camera, table_depth, body, mic_array, robot_audio) claimed by two
+// streams, or a known role on a stream of the wrong kind, is an error naming session.yaml.
+Result<std::map<SensorId, std::vector<std::string>>> stream_roles(const SessionManifest& manifest);
 
 // The checks read_manifest applies after parsing (version, required fields, duplicate ids,
 // encoding valid for the kind, relative file paths); errors name session.yaml and the key.

@@ -4,7 +4,6 @@
 
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/core/camera_model.hpp"
-#include "dreamsense/core/perception.hpp"
 
 #include <memory>
 #include <optional>

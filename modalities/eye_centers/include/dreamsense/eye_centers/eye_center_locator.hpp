@@ -9,9 +9,10 @@
 // featureless eye is found = false with a rejection reason (absence, not an error); an empty image
 // or an unsupported pixel type is an error. All functions are const and thread-safe.
 
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/eye_centers/eye_region.hpp"
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 
 #include <opencv2/core.hpp>
 

@@ -2,8 +2,8 @@
 // Camera selection (D4.2 Camera Selection Module): the camera with the best face, i.e. highest
 // detection score and most frontal, with hysteresis so that the choice does not flicker.
 
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/perception/face_detection.hpp"
 
 #include <optional>
 #include <vector>
@@ -64,9 +64,5 @@ class CameraSelector {
   std::optional<SensorId> challenger_;
   int challenger_ticks_ = 0;
 };
-
-// DREAM's legacy SelectCameraID: 0 camera_middle, 1 camera_left, 2 camera_right, -1 for none or
-// any other id.
-int dream_camera_id(const std::optional<SensorId>& camera);
 
 }  // namespace dreamsense::face_detection

@@ -3,8 +3,8 @@
 // detection score and a frontalness proxy per face. Method, models and measured numbers:
 // modalities/face_detection/README.md.
 
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/perception/face_detection.hpp"
 
 #include <opencv2/core.hpp>
 

@@ -4,6 +4,7 @@
 // full_search_interval frames (new faces), and whenever nothing is tracked.
 
 #include "dreamsense/face_detection/face_detector.hpp"
+#include "dreamsense/perception/face_detection.hpp"
 
 #include <functional>
 #include <optional>

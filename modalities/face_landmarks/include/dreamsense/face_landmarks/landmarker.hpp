@@ -3,7 +3,6 @@
 // dlib) and the dlib 68-point ensemble-of-regression-trees implementation (Kazemi & Sullivan,
 // CVPR 2014). Method and numbers: modalities/face_landmarks/README.md.
 
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/status.hpp"
 
 #include <opencv2/core.hpp>

@@ -13,8 +13,9 @@
 //    otherwise the score-weighted mean.
 
 #include "dreamsense/core/camera_model.hpp"
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <map>
 #include <vector>

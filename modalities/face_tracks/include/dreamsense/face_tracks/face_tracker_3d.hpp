@@ -19,9 +19,9 @@
 // Limits (README.md): association is by distance only (no appearance), so two faces that meet
 // and stop within the gate may exchange ids; faces crossing at walking speed keep theirs.
 
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/core/timestamp.hpp"
+#include "dreamsense/perception/face_tracks.hpp"
 
 #include <opencv2/core.hpp>
 

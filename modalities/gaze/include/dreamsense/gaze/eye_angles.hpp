@@ -16,7 +16,6 @@
 // head pose, which removes the foreshortening of a turned head (ours, the default).
 
 #include "dreamsense/core/camera_model.hpp"
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/status.hpp"
 
 #include <opencv2/core.hpp>

@@ -4,9 +4,12 @@
 // extrinsics), both eyes fused by averaging their directions (the DREAM Paladyn paper).
 
 #include "dreamsense/core/camera_model.hpp"
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/gaze/eye_angles.hpp"
 #include "dreamsense/gaze/eyeball_model.hpp"
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/gaze.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <filesystem>
 #include <optional>

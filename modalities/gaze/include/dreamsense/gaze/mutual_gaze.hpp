@@ -9,8 +9,8 @@
 // the state has lasted (D1.3 asks for a ~3 s hold option: compare held_s with it).
 
 #include "dreamsense/core/camera_model.hpp"
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/timestamp.hpp"
+#include "dreamsense/perception/gaze.hpp"
 
 #include <optional>
 

@@ -1,8 +1,9 @@
 #pragma once
 // 3-D face models for head pose by PnP: a subset of the 68 iBUG 300-W landmarks with their
 // positions in the head frame (metres). Head frame (docs/demo_session.md, HeadPose in
-// dreamsense/core/perception.hpp): origin between the eyes, x towards the subject's LEFT, y down,
-// z towards the back of the head; the face looks along -z. Provenance of the numbers: README.md.
+// dreamsense/perception/head_pose.hpp): origin between the eyes, x towards the subject's LEFT, y
+// down, z towards the back of the head; the face looks along -z. Provenance of the numbers:
+// README.md.
 
 #include "dreamsense/core/status.hpp"
 

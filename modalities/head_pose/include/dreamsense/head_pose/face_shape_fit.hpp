@@ -21,6 +21,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -65,5 +66,10 @@ Result<FaceShapeFit> fit_face_shape(const std::vector<LandmarkView>& views,
 Status write_face_model(const std::string& path, const FaceModel3d& model,
                         const std::string& provenance);
 Result<FaceModel3d> read_face_model(const std::string& path);
+
+// The head-model offset of a subject calibration: `model_from_head` (rotation from the subject's
+// head frame to the face model's frame) as `dreamsense train gaze` writes it into gaze.yaml;
+// identity when the file has none. A matrix that is not a rotation is an error naming the file.
+Result<cv::Matx33d> read_model_from_head(const std::filesystem::path& gaze_yaml);
 
 }  // namespace dreamsense::head_pose

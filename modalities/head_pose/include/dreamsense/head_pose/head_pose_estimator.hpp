@@ -5,8 +5,8 @@
 // through the camera's extrinsics. Method and numbers: modalities/head_pose/README.md.
 
 #include "dreamsense/core/camera_model.hpp"
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/head_pose/face_model.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <optional>
 #include <vector>

@@ -9,7 +9,7 @@
 // constant is 0.16 s and jitter is removed; during a 100 deg/s turn f_c = 6 Hz, tau = 27 ms, so
 // the lag stays ~1 frame at 25 Hz. A gap longer than max_gap_s restarts the filter.
 
-#include "dreamsense/core/perception.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <optional>
 

@@ -12,8 +12,8 @@
 // best competing local maximum q/p. See README.md for the calibration that makes 0.7 (the
 // threshold DREAM's consumer used) correspond to a >= 90 % chance of being within 10 degrees.
 
+#include "dreamsense/audio/mic_array.hpp"
 #include "dreamsense/core/status.hpp"
-#include "dreamsense/sound_direction/mic_array.hpp"
 #include "dreamsense/sound_direction/srp_phat.hpp"
 
 #include <cstdint>

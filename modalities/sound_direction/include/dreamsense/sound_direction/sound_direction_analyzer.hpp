@@ -8,10 +8,9 @@
 // error for that tick (clear message, the pipeline keeps running); clipped audio is processed
 // with a one-time warning; silence is absence, never an error.
 
+#include "dreamsense/audio/mic_array.hpp"
 #include "dreamsense/core/analyzer.hpp"
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/sound_direction/direction_finder.hpp"
-#include "dreamsense/sound_direction/mic_array.hpp"
 
 #include <memory>
 

@@ -12,8 +12,8 @@
 // Thread safety: an SrpPhat / GccPhat object is not thread-safe (it owns scratch buffers); use
 // one per thread. Creating one is thread-safe (FFTW plan creation is serialised internally).
 
+#include "dreamsense/audio/mic_array.hpp"
 #include "dreamsense/core/status.hpp"
-#include "dreamsense/sound_direction/mic_array.hpp"
 
 #include <opencv2/core.hpp>
 
@@ -23,6 +23,11 @@
 #include <vector>
 
 namespace dreamsense::sound_direction {
+
+// The array geometry lives in the audio base library (speech beamforming uses it too).
+using audio::MicArrayGeometry;
+using audio::named_geometry;
+using audio::read_mic_array;
 
 struct PhatOptions {
   int frame_length = 1024;    // samples per analysis frame (64 ms at 16 kHz); a power of 2

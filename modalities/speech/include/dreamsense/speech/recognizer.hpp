@@ -10,9 +10,9 @@
 // garbage path (a second pass over the garbage branch alone, run only when the grammar won);
 // 0.5 = tie. ps_get_prob() is no use here: with FSG searches it returns 0 (posterior 1).
 
-#include "dreamsense/core/perception.hpp"
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/core/timestamp.hpp"
+#include "dreamsense/perception/speech.hpp"
 #include "dreamsense/speech/srgs.hpp"
 
 #include <cstdint>

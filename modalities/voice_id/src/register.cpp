@@ -1,0 +1,60 @@
+// Declared pipeline entry of the voice identification analyser (perception/analyzer_registry.hpp).
+
+#include "dreamsense/perception/analyzer_registry.hpp"
+#include "dreamsense/voice_id/audio_files.hpp"
+#include "dreamsense/voice_id/voice_id_analyzer.hpp"
+
+#include <fmt/format.h>
+
+namespace dreamsense::voice_id {
+
+void register_analyzers(AnalyzerRegistry& registry) {
+  AnalyzerFactory f;
+  f.name = "voice_id";
+  f.summary =
+      "who spoke (GMM-UBM speaker models from the session's enrolment audio, or DREAM's "
+      "direction rule)";
+  f.roles = {roles::kMicArray};
+  f.plan = [](const PlanContext& ctx, OptionsNode& options) -> Result<PlannedAnalyzers> {
+    // method: gmm_ubm (speaker models: `model`, or trained here from the session's enrolment
+    // audio, metadata voice_enroll) or direction_rule (DREAM's rule on the sound direction).
+    std::string method_name = to_string(VoiceIdMethod::kGmmUbm);
+    std::filesystem::path model_file;
+    DS_RETURN_IF_ERROR(options.get("method", method_name));
+    DS_RETURN_IF_ERROR(options.get("model", model_file));
+    DS_ASSIGN_OR_RETURN(const VoiceIdMethod method, parse_voice_id_method(method_name));
+    const StreamDescription* s = ctx.first_with_role(roles::kMicArray);
+    if (s == nullptr) return PlannedAnalyzers::skip("no stream with role mic_array");
+    VoiceIdAnalyzerOptions o;
+    o.audio_sensor = s->id;
+    o.method = method;
+    PlannedAnalyzers p;
+    if (method == VoiceIdMethod::kGmmUbm) {
+      if (!model_file.empty()) {
+        o.model_file = model_file;
+      } else {
+        DS_ASSIGN_OR_RETURN(auto enroll, ctx.metadata_file("voice_enroll"));
+        if (!enroll)
+          return PlannedAnalyzers::skip(
+              "no voice model (option model / --voice-model) and the session has no enrolment "
+              "audio (metadata voice_enroll)");
+        auto audio_files = read_speaker_folders(*enroll);
+        if (!audio_files) return tl::unexpected(audio_files.error());
+        auto m = train_voice_model(*audio_files, {}, VoiceTrainOptions{});
+        if (!m) return make_error(m.error().code, "{}: {}", enroll->string(), m.error().message);
+        std::string who;
+        for (const auto& sp : m->speakers)
+          who += fmt::format("{}{} ({:.1f} s)", who.empty() ? "" : ", ", sp.id,
+                             sp.frames * m->features.hop_s);
+        p.notes.push_back("voice models from the session's enrolment: " + who);
+        o.model = std::make_shared<const VoiceModel>(std::move(*m));
+      }
+    }
+    DS_ASSIGN_OR_RETURN(auto analyzer, make_voice_id_analyzer(o));
+    p.analyzers.push_back(std::move(analyzer));
+    return p;
+  };
+  registry.add(std::move(f));
+}
+
+}  // namespace dreamsense::voice_id

@@ -1,0 +1,49 @@
+#pragma once
+// Facial landmarks of the selected face (modalities/face_landmarks): V13.
+// Blackboard types of one modality (perception layer: below the modalities, which never include
+// each other's headers). docs/blackboard.md maps the keys onto DREAM's global buffer (V1-V29).
+
+#include "dreamsense/core/blackboard.hpp"
+#include "dreamsense/core/sensor_frame.hpp"
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dreamsense {
+
+// Number of landmarks in the iBUG 300-W / dlib-68 mark-up.
+inline constexpr int kFaceLandmarkCount = 68;
+
+// 68 facial landmarks of the selected face in the selected camera's image, iBUG 300-W order as
+// seen in the image: 0-16 jaw contour (image left to right), 17-21 and 22-26 brows, 27-30 nose
+// bridge (27 top, 30 tip), 31-35 nostrils, 36-41 the eye on the image left (the subject's RIGHT
+// eye for a face looking at the camera), 42-47 the other eye, 48-59 outer lips, 60-67 inner lips.
+struct FaceLandmarks {
+  SensorId camera;        // the camera whose image was fitted (keys::kSelectedCamera)
+  Timestamp frame_stamp;  // stamp of that camera frame
+  uint64_t frame_sequence = 0;
+  cv::Size image_size;                 // of that frame
+  cv::Rect2d box_px;                   // face box the landmarker started from
+  std::vector<cv::Point2d> points_px;  // kFaceLandmarkCount points, full-resolution pixels
+  // Centroid of the six contour points of the subject's right (36-41) / left (42-47) eye.
+  cv::Point2d right_eye_px() const { return centroid(36); }
+  cv::Point2d left_eye_px() const { return centroid(42); }
+
+ private:
+  cv::Point2d centroid(size_t first) const {
+    cv::Point2d c(0, 0);
+    if (points_px.size() < first + 6) return c;
+    for (size_t i = first; i < first + 6; ++i) c += points_px[i];
+    return c * (1.0 / 6);
+  }
+};
+
+namespace keys {
+// Landmarks on the selected camera's face; absent entry when no face is selected or the
+// landmarker rejected it. Nothing is written in ticks without a selection entry.
+inline constexpr Key<FaceLandmarks> kFaceLandmarks{"face.landmarks"};
+}  // namespace keys
+
+}  // namespace dreamsense
