@@ -9,6 +9,7 @@
 #include "dreamsense/eval/faces/expression_eval.hpp"
 #include "dreamsense/eval/faces/identity_eval.hpp"
 #include "dreamsense/face_identity/face_gallery.hpp"
+#include "dreamsense/sources/session.hpp"
 #include "dreamsense/vision/face_locator.hpp"
 #include "dreamsense/vision/image_io.hpp"
 
@@ -50,7 +51,45 @@ struct EnrollFacesFlags {
   int person = -1;
   std::string name, gallery, method = "face_api";
   std::vector<std::string> images;
+  // --session: frames of a recorded session instead of images.
+  std::string session, stream;
+  int every = 25, max_frames = 20;
 };
+
+// Grey frames of `stream` in a session (every `every`-th, at most `max` of them) for enrolment.
+Result<std::vector<std::pair<std::string, cv::Mat>>> session_frames(const EnrollFacesFlags& f) {
+  auto reader = sources::SessionReader::open(f.session);
+  if (!reader) return tl::unexpected(reader.error());
+  std::string stream = f.stream;
+  if (stream.empty())
+    for (const auto& e : (*reader)->manifest().streams)
+      if (e.kind == SensorKind::kColor) {
+        stream = e.id;
+        break;
+      }
+  std::vector<std::pair<std::string, cv::Mat>> out;
+  for (int index = 0; static_cast<int>(out.size()) < f.max_frames;) {
+    auto frame = (*reader)->next();
+    if (!frame) {
+      if (frame.error().code == ErrorCode::kEndOfStream) break;
+      return tl::unexpected(frame.error());
+    }
+    if ((*frame)->sensor != stream) continue;
+    const ColorImage* img = (*frame)->as<ColorImage>();
+    if (img == nullptr)
+      return make_error(ErrorCode::kInvalidArgument, "{}: stream '{}' is not a colour stream",
+                        f.session, stream);
+    if (index++ % f.every != 0) continue;
+    auto grey = vision::to_grey(img->image);
+    if (!grey) return tl::unexpected(grey.error());
+    out.emplace_back(fmt::format("{}:{}@{:.2f}s", f.session, stream, (*frame)->stamp.seconds()),
+                     grey->clone());
+  }
+  if (out.empty())
+    return make_error(ErrorCode::kNotFound, "{}: no frames of a colour stream '{}'", f.session,
+                      stream);
+  return out;
+}
 
 // Adds the images of one person to a gallery file (created when missing).
 Status enroll_faces(const EnrollFacesFlags& f, bool quiet) {
@@ -77,30 +116,52 @@ Status enroll_faces(const EnrollFacesFlags& f, bool quiet) {
     return make_error(s.error().code, "{}: {}", f.gallery, s.error().message);
   vision::FaceCropOptions crop;
   crop.alignment = gallery.method().alignment;
+  std::vector<std::pair<std::string, cv::Mat>> images;
+  if (!f.session.empty()) {
+    // Whole camera frames: search at full resolution for a face of >= 1/12 of the shorter side
+    // (the largest face is enrolled; frames without one are skipped).
+    auto frames = session_frames(f);
+    if (!frames) return tl::unexpected(frames.error());
+    images = std::move(*frames);
+    crop.assume_crop = false;
+    crop.working_px = std::min(images.front().second.rows, images.front().second.cols);
+    crop.min_face_fraction = 1.0 / 12;
+  } else {
+    for (const std::string& path : f.images) {
+      auto grey = vision::read_grey_image(path);
+      if (!grey) return tl::unexpected(grey.error());
+      images.emplace_back(path, std::move(*grey));
+    }
+  }
   auto landmarker = vision::load_landmarker();
   if (!landmarker) return tl::unexpected(landmarker.error());
   auto aligner = vision::make_face_crop_aligner(crop, *landmarker);
   if (!aligner) return tl::unexpected(aligner.error());
-  for (const std::string& path : f.images) {
-    auto grey = vision::read_grey_image(path);
-    if (!grey) return tl::unexpected(grey.error());
-    auto face = aligner->align(*grey);
+  size_t enrolled = 0;
+  for (const auto& [path, grey] : images) {
+    auto face = aligner->align(grey);
     if (!face) return make_error(face.error().code, "{}: {}", path, face.error().message);
     // Enrolment needs landmarks: a guessed crop geometry would enrol whatever the image shows.
-    if (!*face || (*face)->source == vision::AlignmentSource::kCropGeometry)
+    if (!*face || (*face)->source == vision::AlignmentSource::kCropGeometry) {
+      if (!f.session.empty()) continue;  // a session frame without a visible face
       return make_error(ErrorCode::kInvalidArgument,
                         "{}: no face found (enrolment needs a visible, roughly frontal face)",
                         path);
-    if (auto s = gallery.add(f.person, extractor->extract(*grey, **face)); !s)
+    }
+    if (auto s = gallery.add(f.person, extractor->extract(grey, **face)); !s)
       return tl::unexpected(s.error());
+    ++enrolled;
   }
+  if (enrolled == 0)
+    return make_error(ErrorCode::kNotFound, "{}: no face found in {} frames", f.session,
+                      images.size());
   if (!f.name.empty()) gallery.set_name(f.person, f.name);
   if (auto s = gallery.save(f.gallery); !s) return s;
   if (!quiet)
     std::fprintf(
         stderr,
         "faces: enrolled %zu images of person %d; gallery %s holds %zu persons, %zu images\n",
-        f.images.size(), f.person, f.gallery.c_str(), gallery.persons().size(), gallery.images());
+        enrolled, f.person, f.gallery.c_str(), gallery.persons().size(), gallery.images());
   return ok_status();
 }
 
@@ -113,7 +174,20 @@ void add_enroll_faces(CLI::App& enroll, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--person", flags->person, "Person id (>= 0; identifyFace answers it)")
       ->required()
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("images", flags->images, "Face images (photos or face crops)")->required();
+  auto* images = cmd->add_option("images", flags->images, "Face images (photos or face crops)");
+  auto* session = cmd->add_option(
+      "--session", flags->session,
+      "Enrol from a recorded session's frames instead (the largest face of every --every-th "
+      "frame of --stream)");
+  images->excludes(session);
+  session->excludes(images);
+  cmd->add_option("--stream", flags->stream, "With --session: colour stream (default: the first)");
+  cmd->add_option("--every", flags->every, "With --session: use every N-th frame")
+      ->default_val(flags->every)
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-frames", flags->max_frames, "With --session: at most this many frames")
+      ->default_val(flags->max_frames)
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--gallery", flags->gallery, "Gallery file (created when missing)")->required();
   cmd->add_option("--name", flags->name,
                   "Store this name for the id (by default the gallery holds ids only)");
@@ -122,6 +196,10 @@ void add_enroll_faces(CLI::App& enroll, const GlobalFlags& g, int& exit_code) {
                   "(DREAM's seed)")
       ->default_val(flags->method);
   cmd->callback([flags, &g, &exit_code] {
+    if (flags->images.empty() && flags->session.empty()) {
+      exit_code = fail(std::string("enroll faces: give face images or --session DIR"));
+      return;
+    }
     if (auto s = enroll_faces(*flags, g.quiet); !s) exit_code = fail(s.error());
   });
 }

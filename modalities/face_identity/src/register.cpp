@@ -39,10 +39,16 @@ void register_analyzers(AnalyzerRegistry& registry) {
     if (cameras.empty())
       return PlannedAnalyzers::skip("no calibrated stream with role child_camera");
     for (const auto& [id, m] : cameras) o.cameras.push_back(id);
-    DS_ASSIGN_OR_RETURN(auto analyzer, make_face_identity_analyzer(o));
+    auto analyzer = make_face_identity_analyzer(o);
+    // A gallery found by default (not asked for) whose network weights are not installed: the
+    // analyser is left out with the reason (--print-pipeline), the rest of the analysis runs.
+    if (!analyzer && where != "option gallery" && analyzer.error().code == ErrorCode::kNotFound &&
+        std::filesystem::exists(o.gallery))
+      return PlannedAnalyzers::skip(analyzer.error().message);
+    if (!analyzer) return tl::unexpected(analyzer.error());
     PlannedAnalyzers p;
     p.notes.push_back("gallery " + o.gallery.string() + " (" + where + ")");
-    p.analyzers.push_back(std::move(analyzer));
+    p.analyzers.push_back(std::move(*analyzer));
     return p;
   };
   registry.add(std::move(f));
