@@ -28,6 +28,8 @@ packages=(
   python3 python3-jsonschema espeak-ng
   # batch --slurm: the test starts a single-node Slurm cluster on 127.0.0.1 (label slurm)
   slurm-wlm munge
+  # faces (issue 12): GIF images (Yale faces); npm installs the face-api.js weights (below)
+  libgif-dev npm
 )
 
 missing=()
@@ -47,6 +49,14 @@ if ((${#missing[@]})); then
   "${sudo[@]}" apt-get update -qq
   "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
     "${missing[@]}" >/dev/null
+fi
+
+# faces (issue 12): face-api.js network weights (MIT, npm @vladmandic/face-api), read by our own
+# C++ (vision/face_api_net.cpp): identifyFace's descriptor and the expression network features.
+if [[ ! -f /usr/lib/node_modules/@vladmandic/face-api/model/face_recognition_model.bin ]]; then
+  echo "setup: installing the npm package @vladmandic/face-api@1.7.15" >&2
+  if [[ $(id -u) -eq 0 ]]; then npm_sudo=(); else npm_sudo=(sudo); fi
+  "${npm_sudo[@]}" npm install -g --no-fund --no-audit @vladmandic/face-api@1.7.15 >/dev/null
 fi
 
 cmake --preset release >/dev/null
