@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <tuple>
 
@@ -148,6 +149,30 @@ Result<cv::Mat> to_grey(const cv::Mat& image) {
                         "face image of OpenCV type {} (need 8-bit grey, BGR or BGRA)",
                         image.type());
   }
+}
+
+Result<FaceRegion> face_region(const cv::Mat& image, const std::vector<cv::Point2d>& landmarks,
+                               double margin) {
+  FaceRegion r;
+  if (landmarks.empty() || image.empty()) return r;
+  double x0 = landmarks[0].x, x1 = x0, y0 = landmarks[0].y, y1 = y0;
+  for (const auto& p : landmarks) {
+    x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
+    y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+  }
+  const double grow = margin * std::max(x1 - x0, y1 - y0);
+  const cv::Rect box = cv::Rect(cv::Point(static_cast<int>(std::floor(x0 - grow)),
+                                          static_cast<int>(std::floor(y0 - grow))),
+                                cv::Point(static_cast<int>(std::ceil(x1 + grow)) + 1,
+                                          static_cast<int>(std::ceil(y1 + grow)) + 1)) &
+                       cv::Rect(0, 0, image.cols, image.rows);
+  if (box.empty()) return r;
+  auto grey = to_grey(image(box));
+  if (!grey) return tl::unexpected(grey.error());
+  r.grey = grey->isContinuous() && grey->data != image.data ? *grey : grey->clone();
+  r.landmarks.reserve(landmarks.size());
+  for (const auto& p : landmarks) r.landmarks.emplace_back(p.x - box.x, p.y - box.y);
+  return r;
 }
 
 std::vector<cv::Point2d> transform_points(const cv::Matx23d& t,

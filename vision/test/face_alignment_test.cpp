@@ -80,6 +80,28 @@ TEST(FaceAlignment, DlibTemplateRecoversTheSimilarity) {
   EXPECT_LT(r, 0.5);
 }
 
+TEST(FaceAlignment, RegionGivesTheSameCropAsTheWholeFrame) {
+  cv::Mat frame(480, 640, CV_8UC3);
+  cv::randu(frame, 0, 255);
+  auto lm = mean_face_landmarks(120);
+  for (auto& p : lm) p += cv::Point2d(300, 200);
+  auto grey = to_grey(frame);
+  ASSERT_TRUE(grey);
+  auto whole = align_face(*grey, lm, {});
+  auto region = face_region(frame, lm);
+  ASSERT_TRUE(whole && *whole && region);
+  EXPECT_LT(region->grey.cols, frame.cols);
+  auto part = align_face(region->grey, region->landmarks, {});
+  ASSERT_TRUE(part && *part);
+  EXPECT_EQ(cv::norm((*whole)->grey, (*part)->grey, cv::NORM_INF), 0.0);
+  // Landmarks outside the frame: an empty region, not an error.
+  auto outside = lm;
+  for (auto& p : outside) p += cv::Point2d(5000, 0);
+  auto none = face_region(frame, outside);
+  ASSERT_TRUE(none);
+  EXPECT_TRUE(none->grey.empty());
+}
+
 TEST(FaceAlignment, MirrorSwapsSidesAndIsAnInvolution) {
   AlignmentOptions o;
   auto face = align_face(textured(300, 300), moved_face(100, 10, {100, 100}), o);

@@ -5,6 +5,7 @@
 #include "dreamsense/perception/face_tracks.hpp"
 #include "dreamsense/vision/face_alignment.hpp"
 
+#include <optional>
 #include <set>
 
 namespace dreamsense::expression {
@@ -41,10 +42,14 @@ class ExpressionAnalyzer : public Analyzer {
       out.set_absent(keys::kFaceExpression, in.stamp);
       return ok_status();
     }
-    DS_ASSIGN_OR_RETURN(cv::Mat grey, vision::to_grey(img->image));
-    DS_ASSIGN_OR_RETURN(
-        auto face,
-        vision::align_face(grey, l.points_px, recognizer_.model().method().features.alignment));
+    DS_ASSIGN_OR_RETURN(vision::FaceRegion region, vision::face_region(img->image, l.points_px));
+    const cv::Mat& grey = region.grey;
+    std::optional<vision::AlignedFace> face;
+    if (!grey.empty()) {
+      DS_ASSIGN_OR_RETURN(face,
+                          vision::align_face(grey, region.landmarks,
+                                             recognizer_.model().method().features.alignment));
+    }
     if (!face) {
       out.set_absent(keys::kFaceExpression, in.stamp);
       return ok_status();

@@ -53,9 +53,13 @@ class FaceIdentityAnalyzer : public Analyzer {
       out.set(keys::kFaceIdentity, std::move(reused), in.stamp, lm->confidence);
       return ok_status();
     }
-    DS_ASSIGN_OR_RETURN(cv::Mat grey, vision::to_grey(img->image));
-    DS_ASSIGN_OR_RETURN(auto face,
-                        vision::align_face(grey, l.points_px, extractor_.method().alignment));
+    DS_ASSIGN_OR_RETURN(vision::FaceRegion region, vision::face_region(img->image, l.points_px));
+    const cv::Mat& grey = region.grey;
+    std::optional<vision::AlignedFace> face;
+    if (!grey.empty()) {
+      DS_ASSIGN_OR_RETURN(
+          face, vision::align_face(grey, region.landmarks, extractor_.method().alignment));
+    }
     if (!face) {
       out.set_absent(keys::kFaceIdentity, in.stamp);
       return ok_status();

@@ -70,6 +70,18 @@ struct AlignedFace {
 // error naming the type.
 Result<cv::Mat> to_grey(const cv::Mat& image);
 
+// The grey region of a camera frame around a face: the landmarks' bounding box grown by `margin`
+// times its size on every side, clipped to the image, and the landmarks moved into it. Aligning
+// from the region instead of the whole frame saves the colour conversion of a large frame
+// (1280x960: ~1 ms); the crops are the same unless the face is at the border. Empty region when
+// there are no landmarks or they lie outside the image.
+struct FaceRegion {
+  cv::Mat grey;
+  std::vector<cv::Point2d> landmarks;
+};
+Result<FaceRegion> face_region(const cv::Mat& image, const std::vector<cv::Point2d>& landmarks,
+                               double margin = 1.0);
+
 // Warps `image` (any type to_grey accepts) with the similarity of the landmarks' eye centres.
 // Pixels outside the image repeat the border. nullopt when `landmarks` has not 68 points or the
 // eyes coincide.
