@@ -117,6 +117,13 @@ Result<std::unique_ptr<Analyzer>> make_face_identity_analyzer(
   if (auto s = check_compatible(gallery, extractor); !s)
     return make_error(s.error().code, "{}: {}", options.gallery.string(), s.error().message);
   DS_ASSIGN_OR_RETURN(auto identifier, FaceIdentifier::create(std::move(gallery)));
+  {  // The network's first run sets up its layers (~1 s): done here, not on the first live face.
+    auto lm = vision::mean_face_landmarks(100);
+    for (auto& p : lm) p += cv::Point2d(50, 50);
+    const cv::Mat blank(200, 200, CV_8UC1, cv::Scalar(128));
+    DS_ASSIGN_OR_RETURN(auto face, vision::align_face(blank, lm, extractor.method().alignment));
+    if (face) (void)extractor.extract(blank, *face);
+  }
   return std::unique_ptr<Analyzer>(
       new FaceIdentityAnalyzer(options, std::move(extractor), std::move(identifier)));
 }
