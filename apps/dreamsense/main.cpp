@@ -61,9 +61,9 @@ int main(int argc, char** argv) {
   app::add_train_face(*train, g, exit_code);
   app::add_train_gaze(*train, g, exit_code);
   app::add_train_speech(*train, g, exit_code);
-  app::add_train_expression(*train, g, exit_code);  // cmd_faces.cpp
   app::add_train_actions(*train, g, exit_code);  // cmd_actions.cpp
   app::add_train_gestures(*train, g, exit_code);
+  app::add_train_expression(*train, g, exit_code);  // cmd_faces.cpp
   CLI::App* enroll = app.add_subcommand(
       "enroll", "Add known people / toys to a gallery (writes a versioned file)");
   enroll->require_subcommand(1);
