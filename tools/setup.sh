@@ -28,6 +28,7 @@ packages=(
   python3 python3-jsonschema espeak-ng
   # batch --slurm: the test starts a single-node Slurm cluster on 127.0.0.1 (label slurm)
   slurm-wlm munge
+  chromium  # tests: report.html opened in a headless browser (apps/test/video_cli_test.cpp)
   # faces (issue 12): GIF images (Yale faces); npm installs the face-api.js weights (below)
   libgif-dev npm
 )

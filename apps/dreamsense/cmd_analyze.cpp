@@ -10,6 +10,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <optional>
 #include <thread>
 
 #include "commands.hpp"
@@ -37,7 +38,10 @@ struct AnalyzeFlags {
   std::string pipeline;          // pipeline.yaml
   std::vector<std::string> set;  // ANALYSER.KEY=VALUE
   std::vector<std::string> enable, disable;
-  bool print_pipeline = false;  // analyze: show the graph and stop
+  bool print_pipeline = false;       // analyze: show the graph and stop
+  bool save_subject = false;         // analyze: keep a converged self-calibration as the subject's
+  std::string calibration;           // analyze VIDEO: intrinsics instead of the approximate ones
+  bool csv = false, no_csv = false;  // analyze: CSV tables (default: on for a video)
 };
 
 void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path& out) {
@@ -46,6 +50,16 @@ void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path
                p.media_seconds, p.wall_seconds,
                p.wall_seconds > 0 ? p.media_seconds / p.wall_seconds : 0.0,
                static_cast<unsigned long long>(p.ticks));
+  if (s.input.value("kind", "") == "video")
+    std::fprintf(stderr, "video %dx%d: %s; audio %s\n", s.input.value("width", 0),
+                 s.input.value("height", 0),
+                 s.input.value("approximate_calibration", false)
+                     ? fmt::format("APPROXIMATE intrinsics (fx = {:.0f} px from the image size; "
+                                   "--calibration FILE for exact 3-D)",
+                                   s.input.value("fx_px", 0.0))
+                           .c_str()
+                     : ("calibration " + s.input.value("calibration", std::string())).c_str(),
+                 s.input.value("audio", std::string()).c_str());
   std::string names;
   for (const auto& a : s.analyzers) names += (names.empty() ? "" : ", ") + a;
   std::fprintf(stderr, "analysers: %s\n",
@@ -139,16 +153,32 @@ Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& 
 
 Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o,
                                                            bool quiet) {
-  return with_progress("analyse", quiet,
-                       [&](const auto& progress) { return runner::analyze_session(o, progress); });
+  return run_analysis_with_progress(o, quiet, SelfCalibrationMode::kWhenNoSubject);
+}
+
+Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o_in,
+                                                           bool quiet, SelfCalibrationMode mode,
+                                                           bool save_subject) {
+  runner::AnalysisOptions o = o_in;
+  std::optional<nlohmann::json> self_calibration;
+  if (!o.out_dir.empty() && needs_self_calibration(o, mode)) {
+    DS_ASSIGN_OR_RETURN(self_calibration,
+                        self_calibrate_for_analysis(o, mode, quiet, save_subject));
+  }
+  auto r = with_progress(
+      "analyse", quiet, [&](const auto& progress) { return runner::analyze_session(o, progress); });
+  if (r && self_calibration)
+    DS_RETURN_IF_ERROR(add_self_calibration_to_summary(o.out_dir, *self_calibration));
+  return r;
 }
 
 void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
   cmd.add_option("--subject", flags.subject,
-                 "The child's calibration folder (face_model.yaml, gaze.yaml, speech_model/), or "
-                 "'none'; "
-                 "default: data/subjects/<the session's metadata subject>, if it exists")
-      ->check(CLI::ExistingDirectory | CLI::IsMember({"none"}));
+                 "The child's calibration folder (face_model.yaml, gaze.yaml, speech_model/), "
+                 "'none' (generic face model, built-in gaze constants) or 'auto' (self-calibrate "
+                 "from the session itself); default: data/subjects/<the session's metadata "
+                 "subject> if it exists, else auto")
+      ->check(CLI::ExistingDirectory | CLI::IsMember({"none", "auto"}));
   cmd.add_option("--face-model", flags.face_model,
                  "3-D face model from `dreamsense train face` (overrides the subject's)")
       ->check(CLI::ExistingFile);
@@ -163,7 +193,7 @@ void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
 }
 
 void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o) {
-  if (flags.subject == "none")
+  if (flags.subject == "none" || flags.subject == "auto")
     o.plan.subject_from_session = false;
   else
     o.plan.subject_dir = flags.subject;
@@ -176,8 +206,20 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<AnalyzeFlags>();
   CLI::App* cmd = app.add_subcommand(
       "analyze",
-      "Offline analysis of a recorded session: primitives.jsonl, events.log, dream.json");
-  cmd->add_option("session", flags->session, "Session folder (with session.yaml)")->required();
+      "Offline analysis of a recorded session or of a plain video (a one-camera session made on "
+      "the fly): primitives.jsonl, events.log, dream.json, report.html, summary.json, CSV tables");
+  cmd->add_option("session", flags->session,
+                  "Session folder (with session.yaml), or a video file (.mp4, .avi, ... anything "
+                  "OpenCV/FFmpeg reads; docs/video_input.md)")
+      ->required();
+  cmd->add_option("--calibration", flags->calibration,
+                  "Video input: camera intrinsics (CameraModel YAML from `dreamsense calibrate "
+                  "intrinsics`) instead of the approximate ones (fx = 500 * width / 640)")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--csv", flags->csv,
+                "Also write OUT/tables/: one CSV per primitive, events.csv (docs/outputs.md); "
+                "default: on for a video, off for a session");
+  cmd->add_flag("--no-csv", flags->no_csv, "Do not write the CSV tables")->excludes("--csv");
   cmd->add_option("--out", flags->out,
                   "Output folder (created if needed; required unless --print-pipeline)");
   cmd->add_option("--policy", flags->policy,
@@ -187,10 +229,16 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                 "Print the analysis graph this session gets (streams and roles, analysers in "
                 "order with their inputs, reads, writes and options) and stop");
   add_analysis_flags(*cmd, *flags);
+  cmd->add_flag("--save-subject", flags->save_subject,
+                "When the self-calibration converges, also save it as the session's subject "
+                "folder (data/subjects/<metadata subject>, must not exist) for the next session");
   cmd->callback([flags, &g, &exit_code] {
     runner::AnalysisOptions o;
     o.session_dir = flags->session;
     o.out_dir = flags->out;
+    o.calibration = flags->calibration;
+    if (flags->csv) o.csv = true;
+    if (flags->no_csv) o.csv = false;
     if (auto s = apply_analysis_flags(*flags, o); !s) {
       exit_code = fail(s.error());
       return;
@@ -208,7 +256,8 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       exit_code = fail("analyze: --out DIR is required");
       return;
     }
-    auto r = run_analysis_with_progress(o, g.quiet);
+    auto r = run_analysis_with_progress(o, g.quiet, self_calibration_mode(flags->subject),
+                                        flags->save_subject);
     if (!r) {
       exit_code = fail(r.error());
       return;

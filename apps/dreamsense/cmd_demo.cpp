@@ -1,4 +1,5 @@
-// `dreamsense demo [--out DIR] [--seed N] [--no-analyze]`
+// `dreamsense demo [--out DIR] [--seed N] [--duration S] [--gestures dream|dream6|classic]
+// [--no-analyze]`
 
 #include "dreamsense/runner/analysis.hpp"
 #include "dreamsense/sim/demo_session.hpp"
@@ -16,6 +17,7 @@ struct DemoFlags {
   uint64_t seed = 1;
   double duration_s = 20;
   bool no_analyze = false;
+  std::string gestures = "dream";  // dream (face in view), dream6, classic
 };
 }  // namespace
 
@@ -33,6 +35,13 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       ->capture_default_str()
       ->check(CLI::Range(1.0, 600.0));
   cmd->add_flag("--no-analyze", flags->no_analyze, "Only build the session");
+  cmd->add_option("--gestures", flags->gestures,
+                  "The child's gestures (F20): dream (wave, fly, hands_on_head, drive_car: "
+                  "DREAM's gestures that leave the face in view), dream6 (also cover_eyes and "
+                  "drink: hands over the face) or classic (wave, fly, hands_on_head: the demo "
+                  "before issue 13)")
+      ->check(CLI::IsMember({"dream", "dream6", "classic"}))
+      ->capture_default_str();
   cmd->callback([flags, &g, &exit_code] {
     const std::filesystem::path out =
         flags->out.empty() ? std::filesystem::path("out") / fmt::format("demo-seed-{}", flags->seed)
@@ -42,6 +51,10 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     o.seed = flags->seed;
     o.duration_s = flags->duration_s;
     o.overwrite = true;
+    if (flags->gestures == "classic")
+      o.script.gestures = sim::DemoScriptOptions::GestureSet::kClassic;
+    else if (flags->gestures == "dream6")
+      o.script.gestures = sim::DemoScriptOptions::GestureSet::kDream;
     Result<sim::DemoSummary> demo = with_progress("generate", g.quiet, [&](const auto& progress) {
       return sim::generate_demo_session(o, progress);
     });

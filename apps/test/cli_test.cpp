@@ -178,9 +178,12 @@ TEST_F(Cli, EvalSessionMeasuresTheBodyAgainstTruth) {
   } else {
     EXPECT_TRUE(j["not_evaluated"].contains("face_identity_accuracy"));
   }
-  // Metrics of analysers that do not exist yet stay null with a reason, not zero.
-  EXPECT_TRUE(j["metrics"]["action_accuracy"].is_null());
-  EXPECT_TRUE(j["not_evaluated"].contains("action_accuracy"));
+  // The demo child makes DREAM gestures (issue 13): identifyTrajectory per tick, 0.3 s edge
+  // tolerance, and no gesture reported in rests.
+  ASSERT_TRUE(m["action_accuracy"].is_number());
+  EXPECT_GE(m["action_accuracy"].get<double>(), 0.95);
+  EXPECT_LE(m["action_rest_false_positive_rate"].get<double>(), 0.05);
+  EXPECT_TRUE(m["action_confusion"].is_object());
 }
 
 TEST_F(Cli, SameSeedGivesIdenticalTruthAndAnalysis) {
@@ -482,6 +485,20 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   r = run("-v analyze " + unknown.string() + " --out " + (root() / "y").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("no calibration for subject 'nobody_known'"), std::string::npos) << r.err;
+  // Issue 15: with no subject folder the analysis self-calibrates from the session (the demo's
+  // three calibrated cameras), uses the result and reports it in summary.json.
+  const json summary = json::parse(slurp(root() / "y" / "summary.json"));
+  ASSERT_TRUE(summary.contains("self_calibration")) << summary.dump();
+  const json& sc = summary["self_calibration"];
+  EXPECT_EQ(sc["status"], "converged") << sc.dump();
+  EXPECT_GE(sc["ticks_used"].get<int>(), 12);
+  EXPECT_LT(sc["residual_rms_mm"].get<double>(), 3.0);
+  EXPECT_TRUE(fs::exists(root() / "y" / "self_calibration" / "face_model.yaml"));
+  EXPECT_NE(r.err.find("self_calibration/face_model.yaml"), std::string::npos) << r.err;
+  // `--subject none` keeps the generic model and does not self-calibrate.
+  r = run("analyze " + unknown.string() + " --subject none --out " + (root() / "z").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(json::parse(slurp(root() / "z" / "summary.json")).contains("self_calibration"));
 }
 
 // `train speech --dataset list` adapts the en-us model to a talker (the five cards utterances of

@@ -94,7 +94,9 @@ struct LegacyOf {
   std::optional<std::vector<double>> operator()(const ClassLabelValue& v) const {
     if (r.id == PrimitiveId::kIdentifyTrajectory) {
       std::vector<double> one_hot(12, 0.0);  // 0 none ... 11 custom 5
-      const int id = trajectory_id(v.label);
+      // The value's F20 id (custom gestures carry their own labels, ids 7-11); a label of
+      // DREAM's list when the id is not one; all zeros for a class outside DREAM's list.
+      const int id = v.id >= 0 && v.id < 12 ? v.id : trajectory_id(v.label);
       if (id >= 0) one_hot[static_cast<size_t>(id)] = 1.0;
       return one_hot;
     }

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <unistd.h>
@@ -133,6 +134,23 @@ TEST(DreamExport, FrameAlignedArraysWithNullsAndDreamJointNames) {
   EXPECT_TRUE(j["eye_gaze"]["rx"][0].is_null());
   EXPECT_EQ(j["participant"]["id"], 3);
   EXPECT_EQ(j["skeleton"]["hand_right"]["confidence"].size(), 2u);
+}
+
+// F20 (issue 13): custom gestures carry their own labels; the one-hot follows the value's F20 id.
+TEST(DreamLegacy, TrajectoryOneHotFollowsTheF20Id) {
+  const auto none =
+      legacy_vector(ok(PrimitiveId::kIdentifyTrajectory, ClassLabelValue{"none", 0, {}}));
+  ASSERT_TRUE(none);
+  EXPECT_EQ(*none, (std::vector<double>{1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}));
+  const auto circle =
+      legacy_vector(ok(PrimitiveId::kIdentifyTrajectory, ClassLabelValue{"circle", 8, {}}));
+  ASSERT_TRUE(circle);
+  EXPECT_EQ((*circle)[8], 1) << "second custom trajectory";
+  EXPECT_EQ(std::count(circle->begin(), circle->end(), 1.0), 1);
+  const auto other =
+      legacy_vector(ok(PrimitiveId::kIdentifyTrajectory, ClassLabelValue{"walk", -1, {}}));
+  ASSERT_TRUE(other);
+  EXPECT_EQ(std::count(other->begin(), other->end(), 0.0), 12) << "outside DREAM's classes";
 }
 
 }  // namespace

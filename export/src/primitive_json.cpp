@@ -88,7 +88,9 @@ struct ValueJson {
     return {{"position_m", vec(v.position_m)},
             {"approach_direction", vec(v.approach_direction)},
             {"width_m", v.width_m},
-            {"object_id", v.object_id}};
+            {"object_id", v.object_id},
+            {"closing_axis", vec(v.closing_axis)},
+            {"track_id", v.track_id}};
   }
   json operator()(const HandsValue& v) const {
     return {{"left", opt_vec(v.left)}, {"right", opt_vec(v.right)}};
@@ -110,14 +112,20 @@ struct ValueJson {
                          {"label", o.label},
                          {"position_m", vec(o.position_m)},
                          {"score", o.score},
-                         {"track_id", o.track_id}});
+                         {"track_id", o.track_id},
+                         {"box_px", rect(o.box_px)},
+                         {"detected", o.detected}});
     return {{"objects", objects}};
   }
   json operator()(const ObjectIdentityValue& v) const {
-    return {{"id", v.id}, {"label", v.label}, {"score", v.score}};
+    return {{"id", v.id}, {"label", v.label}, {"score", v.score}, {"track_id", v.track_id}};
   }
   json operator()(const ObjectTableDistanceValue& v) const {
-    return {{"distance_m", v.distance_m}, {"object_id", v.object_id}};
+    return {{"distance_m", v.distance_m},
+            {"object_id", v.object_id},
+            {"lift_m", v.lift_m},
+            {"measured", v.measured},
+            {"track_id", v.track_id}};
   }
   json operator()(const SoundDirectionValue& v) const {
     return {{"azimuth_deg", v.azimuth_deg},
@@ -262,9 +270,13 @@ PrimitiveValue parse_value(PrimitiveId id, const json& v) {
         f.selected_camera = v["selected_camera"].get<std::string>();
       return f;
     }
-    case P::kGetGripLocation:
-      return GripLocationValue{vec3(v.at("position_m")), vec3(v.at("approach_direction")),
-                               v.at("width_m").get<double>(), v.at("object_id").get<int>()};
+    case P::kGetGripLocation: {
+      GripLocationValue g{vec3(v.at("position_m")), vec3(v.at("approach_direction")),
+                          v.at("width_m").get<double>(), v.at("object_id").get<int>()};
+      if (v.contains("closing_axis")) g.closing_axis = vec3(v["closing_axis"]);
+      g.track_id = v.value("track_id", -1);
+      return g;
+    }
     case P::kGetHands:
       return HandsValue{opt_vec3(v.at("left")), opt_vec3(v.at("right"))};
     case P::kGetHead:
@@ -282,15 +294,20 @@ PrimitiveValue parse_value(PrimitiveId id, const json& v) {
     case P::kGetObjects:
     case P::kGetObjectsCircle: {
       ObjectsValue o;
-      for (const auto& j : v.at("objects"))
-        o.objects.push_back({j.at("id").get<int>(), j.at("label").get<std::string>(),
-                             vec3(j.at("position_m")), j.at("score").get<double>(),
-                             j.value("track_id", -1)});
+      for (const auto& j : v.at("objects")) {
+        ObjectValue ov{j.at("id").get<int>(), j.at("label").get<std::string>(),
+                       vec3(j.at("position_m")), j.at("score").get<double>(),
+                       j.value("track_id", -1)};
+        if (j.contains("box_px")) ov.box_px = rect2d(j["box_px"]);
+        ov.detected = j.value("detected", true);
+        o.objects.push_back(std::move(ov));
+      }
       return o;
     }
     case P::kGetObjectTableDistance:
       return ObjectTableDistanceValue{v.at("distance_m").get<double>(),
-                                      v.at("object_id").get<int>()};
+                                      v.at("object_id").get<int>(), v.value("lift_m", 0.0),
+                                      v.value("measured", false), v.value("track_id", -1)};
     case P::kGetSoundDirection: {
       SoundDirectionValue s;
       s.azimuth_deg = v.at("azimuth_deg").get<double>();
@@ -308,7 +325,7 @@ PrimitiveValue parse_value(PrimitiveId id, const json& v) {
                              v.at("scores").get<std::map<std::string, double>>()};
     case P::kIdentifyObject:
       return ObjectIdentityValue{v.at("id").get<int>(), v.at("label").get<std::string>(),
-                                 v.at("score").get<double>()};
+                                 v.at("score").get<double>(), v.value("track_id", -1)};
     case P::kIdentifyVoice:
       return VoiceValue{v.at("speaker_id").get<std::string>(), v.at("name").get<std::string>(),
                         v.at("score").get<double>(),           v.at("start_ns").get<int64_t>(),

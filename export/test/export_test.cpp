@@ -80,7 +80,7 @@ TEST(PrimitiveJson, MalformedRecordsAreErrorsNamingTheMember) {
 namespace dreamsense::exporters {
 namespace {
 
-TEST(HtmlReport, HasStatusTableAndTimelinesOfEnabledPrimitivesOnly) {
+TEST(HtmlReport, HasSummaryAvailabilityAndChartsOfEnabledPrimitivesOnly) {
   HtmlReport report;
   for (int t = 0; t < 10; ++t) {
     primitives::PrimitiveRecord ok, off;
@@ -94,12 +94,23 @@ TEST(HtmlReport, HasStatusTableAndTimelinesOfEnabledPrimitivesOnly) {
   }
   sources::SessionManifest m;
   m.name = "a<b";
-  const std::string html = report.build(m, {"10 ticks"});
+  ReportContext c;
+  c.plan = {{"not_running", {{"face_detection", "no stream with role child_camera"}}}};
+  const std::string html = report.build(m, c);
   EXPECT_NE(html.find("a&lt;b"), std::string::npos) << "escaped";
-  EXPECT_NE(html.find("<td>F3</td><td>getBody</td><td>9</td><td>1</td>"), std::string::npos);
-  EXPECT_NE(html.find("getBody[0]"), std::string::npos);
-  EXPECT_EQ(html.find("getFaces[0]"), std::string::npos) << "no timeline for a disabled one";
-  EXPECT_NE(html.find("<svg"), std::string::npos);
+  EXPECT_NE(html.find("<td>F3</td><td class=\"l\">getBody</td><td>90.0&nbsp;%</td>"
+                      "<td>10.0&nbsp;%</td>"),
+            std::string::npos);
+  EXPECT_NE(html.find("F3 getBody"), std::string::npos) << "a chart of getBody";
+  EXPECT_NE(html.find("position_m.x"), std::string::npos) << "its quantities by name";
+  EXPECT_NE(html.find("metres"), std::string::npos) << "with their unit";
+  EXPECT_EQ(html.find("F7 getFaces"), std::string::npos) << "no chart for a disabled one";
+  EXPECT_NE(html.find("time (s)"), std::string::npos);
+  EXPECT_NE(html.find("no stream with role child_camera"), std::string::npos);
+  EXPECT_EQ(html.find("http"), std::string::npos) << "self-contained";
+  EXPECT_EQ(html.find("Approximate camera intrinsics"), std::string::npos);
+  c.input = {{"kind", "video"}, {"approximate_calibration", true}, {"fx_px", 500.0}};
+  EXPECT_NE(report.build(m, c).find("Approximate camera intrinsics"), std::string::npos);
 }
 
 }  // namespace

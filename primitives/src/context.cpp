@@ -14,6 +14,7 @@ Status EvaluatorOptions::check() const {
   if (!(track_face_dt_s >= 0)) bad += " track_face_dt_s must be >= 0;";
   if (!(track_object_dt_s >= 0)) bad += " track_object_dt_s must be >= 0;";
   if (!(objects_circle_radius_m > 0)) bad += " objects_circle_radius_m must be > 0;";
+  if (!(object_query_radius_m > 0)) bad += " object_query_radius_m must be > 0;";
   const cv::Vec3d n =
       (head_gaze_plane[1] - head_gaze_plane[0]).cross(head_gaze_plane[2] - head_gaze_plane[0]);
   if (!(cv::norm(n) > 1e-9)) bad += " the three head_gaze_plane points are collinear;";

@@ -1,9 +1,11 @@
 #include "dreamsense/primitives/evaluator.hpp"
 
+#include "dreamsense/primitives/actions.hpp"
 #include "dreamsense/primitives/audio.hpp"
 #include "dreamsense/primitives/body.hpp"
 #include "dreamsense/primitives/face.hpp"
 #include "dreamsense/primitives/face_recognition.hpp"  // faces (issue 12): F17, F18
+#include "dreamsense/primitives/objects.hpp"
 
 #include <functional>
 
@@ -37,7 +39,9 @@ const std::vector<PrimitiveSpec>& table() {
        answer(P::kGetEyeGaze, [](const PrimitiveContext& c) { return get_eye_gaze(c); })},
       {P::kGetEyes, {"face.eye_centers"}, answer(P::kGetEyes, get_eyes)},
       {P::kGetFaces, {"face.detections"}, answer(P::kGetFaces, get_faces)},
-      {P::kGetGripLocation, {"objects.detections"}, nullptr},
+      {P::kGetGripLocation,
+       {"objects.table"},
+       answer(P::kGetGripLocation, [](const PrimitiveContext& c) { return get_grip_location(c); })},
       {P::kGetHands, {"body.child"}, answer(P::kGetHands, get_hands)},
       {P::kGetHead, {"face.head_pose"}, answer(P::kGetHead, get_head)},
       {P::kGetHeadGaze, {"face.head_pose"}, answer(P::kGetHeadGaze, get_head_gaze)},
@@ -47,9 +51,18 @@ const std::vector<PrimitiveSpec>& table() {
               [](const PrimitiveContext& c) {
                 return get_head_gaze_plane(c, PlaneQuery{c.options().head_gaze_plane});
               })},
-      {P::kGetObjects, {"objects.detections"}, nullptr},
-      {P::kGetObjectsCircle, {"objects.detections"}, nullptr},
-      {P::kGetObjectTableDistance, {"objects.detections"}, nullptr},
+      {P::kGetObjects, {"objects.table"}, answer(P::kGetObjects, get_objects)},
+      {P::kGetObjectsCircle,
+       {"objects.table"},
+       answer(P::kGetObjectsCircle,
+              [](const PrimitiveContext& c) {
+                return get_objects_in_circle(c, CircleQuery{c.options().objects_circle_centre_m,
+                                                            c.options().objects_circle_radius_m});
+              })},
+      {P::kGetObjectTableDistance,
+       {"objects.table"},
+       answer(P::kGetObjectTableDistance,
+              [](const PrimitiveContext& c) { return get_object_table_distance(c); })},
       {P::kGetSoundDirection,
        {"audio.sound_direction"},
        answer(P::kGetSoundDirection,
@@ -61,8 +74,13 @@ const std::vector<PrimitiveSpec>& table() {
       {P::kIdentifyFaceExpression,
        {"face.expression"},
        answer(P::kIdentifyFaceExpression, identify_face_expression)},
-      {P::kIdentifyObject, {"objects.detections"}, nullptr},
-      {P::kIdentifyTrajectory, {"body.action"}, nullptr},
+      {P::kIdentifyObject,
+       {"objects.table"},
+       answer(P::kIdentifyObject, [](const PrimitiveContext& c) { return identify_object(c); })},
+      {P::kIdentifyTrajectory,
+       {"body.action"},
+       answer(P::kIdentifyTrajectory,
+              [](const PrimitiveContext& c) { return identify_trajectory(c); })},
       {P::kIdentifyVoice, {"audio.speaker"}, answer(P::kIdentifyVoice, identify_voice)},
       {P::kRecognizeSpeech, {"audio.speech"}, answer(P::kRecognizeSpeech, recognize_speech)},
       {P::kTrackFace,
@@ -71,7 +89,9 @@ const std::vector<PrimitiveSpec>& table() {
       {P::kTrackHand,
        {"body.child"},
        answer(P::kTrackHand, [](const PrimitiveContext& c) { return track_hand(c); })},
-      {P::kTrackObject, {"objects.tracks"}, nullptr},
+      {P::kTrackObject,
+       {"objects.table"},
+       answer(P::kTrackObject, [](const PrimitiveContext& c) { return track_object(c); })},
   };
   return kTable;
 }

@@ -3,11 +3,13 @@
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/core/output_file.hpp"
 #include "dreamsense/dream/writers.hpp"
+#include "dreamsense/export/csv_tables.hpp"
 #include "dreamsense/export/overlay.hpp"
 #include "dreamsense/export/report.hpp"
 #include "dreamsense/export/writers.hpp"
 #include "dreamsense/sources/recorder.hpp"
 #include "dreamsense/sources/session.hpp"
+#include "dreamsense/sources/video_file.hpp"
 
 #include <algorithm>
 
@@ -43,7 +45,15 @@ nlohmann::json AnalysisSummary::to_json() const {
           {"stages", stages},
           {"dropped_frames", pipeline.sync.dropped_frames()},
           {"status_counts", status_counts},
-          {"outputs", outs}};
+          {"outputs", outs},
+          {"input", input}};
+}
+
+bool is_video_input(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return false;
+  if (sources::has_video_extension(path)) return true;
+  return fs::is_regular_file(path, ec) && path.filename() != sources::kManifestName;
 }
 
 namespace {
@@ -63,17 +73,46 @@ std::map<SensorId, CameraModel> child_cameras(const PipelinePlan& plan) {
   return out;
 }
 
+// A key frame for the report: the selected camera (getFaces' source, else the first child camera
+// in the tick) with the analysis overlay, 480 pixels wide.
+void add_key_frame(exporters::HtmlReport& report, const MultiFrame& tick,
+                   const BlackboardView& view,
+                   const std::vector<primitives::PrimitiveRecord>& records,
+                   const std::map<SensorId, CameraModel>& cameras) {
+  SensorId camera;
+  for (const auto& r : records)
+    if (r.id == primitives::PrimitiveId::kGetFaces && r.ok()) camera = r.source;
+  if (camera.empty() || tick.frames.count(camera) == 0)
+    for (const auto& [id, frame] : tick.frames)
+      if (cameras.count(id) > 0) {
+        camera = id;
+        break;
+      }
+  auto it = tick.frames.find(camera);
+  if (it == tick.frames.end() || it->second == nullptr) return;
+  const auto* image = it->second->as<ColorImage>();
+  if (image == nullptr || image->image.empty()) return;
+  exporters::OverlayOptions oo;
+  oo.cameras = cameras;
+  const int w = 480;
+  const int h = std::max(2, image->image.rows * w / std::max(1, image->image.cols)) & ~1;
+  report.add_key_frame(tick.stamp, camera,
+                       exporters::draw_overlay(image->image, camera, tick, view, oo, {w, h}));
+}
+
 // Runs the planned analysers over `source` and writes the outputs (options.out_dir).
 // [t0, t1] is the media span for progress (unset for live sources).
 Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan plan,
                                  const sources::SessionManifest& manifest, Source& source,
                                  const PipelineOptions& po, const AnalysisProgress& progress,
                                  Timestamp t0, Timestamp t1, const fs::path& error_dir,
-                                 const std::string& session_name) {
+                                 const std::string& session_name, nlohmann::json input) {
   AnalysisSummary summary;
+  summary.input = std::move(input);
   for (const auto& a : plan.analyzers) summary.analyzers.emplace_back(a->name());
   summary.plan = plan.to_json();
   const auto overlay_cameras = child_cameras(plan);
+  const auto& plan_cameras = overlay_cameras;
   primitives::Evaluator evaluator(options.evaluator, plan.key_sensors, plan.cameras);
   auto pipeline = Pipeline::build(po, source.info(), std::move(plan.analyzers));
   if (!pipeline) return tl::unexpected(pipeline.error());
@@ -83,6 +122,7 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
   dream::EventLogWriter events;
   dream::DreamExport dream_export;
   exporters::HtmlReport report;
+  report.set_span(t0, t1);
   if (write) {
     DS_RETURN_IF_ERROR(jsonl.open(options.out_dir / "primitives.jsonl"));
     DS_RETURN_IF_ERROR(events.open(options.out_dir / "events.log", manifest.clock_origin_unix_ns));
@@ -107,6 +147,8 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
     DS_RETURN_IF_ERROR(jsonl.write(records));
     DS_RETURN_IF_ERROR(events.write(records));
     report.add(records);
+    if (report.wants_key_frame(tick.stamp))
+      add_key_frame(report, tick, view, records, plan_cameras);
     dream_export.add(view, tick.stamp, options.evaluator.freshness);
     return ok_status();
   };
@@ -123,17 +165,28 @@ Result<AnalysisSummary> run_plan(const AnalysisOptions& options, PipelinePlan pl
     DS_RETURN_IF_ERROR(events.commit());
     if (want_overlay) DS_RETURN_IF_ERROR(overlay.commit());
     DS_RETURN_IF_ERROR(dream_export.write(options.out_dir / "dream.json", manifest));
-    std::string names;
-    for (const auto& a : summary.analyzers) names += (names.empty() ? "" : ", ") + a;
     const auto& ps = (*pipeline)->stats();
-    DS_RETURN_IF_ERROR(
-        report.write(options.out_dir / "report.html", manifest,
-                     {fmt::format("{} ticks, {:.1f} s of session time", ps.ticks, ps.media_seconds),
-                      "analysers: " + (names.empty() ? std::string("none") : names)}));
+    exporters::ReportContext rc;
+    rc.input = summary.input;
+    rc.plan = summary.plan;
+    rc.analyzers = summary.analyzers;
+    rc.ticks = ps.ticks;
+    rc.dropped_frames = ps.sync.dropped_frames();
+    rc.wall_seconds = ps.wall_seconds;
+    DS_RETURN_IF_ERROR(report.write(options.out_dir / "report.html", manifest, rc));
     summary.outputs = {options.out_dir / "primitives.jsonl", options.out_dir / "events.log",
                        options.out_dir / "dream.json", options.out_dir / "report.html",
                        options.out_dir / "summary.json"};
     if (want_overlay) summary.outputs.push_back(options.out_dir / "overlay.mp4");
+    if (options.csv.value_or(summary.input.value("kind", "") == "video")) {
+      exporters::CsvTablesOptions co;
+      co.approximate_calibration = summary.input.value("approximate_calibration", false);
+      if (summary.input.value("kind", "") == "video") co.mutual_gaze_target = "the camera";
+      auto tables = exporters::write_csv_tables(options.out_dir / "primitives.jsonl",
+                                                options.out_dir / "tables", co);
+      if (!tables) return tl::unexpected(tables.error());
+      for (const auto& t : *tables) summary.outputs.push_back(t);
+    }
     OutputFile f;
     DS_RETURN_IF_ERROR(f.open(options.out_dir / "summary.json"));
     nlohmann::json sj = summary.to_json();
@@ -151,10 +204,62 @@ PipelineOptions pipeline_options(const sources::SessionManifest& manifest) {
   return po;
 }
 
+// A plain video: its one-camera session, and the plan options with its assumed intrinsics.
+struct VideoPlan {
+  std::unique_ptr<sources::VideoFileSource> source;
+  PlanOptions plan;
+};
+
+Result<VideoPlan> open_video(const AnalysisOptions& options) {
+  sources::VideoFileOptions vo;
+  vo.calibration = options.calibration;
+  VideoPlan v;
+  DS_ASSIGN_OR_RETURN(v.source, sources::VideoFileSource::open(options.session_dir, vo));
+  const sources::VideoFileInfo& info = v.source->video();
+  v.plan = options.plan;
+  v.plan.absolute_paths_allowed = true;  // the stream's file is the video's absolute path
+  if (info.approximate_calibration) v.plan.assumed_cameras[sources::kVideoStreamId] = info.camera;
+  return v;
+}
+
+nlohmann::json video_input_json(const sources::VideoFileInfo& v) {
+  return {{"kind", "video"},
+          {"path", v.path.string()},
+          {"width", v.width},
+          {"height", v.height},
+          {"nominal_fps", v.nominal_fps},
+          {"container_frames", v.frame_count},
+          {"codec", v.codec},
+          {"calibration", v.manifest.metadata.at("calibration")},
+          {"approximate_calibration", v.approximate_calibration},
+          {"fx_px", v.camera.K(0, 0)},
+          {"audio", v.audio}};
+}
+
+Result<AnalysisSummary> analyze_video(const AnalysisOptions& options,
+                                      const AnalysisProgress& progress) {
+  DS_ASSIGN_OR_RETURN(VideoPlan v, open_video(options));
+  const sources::VideoFileInfo& info = v.source->video();
+  auto plan = plan_pipeline(v.plan, info.manifest, info.path.parent_path());
+  if (!plan) return tl::unexpected(plan.error());
+  if (!options.out_dir.empty()) DS_RETURN_IF_ERROR(ensure_writable_dir(options.out_dir));
+  PipelineOptions po = pipeline_options(info.manifest);
+  po.sync.policy = options.policy;
+  po.sync.start = Timestamp::from_ns(0);
+  po.pace_source = options.pace_source;
+  const SourceInfo si = v.source->info();
+  return run_plan(options, std::move(*plan), info.manifest, *v.source, po, progress, si.start,
+                  si.end, fs::path(), info.path.string(), video_input_json(info));
+}
+
 }  // namespace
 
 Result<PipelinePlan> plan_session(const AnalysisOptions& options) {
   DS_RETURN_IF_ERROR(options.check());
+  if (is_video_input(options.session_dir)) {
+    DS_ASSIGN_OR_RETURN(VideoPlan v, open_video(options));
+    return plan_pipeline(v.plan, v.source->video().manifest, v.source->video().path.parent_path());
+  }
   auto manifest = sources::read_manifest(options.session_dir);
   if (!manifest) return tl::unexpected(in_session(manifest.error(), options.session_dir));
   auto plan = plan_pipeline(options.plan, *manifest, options.session_dir);
@@ -165,6 +270,25 @@ Result<PipelinePlan> plan_session(const AnalysisOptions& options) {
 Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
                                         const AnalysisProgress& progress) {
   DS_RETURN_IF_ERROR(options.check());
+  if (is_video_input(options.session_dir)) return analyze_video(options, progress);
+  if (std::error_code ec; fs::is_directory(options.session_dir, ec) &&
+                          !fs::exists(options.session_dir / sources::kManifestName, ec)) {
+    // A folder of recordings is batch's job; say so instead of "session.yaml missing".
+    int videos = 0;
+    for (const auto& e : fs::directory_iterator(options.session_dir, ec))
+      videos += e.is_regular_file(ec) && sources::has_video_extension(e.path());
+    if (videos > 0)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "{}: a folder of {} videos, not a session (no {}): analyse each with "
+                        "`dreamsense batch {} --out DIR`",
+                        options.session_dir.string(), videos, sources::kManifestName,
+                        options.session_dir.string());
+  }
+  if (!options.calibration.empty())
+    return make_error(ErrorCode::kInvalidArgument,
+                      "--calibration applies to a video input; {} is a session (its calibrations "
+                      "are in session.yaml)",
+                      options.session_dir.string());
 
   // Validate the whole session first (every stream, even those no analyser reads yet), so a
   // damaged recording is reported before any output is written.
@@ -190,7 +314,8 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   po.sync.start = full_info.start;  // ticks on the session clock, whatever streams are read
   po.pace_source = options.pace_source;
   return run_plan(options, std::move(*plan), manifest, **reader, po, progress, full_info.start,
-                  full_info.end, options.session_dir, fs::absolute(options.session_dir).string());
+                  full_info.end, options.session_dir, fs::absolute(options.session_dir).string(),
+                  {{"kind", "session"}, {"path", fs::absolute(options.session_dir).string()}});
 }
 
 Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
@@ -208,7 +333,7 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   po.sync.policy = SyncPolicy::kLatestWithinTolerance;
   po.pace_source = false;  // the devices deliver in real time
   return run_plan(options, std::move(*plan), manifest, capture, po, nullptr, Timestamp::unset(),
-                  Timestamp::unset(), fs::path("live"), manifest.name);
+                  Timestamp::unset(), fs::path("live"), manifest.name, {{"kind", "live"}});
 }
 
 }  // namespace dreamsense::runner

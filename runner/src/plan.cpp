@@ -69,7 +69,8 @@ Result<SubjectFiles> subject_files(const PlanOptions& options,
 
 // The streams as the factories see them: roles, and camera models read from the calibrations.
 Result<std::vector<StreamDescription>> describe_streams(const sources::SessionManifest& manifest,
-                                                        const fs::path& dir) {
+                                                        const fs::path& dir,
+                                                        const PlanOptions& options) {
   auto roles = sources::stream_roles(manifest);
   if (!roles) return tl::unexpected(roles.error());
   std::vector<StreamDescription> out;
@@ -95,6 +96,9 @@ Result<std::vector<StreamDescription>> describe_streams(const sources::SessionMa
         else
           log::warn("depth stream '{}': {}", s.id, m.error().message);
       }
+    } else if (auto a = options.assumed_cameras.find(s.id); a != options.assumed_cameras.end()) {
+      d.camera = a->second;
+      d.approximate_calibration = true;
     }
     out.push_back(std::move(d));
   }
@@ -144,7 +148,7 @@ Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
 
   PipelinePlan plan;
   plan.config = config.file.empty() ? "defaults" : config.file.string();
-  DS_ASSIGN_OR_RETURN(plan.streams, describe_streams(manifest, dir));
+  DS_ASSIGN_OR_RETURN(plan.streams, describe_streams(manifest, dir, options));
   DS_ASSIGN_OR_RETURN(plan.subject, subject_files(options, manifest));
   PlanContext ctx;
   ctx.streams = plan.streams;
@@ -237,12 +241,13 @@ std::string PipelinePlan::describe() const {
   for (const auto& s : streams) {
     std::string roles_text;
     for (const auto& r : s.roles) roles_text += (roles_text.empty() ? "" : ", ") + r;
-    out += fmt::format("  {:<16} {:<9} role {:<22} {}{}\n", s.id, to_string(s.kind),
-                       roles_text.empty() ? "-" : roles_text,
-                       s.calibration_file.empty()
-                           ? "no calibration"
-                           : "calibration " + s.calibration_file.filename().string(),
-                       s.approximate_calibration ? " (approximate)" : "");
+    out += fmt::format(
+        "  {:<16} {:<9} role {:<22} {}{}\n", s.id, to_string(s.kind),
+        roles_text.empty() ? "-" : roles_text,
+        s.approximate_calibration    ? "approximate intrinsics from the image size (no calibration)"
+        : s.calibration_file.empty() ? "no calibration"
+                                     : "calibration " + s.calibration_file.filename().string(),
+        "");
   }
   out += "\nanalysers, in execution order:\n";
   int n = 0;
@@ -304,6 +309,10 @@ nlohmann::json PipelinePlan::to_json() const {
   nlohmann::json roles = nlohmann::json::object();
   for (const auto& s : streams) roles[s.id] = s.roles;
   j["roles"] = roles;
+  nlohmann::json approximate = nlohmann::json::array();
+  for (const auto& s : streams)
+    if (s.approximate_calibration) approximate.push_back(s.id);
+  if (!approximate.empty()) j["approximate_calibration"] = approximate;
   return j;
 }
 

@@ -147,6 +147,8 @@ std::vector<ActionSegment> make_action_schedule(uint64_t seed, double duration_s
   std::vector<DemoAction> order = {DemoAction::kWave, DemoAction::kFly, DemoAction::kHandsOnHead};
   if (set == DemoScriptOptions::GestureSet::kDream)
     order.insert(order.end(), {DemoAction::kCoverEyes, DemoAction::kDriveCar, DemoAction::kDrink});
+  if (set == DemoScriptOptions::GestureSet::kDreamFaceVisible)
+    order.push_back(DemoAction::kDriveCar);
   for (size_t i = order.size() - 1; i > 0; --i)  // Fisher-Yates with our own draws (portable)
     std::swap(order[i], order[static_cast<size_t>(rng() % (i + 1))]);
   std::vector<ActionSegment> out;

@@ -550,6 +550,53 @@ class Generator {
 
 // ---------------------------------------------------------------- truth
 
+// ---- Hands in front of the eyes (issue 13: the DREAM gestures cover_eyes and drink) ----
+// The truth must not claim a face is visible, or a gaze meets the robot, through the child's
+// hands: a line of sight is blocked when it passes through a forearm or hand capsule (the same
+// capsules, radii included, that dynamic_scene renders).
+
+// Distance between the segments [p0, p1] and [q0, q1].
+double segment_distance(const cv::Vec3d& p0, const cv::Vec3d& p1, const cv::Vec3d& q0,
+                        const cv::Vec3d& q1) {
+  const cv::Vec3d d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.dot(d1), e = d2.dot(d2), f = d2.dot(r);
+  double s = 0, u = 0;
+  if (a <= 1e-12 && e <= 1e-12) return cv::norm(r);
+  if (a <= 1e-12) {
+    u = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 1e-12) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2), den = a * e - b * b;
+      s = den > 1e-12 ? std::clamp((b * f - c * e) / den, 0.0, 1.0) : 0.0;
+      u = (b * s + f) / e;
+      if (u < 0) {
+        u = 0, s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (u > 1) {
+        u = 1, s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  return cv::norm((p0 + d1 * s) - (q0 + d2 * u));
+}
+
+// True when the line of sight from `eye` to `target` passes through a forearm or a hand.
+bool hands_block(const std::array<cv::Vec3d, kJointCount>& j, const cv::Vec3d& eye,
+                 const cv::Vec3d& target) {
+  auto J = [&](JointId id) { return j[static_cast<size_t>(id)]; };
+  for (bool left : {true, false}) {
+    const JointId e = left ? JointId::kElbowLeft : JointId::kElbowRight;
+    const JointId w = left ? JointId::kWristLeft : JointId::kWristRight;
+    const JointId h = left ? JointId::kHandLeft : JointId::kHandRight;
+    if (segment_distance(eye, target, J(e), J(w)) < 0.03 ||
+        segment_distance(eye, target, J(w), J(h)) < 0.033)
+      return true;
+  }
+  return false;
+}
+
 json face_record(const Generator& gen, int64_t stamp) {
   const DemoScript& s = gen.script();
   const DemoGeometry& g = s.geometry();
@@ -562,7 +609,11 @@ json face_record(const Generator& gen, int64_t stamp) {
   const cv::Vec3d gaze = hp.gaze_dir();
   const cv::Vec3d eye_gaze = eyes.gaze_dir();
   const cv::Vec3d eye_mid = eyes.eye_midpoint();
-  const bool mutual = ray_point_distance(eye_mid, eye_gaze, g.robot_head_m) <= g.gaze_radius_m;
+  // Eye contact needs a line of sight: none while the hands cover both eyes from the robot.
+  const auto joints = s.joints(t);
+  const bool mutual =
+      ray_point_distance(eye_mid, eye_gaze, g.robot_head_m) <= g.gaze_radius_m &&
+      !(hands_block(joints, left, g.robot_head_m) && hands_block(joints, right, g.robot_head_m));
   json cams = json::object();
   std::string best;
   double best_yaw = 1e9;
@@ -574,8 +625,11 @@ json face_record(const Generator& gen, int64_t stamp) {
     const double facing = gaze.dot(to_cam) / cv::norm(to_cam);
     const auto pl = cam.project(left), pr = cam.project(right);
     const cv::Rect2d img(0, 0, cam.image_size.width, cam.image_size.height);
-    bool visible =
-        facing > std::cos(75 * CV_PI / 180) && pl && pr && img.contains(*pl) && img.contains(*pr);
+    // Hidden: the hands cover both pupils from this camera (the face is not visible then).
+    const bool hidden = hands_block(joints, left, cam.centre_world()) &&
+                        hands_block(joints, right, cam.centre_world());
+    bool visible = facing > std::cos(75 * CV_PI / 180) && pl && pr && img.contains(*pl) &&
+                   img.contains(*pr) && !hidden;
     json rec;
     json box = nullptr;
     std::vector<cv::Point2d> pts;
@@ -590,6 +644,7 @@ json face_record(const Generator& gen, int64_t stamp) {
       box = json::array({q(x0, 1e3), q(y0, 1e3), q(x1 - x0, 1e3), q(y1 - y0, 1e3)});
     }
     rec["visible"] = visible;
+    rec["eyes_hidden"] = hidden;
     rec["box"] = box;
     rec["yaw_deg"] = q(yaw_rel, 1e4);
     rec["eyes_px"] = json{{"left", pl ? px_json(*pl) : json(nullptr)},
@@ -1027,6 +1082,10 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       r["type"] = "skeleton";
       r["stamp_ns"] = s;
       r["joints"] = skeleton_json(script.joints(static_cast<double>(s) * 1e-9));
+      // The gesture the child performs in this skeleton frame (F20 label and id, per frame).
+      const ActionSegment& seg = script.segment_at(static_cast<double>(s) * 1e-9);
+      r["action"] = script.segment_label(seg);
+      r["action_id"] = script.segment_dream_id(seg);
       truth.push_back({{s, 2}, r});
     }
     const CameraModel& top = gen.cameras()[5];

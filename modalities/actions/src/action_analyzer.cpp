@@ -32,6 +32,7 @@ class ActionAnalyzer : public Analyzer {
     s.scores = r.scores;
     s.ready = r.ready;
     s.custom = r.custom;
+    s.window_s = classifier_.window_s();
     double confidence = 0;
     for (const auto& [label, score] : r.scores)
       if (label == r.label) confidence = std::max(confidence, score);
@@ -50,6 +51,10 @@ class ActionAnalyzer : public Analyzer {
 };
 
 }  // namespace
+
+std::filesystem::path default_action_model_path() {
+  return std::filesystem::path(DREAMSENSE_ACTIONS_MODELS_DIR) / "dream_gestures.yaml";
+}
 
 Status ActionAnalyzerOptions::check() const {
   if (model.empty() && gestures.empty())

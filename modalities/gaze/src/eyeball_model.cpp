@@ -17,6 +17,23 @@ Status EyeballModel::check() const {
   return ok_status();
 }
 
+Status AnatomicalEyeOptions::check() const {
+  if (!(centre_depth_m > 0 && centre_depth_m < 0.03 && radius_m > 0.003 && radius_m < 0.025 &&
+        std::abs(pupil_above_opening_m) < 0.005))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "AnatomicalEyeOptions: centre_depth_m must be in (0, 30) mm, radius_m in "
+                      "(3, 25) mm and |pupil_above_opening_m| < 5 mm");
+  return ok_status();
+}
+
+EyeballModel anatomical_eyeball(const cv::Vec3d& opening_centroid_head_m,
+                                const AnatomicalEyeOptions& options) {
+  // Head frame: y down, z backwards.
+  return {opening_centroid_head_m +
+              cv::Vec3d(0, -options.pupil_above_opening_m, options.centre_depth_m),
+          options.radius_m};
+}
+
 HeadRay pixel_ray_head(const cv::Point2d& px, const CameraModel& camera,
                        const cv::Matx33d& camera_from_head,
                        const cv::Vec3d& head_position_camera_m) {

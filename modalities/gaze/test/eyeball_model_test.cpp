@@ -120,5 +120,28 @@ TEST(GazeModelFile, EyeballsRoundTripAndMustComeInPairs) {
   std::filesystem::remove_all(dir);
 }
 
+// Issue 15: the anatomical eyeball sits behind the eye opening (head +z), slightly raised, and
+// a pupil seen straight ahead on it reads as looking along the head's -z.
+TEST(AnatomicalEyeball, BehindTheOpeningAndStraightAhead) {
+  const cv::Vec3d opening(0.031, 0.0, 0.0);
+  const AnatomicalEyeOptions o;
+  ASSERT_TRUE(o.check());
+  const EyeballModel e = anatomical_eyeball(opening, o);
+  ASSERT_TRUE(e.check());
+  EXPECT_NEAR(e.centre_head_m[2], 0.0115, 1e-12);
+  EXPECT_NEAR(e.centre_head_m[1], -0.0005, 1e-12);  // y down: raised
+  EXPECT_NEAR(e.radius_m, 0.0105, 1e-12);
+  // A camera 1 m in front sees the pupil at the front of the sphere: direction -z.
+  const cv::Vec3d pupil = e.centre_head_m + cv::Vec3d(0, 0, -e.radius_m);
+  const cv::Vec3d cam(0.031, -0.0005, -1.0);
+  const HeadRay ray{cam, cv::normalize(pupil - cam)};
+  auto d = eyeball_direction(ray, e);
+  ASSERT_TRUE(d);
+  EXPECT_LT(cv::norm(*d - cv::Vec3d(0, 0, -1)), 1e-6);
+  AnatomicalEyeOptions bad;
+  bad.radius_m = 0.05;
+  EXPECT_FALSE(bad.check());
+}
+
 }  // namespace
 }  // namespace dreamsense::gaze

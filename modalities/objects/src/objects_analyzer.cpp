@@ -4,6 +4,8 @@
 
 #include "dreamsense/core/log.hpp"
 
+#include <algorithm>
+
 namespace dreamsense::objects {
 
 Status ObjectsAnalyzerOptions::check() const {
@@ -15,7 +17,54 @@ Status ObjectsAnalyzerOptions::check() const {
   if (camera_model) {
     if (auto s = camera_model->check(); !s) return s;
   }
+  if (!(trajectory_s >= 0))
+    return make_error(ErrorCode::kInvalidArgument, "objects analyser: trajectory_s must be >= 0");
+  DS_RETURN_IF_ERROR(grip.check());
   return objects.check();
+}
+
+TableObjects to_table_objects(const std::vector<ObjectState>& states,
+                              const std::optional<geometry::Plane>& table,
+                              const TableTopObjects& tracks, const ObjectsAnalyzerOptions& o) {
+  TableObjects out;
+  out.camera = o.camera;
+  if (table) out.table = TablePlane{table->normal, table->offset};
+  out.objects.reserve(states.size());
+  for (const ObjectState& s : states) {
+    TableObject t;
+    t.track_id = s.track_id;
+    t.id = s.id;
+    t.label = s.label;
+    t.id_score = s.id_score;
+    t.stamp = Timestamp::from_ns(s.stamp_ns);
+    t.box_px = s.box;
+    t.position_m = s.position_m;
+    t.axis_m = s.axis_m;
+    t.velocity_mps = s.velocity_mps;
+    t.size_m = s.size_m;
+    t.detected = s.detected;
+    t.missing_frames = s.missing_frames;
+    if (table && s.position_m) {
+      // Heights are measured only when the position came from depth; today it assumes the toy
+      // rests on the table (README, "Not done").
+      if (auto d = table_distance(s, *table, false)) {
+        t.height_m = d->top_m;
+        t.lift_m = d->lift_m;
+        t.height_measured = d->measured;
+      }
+      if (auto g = grip_location(s, *table, o.grip))
+        t.grip = ObjectGrip{g->point_m, g->approach, g->closing_axis, g->opening_m};
+    }
+    const auto& history = tracks.history(s.track_id);
+    const int64_t since = s.stamp_ns - static_cast<int64_t>(o.trajectory_s * 1e9);
+    for (const ObjectState& h : history)
+      if (h.stamp_ns >= since && h.position_m)
+        t.trajectory.push_back({Timestamp::from_ns(h.stamp_ns), *h.position_m, h.detected});
+    out.objects.push_back(std::move(t));
+  }
+  std::sort(out.objects.begin(), out.objects.end(),
+            [](const TableObject& a, const TableObject& b) { return a.track_id < b.track_id; });
+  return out;
 }
 
 Result<std::unique_ptr<ObjectsAnalyzer>> ObjectsAnalyzer::create(
@@ -40,7 +89,7 @@ AnalyzerContract ObjectsAnalyzer::contract() const {
   AnalyzerContract c;
   c.required_inputs = {o_.camera};
   if (o_.depth) c.optional_inputs = {*o_.depth};
-  c.writes = {kTableObjectsKey.name};
+  c.writes = {keys::kTableObjects.name};
   return c;
 }
 
@@ -78,8 +127,7 @@ Status ObjectsAnalyzer::process(const MultiFrame& in, const BlackboardView&,
     return make_error(ErrorCode::kInvalidArgument, "objects: {} frames must be BGR", o_.camera);
   auto states = pipeline_->process(img->image, f->stamp.ns());
   if (!states) return tl::unexpected(states.error());
-  TableObjects value{std::move(*states), table_, o_.camera};
-  out.set(kTableObjectsKey, std::move(value), f->stamp, 1.f);
+  out.set(keys::kTableObjects, to_table_objects(*states, table_, *pipeline_, o_), f->stamp, 1.f);
   return ok_status();
 }
 

@@ -59,7 +59,7 @@ TEST(ObjectsAnalyzer, WritesTheToysOnceThePlaneIsKnown) {
     ASSERT_TRUE((*a)->process(tick(k, &img, k == 0 ? &depth : nullptr), board.snapshot(), w));
     board.commit(w, Timestamp::from_ns(k * 40'000'000LL));
   }
-  auto e = board.snapshot().get(kTableObjectsKey);
+  auto e = board.snapshot().get(keys::kTableObjects);
   ASSERT_TRUE(e && e->present());
   ASSERT_TRUE(e->value->table);
   EXPECT_NEAR(e->value->table->offset, 0.30, 0.005);

@@ -51,6 +51,8 @@ struct EvaluatorOptions {
   // Default query of getObjects (circle), F14: a circle on the table (world, m).
   cv::Vec3d objects_circle_centre_m{0, 0.3, 0.6};
   double objects_circle_radius_m = 0.15;
+  // F8, F15, F19, F25 with a position: the object nearest to it, if within this distance.
+  double object_query_radius_m = 0.15;
   Status check() const;
 };
 

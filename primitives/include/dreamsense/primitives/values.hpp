@@ -92,12 +92,14 @@ struct FacesValue {
   std::optional<SensorId> selected_camera;
 };
 
-// F8 getGripLocation.
+// F8 getGripLocation (the rule: modalities/objects/README.md).
 struct GripLocationValue {
   cv::Vec3d position_m{0, 0, 0};
   cv::Vec3d approach_direction{0, -1, 0};  // unit, world: the direction the gripper moves in
   double width_m = 0;                      // opening the grip needs
   int object_id = -1;
+  cv::Vec3d closing_axis{1, 0, 0};  // unit, world: the fingers close along it
+  int track_id = -1;
 };
 
 // F9 getHands.
@@ -131,23 +133,29 @@ struct HeadGazePlaneValue {
 struct ObjectValue {
   int id = -1;
   std::string label;
-  cv::Vec3d position_m{0, 0, 0};
-  double score = 0;
+  cv::Vec3d position_m{0, 0, 0};  // top face centre
+  double score = 0;               // identification agreement of the track
   int track_id = -1;
+  cv::Rect2d box_px;     // in the table camera's image (the record's source)
+  bool detected = true;  // false: carried by the visual tracker (e.g. under a hand)
 };
 struct ObjectsValue {
-  std::vector<ObjectValue> objects;
+  std::vector<ObjectValue> objects;  // getObjects: by track id; circle: nearest first
 };
 struct ObjectIdentityValue {
   int id = -1;
   std::string label;
   double score = 0;
+  int track_id = -1;
 };
 
 // F15 getObjectTableDistance.
 struct ObjectTableDistanceValue {
-  double distance_m = 0;  // above the table plane (positive up)
+  double distance_m = 0;  // of the object's position (top face centre) above the table plane
   int object_id = -1;
+  double lift_m = 0;      // of its bottom (0: resting on the table)
+  bool measured = false;  // false: the position assumed the toy rests on the table (no depth)
+  int track_id = -1;
 };
 
 // F16 getSoundDirection.

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 
 namespace dreamsense::sources {
@@ -22,7 +23,14 @@ class LiveCapture;
 namespace dreamsense::runner {
 
 struct AnalysisOptions {
+  // A session folder, or a plain video file (is_video_input): a one-camera session made on the
+  // fly (sources/video_file.hpp, docs/video_input.md).
   std::filesystem::path session_dir;
+  // Video input only: a CameraModel file replacing the approximate intrinsics.
+  std::filesystem::path calibration;
+  // Also write the CSV tables (export/csv_tables.hpp, docs/outputs.md). Unset: on for a video,
+  // off for a session.
+  std::optional<bool> csv;
   std::filesystem::path out_dir;             // empty: run without writing outputs (benchmarks)
   SyncPolicy policy = SyncPolicy::kSettled;  // replay: settled (deterministic)
   bool pace_source = true;                   // live policy only
@@ -45,10 +53,17 @@ struct AnalysisSummary {
   nlohmann::json plan;                 // PipelinePlan::to_json()
   std::map<std::string, std::map<std::string, int>> status_counts;  // primitive -> status -> n
   std::vector<std::filesystem::path> outputs;
+  // What was analysed: {"kind": "session"|"video", ...; for a video its size, frame rate,
+  // frames, codec, "calibration" ("approximate" or the file), "approximate_calibration", "audio"}.
+  nlohmann::json input;
   nlohmann::json to_json() const;
 };
 
 using AnalysisProgress = std::function<void(double fraction)>;
+
+// True when `path` is analysed as a plain video: not a folder, and a file with a video extension
+// (or any existing file other than session.yaml).
+bool is_video_input(const std::filesystem::path& path);
 
 Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
                                         const AnalysisProgress& progress = nullptr);

@@ -1,8 +1,8 @@
 #pragma once
 // `dreamsense eval objects SESSION`: the table-top toys of a session that has ground truth
 // (truth.jsonl `object` records, e.g. any demo seed) against what modalities/objects finds in its
-// top camera. The measurement `eval session` will report as object_position_median_m,
-// object_track_mean_iou and object_identification_accuracy once the analyser is wired in.
+// top camera alone, at every top frame (`eval session` reports the same measurement of a whole
+// analysis as object_position_median_m, object_track_mean_iou, object_identification_accuracy).
 //
 // Per top-camera frame and truth toy, the output toy whose box overlaps the truth box most
 // (IoU > 0) is its match. object_track_mean_iou = mean IoU over all (frame, toy) pairs (0 when

@@ -1,37 +1,18 @@
 #pragma once
 // Actions analyser (F20 identifyTrajectory): a thin adapter that feeds the child's body
 // (keys::kChildBody, written by the body analyser earlier in the same tick) to the online
-// classifier and writes the answer. Not wired into the runner yet: the blackboard type lives
-// here until the perception/ layer takes it (issue 19).
+// classifier and writes the answer (keys::kChildAction, perception/actions.hpp). Registered with
+// the declared pipeline in src/register.cpp.
 
 #include "dreamsense/actions/online.hpp"
 #include "dreamsense/core/analyzer.hpp"
+#include "dreamsense/perception/actions.hpp"
 #include "dreamsense/perception/body.hpp"
 
 #include <filesystem>
 #include <memory>
-#include <string>
-#include <utility>
-#include <vector>
 
-namespace dreamsense {
-
-// The child's body action over the last window. `label` is "none" when nothing matches, the
-// window is not full yet, or the child is not in view.
-struct ActionState {
-  std::string label = "none";
-  int dream_id = 0;  // F20 index: 0 none, 1 wave, 2 cover_eyes, 3 hands_on_head, 4 fly,
-                     // 5 drive_car, 6 drink, 7-11 custom gestures; -1 outside DREAM's classes
-  std::vector<std::pair<std::string, double>> scores;  // per class
-  bool ready = false;                                  // a full window was classified
-  bool custom = false;                                 // from the custom-gesture model
-};
-
-namespace keys {
-inline constexpr Key<ActionState> kChildAction{"body.action"};
-}  // namespace keys
-
-namespace actions {
+namespace dreamsense::actions {
 
 struct ActionAnalyzerOptions {
   // Shipped DREAM-gesture model (modalities/actions/models/dream_gestures.yaml) or any model of
@@ -49,5 +30,7 @@ Result<std::unique_ptr<Analyzer>> make_action_analyzer(std::shared_ptr<const Act
                                                        std::shared_ptr<const GestureModel> gestures,
                                                        const OnlineOptions& online = {});
 
-}  // namespace actions
-}  // namespace dreamsense
+// The shipped DREAM-gesture model (modalities/actions/models/dream_gestures.yaml).
+std::filesystem::path default_action_model_path();
+
+}  // namespace dreamsense::actions

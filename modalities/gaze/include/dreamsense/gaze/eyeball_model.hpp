@@ -39,6 +39,27 @@ HeadRay pixel_ray_head(const cv::Point2d& px, const CameraModel& camera,
 // ray point nearest the centre; nullopt only for a degenerate ray.
 std::optional<cv::Vec3d> eyeball_direction(const HeadRay& pupil_ray, const EyeballModel& eye);
 
+// An eyeball from anatomy, with no calibration (issue 15, README.md "Gaze without known
+// targets"): the centre of rotation lies `centre_depth_m` behind the centroid of the eye opening
+// (the six lid/canthus landmarks 36-41 or 42-47, in the head frame) along the head's optical
+// direction (+z: the eye at rest looks along the head's -z), and the pupil lies `radius_m` from
+// it. Defaults from the literature: centre of rotation 13.5 mm behind the corneal apex (Fry &
+// Hill 1962), entrance pupil 3.0 mm behind the apex (Le Grand's schematic eye), so centre to
+// pupil 10.5 mm; the lid opening's centroid taken 2 mm behind the apex (lids rest on the globe
+// at the limbus), so the centre 11.5 mm behind it. Vertically the pupil at rest sits above the
+// middle of the opening: upper lid margin 4-4.5 mm above it, lower 5-5.5 mm below (the margin
+// reflex distances MRD1/MRD2 of the oculoplastic literature), so the six-point centroid
+// (two upper-lid points, two lower-lid points, two canthi near pupil height) lies about 0.5 mm
+// below the pupil.
+struct AnatomicalEyeOptions {
+  double centre_depth_m = 0.0115;
+  double radius_m = 0.0105;
+  double pupil_above_opening_m = 0.0005;
+  Status check() const;
+};
+EyeballModel anatomical_eyeball(const cv::Vec3d& opening_centroid_head_m,
+                                const AnatomicalEyeOptions& options = {});
+
 struct EyeballSample {
   HeadRay pupil_ray;
   cv::Vec3d truth_direction;  // unit, head frame

@@ -25,7 +25,10 @@ struct TablePlaneFitOptions {
   int pixel_step = 4;  // use every n-th pixel in x and y
   double min_depth_m = 0.3, max_depth_m = 3.0;
   double inlier_distance_m = 0.01;  // RANSAC inlier band
-  int iterations = 300;
+  int iterations = 600;
+  // Every other RANSAC draw takes its second and third points within this many pixels of the
+  // first (0: every draw from the whole image).
+  int neighbourhood_px = 64;
   // Prior on the table normal (world, pointing up, i.e. towards the camera side): the plane's
   // normal must be within `max_normal_angle_deg` of it. Unset: the direction from the scene to
   // the camera that took the depth (-optical axis), right for a top sensor looking down; for a

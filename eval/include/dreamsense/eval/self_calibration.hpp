@@ -1,0 +1,57 @@
+#pragma once
+// Self-calibration of a session (issue 15): the child's 3-D face model and anatomical eyeballs
+// from the first seconds of the session itself, with no truth and no calibration recording.
+// Every `tick_step`-th tick of the first `max_seconds` is searched for the face in every
+// calibrated colour camera (OpenCV cascade on the full frame, dlib's 68 landmarks);
+// head_pose::self_calibrate_face triangulates and aligns the ticks; gaze::anatomical_eyeball
+// places the eyeballs behind the triangulated eye openings. The result is written as a subject
+// folder (face_model.yaml, gaze.yaml, self_calibration.json) that `analyze` uses like one from
+// `train face` / `train gaze`. With fewer than two cameras seeing the face, or an inconsistent
+// result, nothing is written but the status and its reason (the analysis then falls back to the
+// generic face model and the built-in gaze constants, and says so).
+
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/gaze/eyeball_model.hpp"
+#include "dreamsense/head_pose/self_calibration.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace dreamsense::eval {
+
+struct SessionSelfCalibrationOptions {
+  double max_seconds = 10;  // of session time searched from the first frame
+  int tick_step = 2;        // every n-th tick
+  int enough_frames = 60;   // stop once this many ticks had the face in two or more cameras
+  // Colour streams used; empty = every calibrated colour stream with the role child_camera.
+  std::vector<std::string> cameras;
+  head_pose::SelfCalibrationOptions face;
+  gaze::AnatomicalEyeOptions eyes;
+  Status check() const;
+};
+
+struct SessionSelfCalibration {
+  head_pose::SelfCalibration face;
+  int cameras = 0;  // calibrated colour streams searched
+  int ticks_searched = 0;
+  int views_with_landmarks = 0;
+  double seconds_searched = 0;                     // of session time
+  double cpu_s = 0;                                // process CPU time of the self-calibration
+  gaze::EyeballModel right_eyeball, left_eyeball;  // valid when face.converged()
+  std::string session;
+  nlohmann::json to_json() const;
+};
+
+// Errors: an unreadable session or one without calibrated colour streams; everything else
+// (one camera, the face never seen twice, disagreeing cameras) is a non-converged status.
+Result<SessionSelfCalibration> self_calibrate_session(
+    const std::filesystem::path& session_dir, const SessionSelfCalibrationOptions& options = {});
+
+// Writes self_calibration.json into `dir` (created), and when converged face_model.yaml and
+// gaze.yaml (eyeball method, head_plane) as a subject folder.
+Status write_self_calibration(const SessionSelfCalibration& c, const std::filesystem::path& dir);
+
+}  // namespace dreamsense::eval

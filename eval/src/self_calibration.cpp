@@ -1,0 +1,212 @@
+#include "dreamsense/eval/self_calibration.hpp"
+
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/core/sensor_frame.hpp"
+#include "dreamsense/face_detection/face_detector.hpp"
+#include "dreamsense/face_landmarks/landmarker.hpp"
+#include "dreamsense/gaze/gaze_estimator.hpp"
+#include "dreamsense/head_pose/face_shape_fit.hpp"
+#include "dreamsense/sources/session.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <ctime>
+#include <fstream>
+#include <map>
+
+namespace dreamsense::eval {
+namespace {
+
+// Frames closer than this belong to the same tick (cameras of one rig are triggered together;
+// a recording's stamps may differ by a few ms).
+constexpr int64_t kSameTickNs = 10'000'000;
+
+std::optional<cv::Vec3d> model_centroid(const head_pose::FaceModel3d& m, int from, int to) {
+  cv::Vec3d s(0, 0, 0);
+  for (int i = from; i <= to; ++i) {
+    const auto it = std::find(m.landmark_index.begin(), m.landmark_index.end(), i);
+    if (it == m.landmark_index.end()) return std::nullopt;
+    const cv::Point3d& p = m.points_m[static_cast<size_t>(it - m.landmark_index.begin())];
+    s += cv::Vec3d(p.x, p.y, p.z);
+  }
+  return s * (1.0 / (to - from + 1));
+}
+
+nlohmann::json vec_json(const cv::Vec3d& v) { return {v[0], v[1], v[2]}; }
+
+}  // namespace
+
+Status SessionSelfCalibrationOptions::check() const {
+  if (!(max_seconds > 0) || tick_step < 1 || enough_frames < 1)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "SessionSelfCalibrationOptions: max_seconds > 0, tick_step >= 1 and "
+                      "enough_frames >= 1 needed");
+  if (auto s = eyes.check(); !s) return s;
+  return face.check();
+}
+
+nlohmann::json SessionSelfCalibration::to_json() const {
+  nlohmann::json j;
+  j["method"] = "self_calibration";
+  j["status"] = head_pose::to_string(face.status);
+  j["converged"] = face.converged();
+  j["reason"] = face.reason;
+  j["session"] = session;
+  j["cameras"] = cameras;
+  j["seconds_searched"] = seconds_searched;
+  j["ticks_searched"] = ticks_searched;
+  j["views_with_landmarks"] = views_with_landmarks;
+  j["ticks_multi_view"] = face.frames_multi_view;
+  j["ticks_triangulated"] = face.frames_triangulated;
+  j["views_dropped"] = face.views_dropped;
+  j["camera_pair_scale_spread"] = face.median_pair_scale_spread;
+  j["ticks_used"] = face.frames_used;
+  j["points"] = face.model.points_m.size();
+  j["residual_rms_mm"] = 1000 * face.median_rms_m;
+  j["reprojection_rms_px"] = face.median_reprojection_px;
+  j["interocular_mm"] = 1000 * face.interocular_m;
+  j["cpu_s"] = cpu_s;
+  if (face.converged()) {
+    j["right_eyeball"] = {{"centre_head_m", vec_json(right_eyeball.centre_head_m)},
+                          {"radius_m", right_eyeball.radius_m}};
+    j["left_eyeball"] = {{"centre_head_m", vec_json(left_eyeball.centre_head_m)},
+                         {"radius_m", left_eyeball.radius_m}};
+  }
+  return j;
+}
+
+Result<SessionSelfCalibration> self_calibrate_session(
+    const std::filesystem::path& dir, const SessionSelfCalibrationOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  const std::clock_t cpu0 = std::clock();
+  auto manifest = sources::read_manifest(dir);
+  if (!manifest) return tl::unexpected(manifest.error());
+  auto calibrated = sources::read_color_calibrations(dir, *manifest);
+  if (!calibrated) return tl::unexpected(calibrated.error());
+  auto roles = sources::stream_roles(*manifest);
+  if (!roles) return tl::unexpected(roles.error());
+  std::map<SensorId, CameraModel> cameras;
+  for (auto& [id, camera] : *calibrated) {
+    const auto& r = (*roles)[id];
+    const bool child_camera = std::find(r.begin(), r.end(), "child_camera") != r.end();
+    if (options.cameras.empty() ? child_camera
+                                : std::find(options.cameras.begin(), options.cameras.end(), id) !=
+                                      options.cameras.end())
+      cameras.emplace(id, std::move(camera));
+  }
+  if (cameras.empty())
+    return make_error(ErrorCode::kNotFound, "{}: no calibrated colour stream to self-calibrate on",
+                      dir.string());
+  SessionSelfCalibration out;
+  out.session = manifest->name;
+  out.cameras = static_cast<int>(cameras.size());
+
+  auto detector = face_detection::FaceDetector::create({});
+  if (!detector) return tl::unexpected(detector.error());
+  auto landmarker = face_landmarks::make_dlib_landmarker();
+  if (!landmarker) return tl::unexpected(landmarker.error());
+
+  sources::SessionReaderOptions ro;
+  for (const auto& [id, c] : cameras) ro.only.push_back(id);
+  auto reader = sources::SessionReader::open(dir, ro);
+  if (!reader) return tl::unexpected(reader.error());
+
+  std::vector<head_pose::MultiViewLandmarks> ticks;
+  std::vector<FramePtr> group;
+  int64_t first_ns = 0, group_ns = 0;
+  bool started = false;
+  int tick_index = -1;
+  int triangulated = 0, multi_view = 0;
+  // Enough searching: this many ticks seen by two or more cameras (triangulated or not: when
+  // they do not, cameras that disagree, the reason is clear by then).
+  auto enough = [&] { return multi_view >= options.enough_frames; };
+  auto flush = [&]() -> Status {
+    if (group.empty()) return ok_status();
+    ++tick_index;
+    if (tick_index % options.tick_step != 0) {
+      group.clear();
+      return ok_status();
+    }
+    ++out.ticks_searched;
+    head_pose::MultiViewLandmarks mv;
+    mv.stamp_ns = group_ns;
+    for (const FramePtr& f : group) {
+      const ColorImage* img = f->as<ColorImage>();
+      if (img == nullptr) continue;
+      const auto faces = detector->detect(img->image, std::nullopt, false);
+      if (faces.empty()) continue;
+      auto pts = (*landmarker)->fit(img->image, faces.front().box_px);
+      if (!pts) return tl::unexpected(pts.error());
+      if (!*pts) continue;
+      ++out.views_with_landmarks;
+      mv.views.push_back({&cameras.at(f->sensor), std::move(**pts)});
+    }
+    if (mv.views.size() >= 2) {
+      ++multi_view;
+      if (head_pose::triangulate_face(mv, options.face.triangulation)) ++triangulated;
+    }
+    ticks.push_back(std::move(mv));
+    group.clear();
+    return ok_status();
+  };
+  for (;;) {
+    auto frame = (*reader)->next();
+    if (!frame) {
+      if (frame.error().code == ErrorCode::kEndOfStream) break;
+      return tl::unexpected(frame.error());
+    }
+    const FramePtr& f = *frame;
+    const int64_t ns = f->stamp.ns();
+    if (!started) {
+      first_ns = group_ns = ns;
+      started = true;
+    }
+    if (ns - first_ns > static_cast<int64_t>(options.max_seconds * 1e9)) break;
+    if (ns - group_ns > kSameTickNs) {
+      DS_RETURN_IF_ERROR(flush());
+      group_ns = ns;
+      if (enough()) break;
+    }
+    out.seconds_searched = static_cast<double>(ns - first_ns) * 1e-9;
+    group.push_back(f);
+  }
+  if (!enough()) DS_RETURN_IF_ERROR(flush());
+  out.face = head_pose::self_calibrate_face(ticks, options.face);
+  if (out.face.converged()) {
+    const auto r = model_centroid(out.face.model, 36, 41),
+               l = model_centroid(out.face.model, 42, 47);
+    if (r && l) {
+      out.right_eyeball = gaze::anatomical_eyeball(*r, options.eyes);
+      out.left_eyeball = gaze::anatomical_eyeball(*l, options.eyes);
+    }
+  }
+  out.cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
+  return out;
+}
+
+Status write_self_calibration(const SessionSelfCalibration& c, const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return make_error(ErrorCode::kIoError, "{}: {}", dir.string(), ec.message());
+  if (c.face.converged()) {
+    const std::string provenance =
+        fmt::format("self-calibrated (no truth) from session {}: {}", c.session, c.face.reason);
+    DS_RETURN_IF_ERROR(
+        head_pose::write_face_model((dir / "face_model.yaml").string(), c.face.model, provenance));
+    gaze::GazeModelFile g;
+    g.plane = gaze::OffsetPlane::kHeadPlane;
+    g.right_eyeball = c.right_eyeball;
+    g.left_eyeball = c.left_eyeball;
+    g.provenance =
+        "anatomical eyeballs (modalities/gaze/README.md) behind the eye openings of " + provenance;
+    DS_RETURN_IF_ERROR(gaze::write_gaze_model(dir / "gaze.yaml", g));
+  }
+  const auto path = dir / "self_calibration.json";
+  std::ofstream f(path);
+  f << c.to_json().dump(2) << "\n";
+  if (!f) return make_error(ErrorCode::kIoError, "{}: cannot write", path.string());
+  return ok_status();
+}
+
+}  // namespace dreamsense::eval
