@@ -31,6 +31,8 @@ packages=(
   chromium  # tests: report.html opened in a headless browser (apps/test/video_cli_test.cpp)
   # SRGS grammars (XML, modalities/speech); clang-tidy for tools/tidy.sh (CI, issue 19)
   libtinyxml2-dev clang-tidy
+  # faces (issue 12): GIF images (Yale faces); npm installs the face-api.js weights (below)
+  libgif-dev npm
 )
 
 missing=()
@@ -50,6 +52,14 @@ if ((${#missing[@]})); then
   "${sudo[@]}" apt-get update -qq
   "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
     "${missing[@]}" >/dev/null
+fi
+
+# faces (issue 12): face-api.js network weights (MIT, npm @vladmandic/face-api), read by our own
+# C++ (vision/face_api_net.cpp): identifyFace's descriptor and the expression network features.
+if [[ ! -f /usr/lib/node_modules/@vladmandic/face-api/model/face_recognition_model.bin ]]; then
+  echo "setup: installing the npm package @vladmandic/face-api@1.7.15" >&2
+  if [[ $(id -u) -eq 0 ]]; then npm_sudo=(); else npm_sudo=(sudo); fi
+  "${npm_sudo[@]}" npm install -g --no-fund --no-audit @vladmandic/face-api@1.7.15 >/dev/null
 fi
 
 cmake --preset release >/dev/null

@@ -59,6 +59,9 @@ void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   add_eval_objects(*eval, g, exit_code);   // cmd_objects.cpp
   add_eval_actions(*eval, g, exit_code);   // cmd_actions.cpp
 
+  add_eval_expression(*eval, g, exit_code);  // cmd_faces.cpp
+  add_eval_faces(*eval, g, exit_code);       // cmd_faces.cpp
+
   auto flags = std::make_shared<EvalSessionFlags>();
   CLI::App* cmd = eval->add_subcommand(
       "session", "Compare an analysis of a session that has truth.jsonl with its truth");

@@ -62,6 +62,12 @@ void add_train_actions(CLI::App& train, const GlobalFlags& g, int& exit_code);
 void add_train_gestures(CLI::App& train, const GlobalFlags& g, int& exit_code);
 void add_eval_actions(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 
+// cmd_faces.cpp: `train expression`, `eval expression`, `enroll faces`, `eval faces`.
+void add_train_expression(CLI::App& train, const GlobalFlags& g, int& exit_code);
+void add_eval_expression(CLI::App& eval, const GlobalFlags& g, int& exit_code);
+void add_eval_faces(CLI::App& eval, const GlobalFlags& g, int& exit_code);
+void add_enroll_faces(CLI::App& enroll, const GlobalFlags& g, int& exit_code);
+
 // The child's calibration for analyses (cmd_analyze.cpp): --subject DIR|none, --face-model,
 // --gaze-model, --speech-model.
 struct SubjectFlags {

@@ -64,10 +64,12 @@ int main(int argc, char** argv) {
   app::add_train_speech(*train, g, exit_code);
   app::add_train_actions(*train, g, exit_code);  // cmd_actions.cpp
   app::add_train_gestures(*train, g, exit_code);
+  app::add_train_expression(*train, g, exit_code);  // cmd_faces.cpp
   CLI::App* enroll = app.add_subcommand(
       "enroll", "Add known people / toys to a gallery (writes a versioned file)");
   enroll->require_subcommand(1);
   app::add_enroll_objects(*enroll, g, exit_code);
+  app::add_enroll_faces(*enroll, g, exit_code);  // cmd_faces.cpp
   app.parse_complete_callback([&] {
     log::set_level(g.verbose ? log::Level::kDebug
                    : g.quiet ? log::Level::kError

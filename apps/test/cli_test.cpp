@@ -167,6 +167,18 @@ TEST_F(Cli, EvalSessionMeasuresTheBodyAgainstTruth) {
   EXPECT_LE(m["eye_center_median_px"].get<double>(), 1.5);
   EXPECT_GE(m["camera_selection_accuracy"].get<double>(), 0.95);
   EXPECT_GE(m["mutual_gaze_f1"].get<double>(), 0.90);
+  // faces (issue 12): the portrait's smile is read as happy on the face ticks, and the child is
+  // identified from its gallery (data/subjects/demo_child, enrolled on seed 101) when the npm
+  // face-api weights are installed (else identifyFace is disabled and not evaluated).
+  ASSERT_TRUE(m["expression_ok_rate"].is_number());
+  EXPECT_GE(m["expression_ok_rate"].get<double>(), 0.9);
+  EXPECT_GE(m["expression_accuracy"].get<double>(), 0.9);
+  if (m["face_identity_ok_rate"].is_number()) {
+    EXPECT_GE(m["face_identity_ok_rate"].get<double>(), 0.9);
+    EXPECT_GE(m["face_identity_accuracy"].get<double>(), 0.95);
+  } else {
+    EXPECT_TRUE(j["not_evaluated"].contains("face_identity_accuracy"));
+  }
   // The demo child makes DREAM gestures (issue 13): identifyTrajectory per tick, 0.3 s edge
   // tolerance, and no gesture reported in rests.
   ASSERT_TRUE(m["action_accuracy"].is_number());

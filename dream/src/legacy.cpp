@@ -140,6 +140,9 @@ int expression_id(std::string_view label) {
   constexpr std::array<std::string_view, 5> kIds = {"happy", "sad", "angry", "fear", "neutral"};
   for (size_t i = 0; i < kIds.size(); ++i)
     if (label == kIds[i]) return static_cast<int>(i);
+  // faces (issue 12): the expression analyser's CK+ spellings of sad and angry.
+  if (label == "sadness") return 1;
+  if (label == "anger") return 2;
   return -1;
 }
 

@@ -4,6 +4,7 @@
 #include "dreamsense/primitives/audio.hpp"
 #include "dreamsense/primitives/body.hpp"
 #include "dreamsense/primitives/face.hpp"
+#include "dreamsense/primitives/face_recognition.hpp"  // faces (issue 12): F17, F18
 #include "dreamsense/primitives/objects.hpp"
 
 #include <functional>
@@ -69,8 +70,10 @@ const std::vector<PrimitiveSpec>& table() {
                 return get_sound_direction(c,
                                            ThresholdQuery{c.options().sound_direction_threshold});
               })},
-      {P::kIdentifyFace, {"face.identity"}, nullptr},
-      {P::kIdentifyFaceExpression, {"face.expression"}, nullptr},
+      {P::kIdentifyFace, {"face.identity"}, answer(P::kIdentifyFace, identify_face)},
+      {P::kIdentifyFaceExpression,
+       {"face.expression"},
+       answer(P::kIdentifyFaceExpression, identify_face_expression)},
       {P::kIdentifyObject,
        {"objects.table"},
        answer(P::kIdentifyObject, [](const PrimitiveContext& c) { return identify_object(c); })},

@@ -658,6 +658,11 @@ json face_record(const Generator& gen, int64_t stamp) {
   r["robot_gaze_distance_m"] = q(ray_point_distance(eye_mid, eye_gaze, g.robot_head_m));
   r["best_camera"] = best.empty() ? json(nullptr) : json(best);
   r["cameras"] = cams;
+  // faces (issue 12): who the face is (the mesh face is the session's subject; the planar face is
+  // an uncalibrated stranger) and its expression: the NASA portrait smiles, and the renderer
+  // does not animate the mouth, so it is "happy" throughout.
+  r["person"] = gen.media().moving_eyes ? json(kDemoSubject) : json(nullptr);
+  r["expression"] = "happy";
   return r;
 }
 

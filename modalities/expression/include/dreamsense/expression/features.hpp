@@ -1,0 +1,70 @@
+#pragma once
+// Descriptors of an aligned face for expression recognition, in named blocks that a model lists:
+//   lbp1     uniform LBP(8,1) histograms (59 bins) on a grid x grid layout of the crop (DREAM's
+//            FaceAnalysis descriptor: elbp + spatial_histogram, 8 x 8 grid)
+//   lbp2     the same with radius 2 (multi-scale LBP)
+//   hog      histograms of oriented gradients of the crop (vision/descriptors.hpp)
+//   geometry the 68 landmarks in crop coordinates (136 values) and a 0/1 "landmarks known" flag
+//   face_api the 256 pooled features and 7 logits of face-api.js's expression network
+//            (vision/face_api_net.hpp) on the same alignment re-sampled at 112 px; with
+//            face_api_flip the mean of the face and its mirror image
+
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/vision/descriptors.hpp"
+#include "dreamsense/vision/face_alignment.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace dreamsense::vision {
+class FaceApiExpressionNet;
+}
+
+namespace dreamsense::expression {
+
+inline constexpr const char* kFeatureBlocks[] = {"lbp1", "lbp2", "hog", "geometry", "face_api"};
+
+struct ExpressionFeatureOptions {
+  vision::AlignmentOptions alignment;  // canonical crop of the classical descriptors
+  std::vector<std::string> blocks{"lbp1"};
+  int lbp_grid = 8;       // cells per side
+  bool lbp_sqrt = false;  // square root of the normalised histograms (Hellinger)
+  vision::HogOptions hog;
+  bool face_api_flip = true;
+  std::filesystem::path face_api_dir;  // empty: vision::default_face_api_model_dir()
+  Status check() const;
+  bool uses(const std::string& block) const;
+};
+
+// Not thread-safe (the network): one per thread.
+class ExpressionFeatureExtractor {
+ public:
+  // Loads the network when a block needs it (an error names the missing weights).
+  static Result<ExpressionFeatureExtractor> create(const ExpressionFeatureOptions& options);
+  ExpressionFeatureExtractor(ExpressionFeatureExtractor&&) noexcept;
+  ExpressionFeatureExtractor& operator=(ExpressionFeatureExtractor&&) noexcept;
+  ~ExpressionFeatureExtractor();
+
+  // `image_grey`: the CV_8UC1 image `face` was aligned from (options().alignment geometry).
+  std::vector<float> block(const std::string& name, const cv::Mat& image_grey,
+                           const vision::AlignedFace& face);
+  // The blocks of options().blocks, concatenated in that order.
+  std::vector<float> extract(const cv::Mat& image_grey, const vision::AlignedFace& face);
+  size_t block_length(const std::string& name) const;
+  size_t length() const;
+  const ExpressionFeatureOptions& options() const { return options_; }
+  // Hash of the network weights (empty when no block uses it).
+  std::string face_api_hash() const;
+
+ private:
+  ExpressionFeatureExtractor(ExpressionFeatureOptions options,
+                             std::unique_ptr<vision::FaceApiExpressionNet> net);
+  ExpressionFeatureOptions options_;
+  std::unique_ptr<vision::FaceApiExpressionNet> net_;
+};
+
+}  // namespace dreamsense::expression

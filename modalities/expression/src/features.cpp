@@ -1,0 +1,126 @@
+#include "dreamsense/expression/features.hpp"
+
+#include "dreamsense/vision/face_api_net.hpp"
+#include "dreamsense/vision/lbp.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+
+namespace dreamsense::expression {
+
+Status ExpressionFeatureOptions::check() const {
+  if (auto s = alignment.check(); !s) return s;
+  if (blocks.empty())
+    return make_error(ErrorCode::kInvalidArgument, "expression features: no block");
+  for (const std::string& b : blocks)
+    if (std::find_if(std::begin(kFeatureBlocks), std::end(kFeatureBlocks),
+                     [&](const char* k) { return b == k; }) == std::end(kFeatureBlocks))
+      return make_error(ErrorCode::kInvalidArgument,
+                        "expression features: unknown block '{}' (lbp1, lbp2, hog, geometry, "
+                        "face_api)",
+                        b);
+  if (lbp_grid < 1 || lbp_grid > alignment.size / 4)
+    return make_error(ErrorCode::kInvalidArgument, "expression features: lbp_grid {} out of range",
+                      lbp_grid);
+  if (uses("hog"))
+    if (auto s = hog.check(cv::Size(alignment.size, alignment.size)); !s) return s;
+  return ok_status();
+}
+
+bool ExpressionFeatureOptions::uses(const std::string& block) const {
+  return std::find(blocks.begin(), blocks.end(), block) != blocks.end();
+}
+
+ExpressionFeatureExtractor::ExpressionFeatureExtractor(
+    ExpressionFeatureOptions options, std::unique_ptr<vision::FaceApiExpressionNet> net)
+    : options_(std::move(options)), net_(std::move(net)) {}
+ExpressionFeatureExtractor::ExpressionFeatureExtractor(ExpressionFeatureExtractor&&) noexcept =
+    default;
+ExpressionFeatureExtractor& ExpressionFeatureExtractor::operator=(
+    ExpressionFeatureExtractor&&) noexcept = default;
+ExpressionFeatureExtractor::~ExpressionFeatureExtractor() = default;
+
+Result<ExpressionFeatureExtractor> ExpressionFeatureExtractor::create(
+    const ExpressionFeatureOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  std::unique_ptr<vision::FaceApiExpressionNet> net;
+  if (options.uses("face_api")) {
+    auto n = vision::FaceApiExpressionNet::load(
+        options.face_api_dir.empty() ? vision::default_face_api_model_dir() : options.face_api_dir);
+    if (!n) return tl::unexpected(n.error());
+    net = std::make_unique<vision::FaceApiExpressionNet>(std::move(*n));
+  }
+  return ExpressionFeatureExtractor(options, std::move(net));
+}
+
+std::string ExpressionFeatureExtractor::face_api_hash() const {
+  return net_ ? net_->weights_hash() : std::string();
+}
+
+size_t ExpressionFeatureExtractor::block_length(const std::string& name) const {
+  const size_t cells = static_cast<size_t>(options_.lbp_grid * options_.lbp_grid);
+  if (name == "lbp1" || name == "lbp2") return cells * vision::kUniformLbpBins;
+  if (name == "hog")
+    return vision::hog_length(cv::Size(options_.alignment.size, options_.alignment.size),
+                              options_.hog);
+  if (name == "geometry") return vision::kLandmarkGeometryLength + 1;
+  if (name == "face_api") return vision::kFaceApiFeatures + 7;
+  DS_CHECK(false);
+  return 0;
+}
+
+size_t ExpressionFeatureExtractor::length() const {
+  size_t n = 0;
+  for (const std::string& b : options_.blocks) n += block_length(b);
+  return n;
+}
+
+std::vector<float> ExpressionFeatureExtractor::block(const std::string& name,
+                                                     const cv::Mat& image_grey,
+                                                     const vision::AlignedFace& face) {
+  const ExpressionFeatureOptions& o = options_;
+  std::vector<float> out;
+  out.reserve(block_length(name));
+  if (name == "lbp1" || name == "lbp2") {
+    const cv::Mat labels = vision::uniform_lbp_labels(face.grey, name == "lbp1" ? 1.0 : 2.0);
+    vision::grid_histograms(labels, vision::kUniformLbpBins, o.lbp_grid, o.lbp_grid, o.lbp_sqrt,
+                            out);
+  } else if (name == "hog") {
+    vision::hog_descriptor(face.grey, o.hog, out);
+  } else if (name == "geometry") {
+    vision::landmark_geometry(face.landmarks, o.alignment.size, o.alignment.eye_row, out);
+    out.push_back(face.landmarks.empty() ? 0.f : 1.f);
+  } else if (name == "face_api") {
+    DS_CHECK(net_ != nullptr);
+    const cv::Mat crop = vision::resample_face(image_grey, face, vision::kFaceApiInputPx);
+    vision::FaceApiOutput r = net_->run(crop);
+    if (o.face_api_flip) {
+      cv::Mat mirrored;
+      cv::flip(crop, mirrored, 1);
+      const vision::FaceApiOutput m = net_->run(mirrored);
+      for (size_t i = 0; i < r.features.size(); ++i)
+        r.features[i] = 0.5f * (r.features[i] + m.features[i]);
+      for (size_t i = 0; i < r.logits.size(); ++i) r.logits[i] = 0.5f * (r.logits[i] + m.logits[i]);
+    }
+    out = std::move(r.features);
+    out.insert(out.end(), r.logits.begin(), r.logits.end());
+  } else {
+    DS_CHECK(false);
+  }
+  DS_CHECK_EQ(out.size(), block_length(name));
+  return out;
+}
+
+std::vector<float> ExpressionFeatureExtractor::extract(const cv::Mat& image_grey,
+                                                       const vision::AlignedFace& face) {
+  std::vector<float> all;
+  all.reserve(length());
+  for (const std::string& b : options_.blocks) {
+    const std::vector<float> v = block(b, image_grey, face);
+    all.insert(all.end(), v.begin(), v.end());
+  }
+  return all;
+}
+
+}  // namespace dreamsense::expression

@@ -1,0 +1,181 @@
+// The expression analyser through testing::AnalyzerRunner: nothing without a landmarks entry,
+// absent without a face (negative cases), a smoothed label with per-class probabilities on a
+// face, per-track smoothing against flicker, and the shipped model loading.
+#include "dreamsense/expression/expression_analyzer.hpp"
+
+#include "dreamsense/perception/expression.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/face_tracks.hpp"
+#include "dreamsense/testing/analyzer_runner.hpp"
+#include "dreamsense/vision/face_alignment.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+#include <unistd.h>
+
+namespace dreamsense::expression {
+namespace {
+namespace fs = std::filesystem;
+
+const SensorId kCam = "front.color";
+
+// A face image whose texture encodes the class: a model trained on such faces answers by the
+// stripes' direction (horizontal = "happy", vertical = "sadness"), which lets the test steer
+// predictions. `kind` 40 or 200 (the two classes).
+cv::Mat face_image(int kind) {
+  cv::Mat m(240, 320, CV_8UC3);
+  for (int y = 0; y < m.rows; ++y)
+    for (int x = 0; x < m.cols; ++x)
+      m.at<cv::Vec3b>(y, x) = cv::Vec3b::all(((kind == 40 ? y : x) / 3) % 2 ? 180 : 60);
+  cv::Mat noise(m.size(), CV_8UC3);
+  cv::randu(noise, 0, 20);
+  m += noise;
+  return m;
+}
+
+std::vector<cv::Point2d> landmarks() {
+  auto lm = vision::mean_face_landmarks(100);
+  for (auto& p : lm) p += cv::Point2d(110, 60);
+  return lm;
+}
+
+fs::path tiny_model() {
+  const fs::path path =
+      fs::temp_directory_path() / ("ds_expr_model_" + std::to_string(::getpid()) + ".yaml");
+  auto m = expression_method("lbp_hog");
+  EXPECT_TRUE(m);
+  auto e = ExpressionFeatureExtractor::create(m->features);
+  EXPECT_TRUE(e);
+  cv::Mat x;
+  std::vector<int> y;
+  cv::theRNG().state = 3;
+  for (int i = 0; i < 12; ++i) {
+    const int label = i % 2;
+    const cv::Mat img = face_image(label == 0 ? 40 : 200);
+    auto grey = vision::to_grey(img);
+    auto face = vision::align_face(*grey, landmarks(), m->features.alignment);
+    const auto v = e->extract(*grey, **face);
+    x.push_back(
+        cv::Mat(1, static_cast<int>(v.size()), CV_32F, const_cast<float*>(v.data())).clone());
+    y.push_back(label);
+  }
+  auto model = ExpressionModel::train(*m, x, y, {"happy", "sadness"});
+  EXPECT_TRUE(model);
+  EXPECT_TRUE(model->save(path));
+  return path;
+}
+
+FaceLandmarks face_landmarks(Timestamp t) {
+  FaceLandmarks l;
+  l.camera = kCam;
+  l.frame_stamp = t;
+  l.image_size = cv::Size(320, 240);
+  l.points_px = landmarks();
+  return l;
+}
+
+class ExpressionAnalyzerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { model_ = new fs::path(tiny_model()); }
+  static void TearDownTestSuite() {
+    fs::remove(*model_);
+    delete model_;
+  }
+  testing::AnalyzerRunner runner(ExpressionSmoothingOptions s = {}) {
+    ExpressionAnalyzerOptions o;
+    o.cameras = {kCam};
+    o.model = *model_;
+    o.smoothing = s;
+    auto a = make_expression_analyzer(o);
+    EXPECT_TRUE(a) << a.error().message;
+    return testing::AnalyzerRunner(std::move(*a));
+  }
+  static fs::path* model_;
+};
+fs::path* ExpressionAnalyzerTest::model_ = nullptr;
+
+TEST_F(ExpressionAnalyzerTest, NothingWithoutLandmarksAbsentWithoutAFace) {
+  auto r = runner();
+  const Timestamp t = Timestamp::from_seconds(1);
+  ASSERT_TRUE(r.run(t, {make_frame(kCam, t, 1, ColorImage{face_image(40)})}));
+  EXPECT_TRUE(r.last_writes().empty()) << "no landmarks entry: no write";
+  r.preset_absent(keys::kFaceLandmarks, t + Duration::from_ms(40));
+  ASSERT_TRUE(r.run(t + Duration::from_ms(40),
+                    {make_frame(kCam, t + Duration::from_ms(40), 2, ColorImage{face_image(40)})}));
+  auto e = r.output(keys::kFaceExpression);
+  ASSERT_TRUE(e);
+  EXPECT_FALSE(e->present()) << "no face: absent, never a made-up expression";
+  // Landmarks but no frame of that camera in the tick: absent.
+  const Timestamp t2 = t + Duration::from_ms(80);
+  r.preset(keys::kFaceLandmarks, face_landmarks(t2), t2);
+  ASSERT_TRUE(r.run(t2, {}));
+  e = r.output(keys::kFaceExpression);
+  ASSERT_TRUE(e);
+  EXPECT_FALSE(e->present());
+  // Landmarks of a wrong count (a broken landmarker): absent, not an error.
+  const Timestamp t3 = t + Duration::from_ms(120);
+  FaceLandmarks bad = face_landmarks(t3);
+  bad.points_px.resize(5);
+  r.preset(keys::kFaceLandmarks, bad, t3);
+  ASSERT_TRUE(r.run(t3, {make_frame(kCam, t3, 3, ColorImage{face_image(40)})}));
+  EXPECT_FALSE(r.output(keys::kFaceExpression)->present());
+}
+
+TEST_F(ExpressionAnalyzerTest, LabelsAFaceAndSmoothsPerTrack) {
+  auto r = runner();
+  Timestamp t = Timestamp::from_seconds(2);
+  auto tick = [&](int level) {
+    r.preset(keys::kFaceLandmarks, face_landmarks(t), t, 0.8f);
+    EXPECT_TRUE(r.run(t, {make_frame(kCam, t, 1, ColorImage{face_image(level)})}));
+    auto e = r.output(keys::kFaceExpression);
+    EXPECT_TRUE(e && e->present());
+    t = t + Duration::from_ms(40);
+    return *e->value;
+  };
+  FaceExpression e = tick(40);
+  EXPECT_EQ(e.label, "happy");
+  EXPECT_EQ(e.raw_label, "happy");
+  EXPECT_EQ(e.camera, kCam);
+  double sum = 0;
+  for (const auto& [l, p] : e.probabilities) sum += p;
+  EXPECT_NEAR(sum, 1.0, 1e-3);
+  for (int i = 0; i < 10; ++i) e = tick(40);
+  // One bright frame: the raw prediction changes, the smoothed label does not flicker.
+  e = tick(200);
+  EXPECT_EQ(e.raw_label, "sadness");
+  EXPECT_EQ(e.label, "happy");
+  // It follows a lasting change.
+  for (int i = 0; i < 25; ++i) e = tick(200);
+  EXPECT_EQ(e.label, "sadness");
+}
+
+TEST(ExpressionAnalyzer, BadOptionsAndModelFiles) {
+  ExpressionAnalyzerOptions o;
+  o.cameras = {kCam, kCam};
+  EXPECT_FALSE(make_expression_analyzer(o)) << "repeated camera";
+  o.cameras = {kCam};
+  o.model = "/nonexistent/expression.yaml";
+  auto a = make_expression_analyzer(o);
+  ASSERT_FALSE(a);
+  EXPECT_NE(a.error().message.find("/nonexistent/expression.yaml"), std::string::npos);
+  const fs::path corrupt =
+      fs::temp_directory_path() / ("ds_expr_bad_" + std::to_string(::getpid()) + ".yaml");
+  { std::ofstream(corrupt) << "%YAML:1.0\nnot_a_model: 1\n"; }
+  o.model = corrupt;
+  EXPECT_FALSE(make_expression_analyzer(o)) << "corrupt model file";
+  fs::remove(corrupt);
+}
+
+TEST(ExpressionAnalyzer, ShippedModelLoads) {
+  if (!fs::exists(default_expression_model())) GTEST_SKIP() << "no shipped model";
+  auto m = ExpressionModel::load(default_expression_model());
+  ASSERT_TRUE(m) << m.error().message;
+  EXPECT_EQ(m->labels().size(), 7u);
+  EXPECT_EQ(m->method().name, "lbp_hog");
+}
+
+}  // namespace
+}  // namespace dreamsense::expression

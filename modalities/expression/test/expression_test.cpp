@@ -1,0 +1,187 @@
+#include "dreamsense/expression/expression_model.hpp"
+#include "dreamsense/expression/features.hpp"
+#include "dreamsense/expression/labels.hpp"
+#include "dreamsense/expression/smoothing.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+
+namespace dreamsense::expression {
+namespace {
+
+TEST(ExpressionLabels, DatasetSpellingsAndDreamIds) {
+  EXPECT_EQ(canonical_label("angry"), "anger");
+  EXPECT_EQ(canonical_label("Sad"), "sadness");
+  EXPECT_EQ(canonical_label("surprised"), "surprise");
+  EXPECT_EQ(canonical_label("fearful"), "fear");
+  EXPECT_FALSE(canonical_label("bored").has_value());
+  EXPECT_EQ(dream_expression_id("happy"), 0);
+  EXPECT_EQ(dream_expression_id("sadness"), 1);
+  EXPECT_EQ(dream_expression_id("anger"), 2);
+  EXPECT_EQ(dream_expression_id("fear"), 3);
+  EXPECT_EQ(dream_expression_id("neutral"), 4);
+  EXPECT_EQ(dream_expression_id("surprise"), -1);
+  EXPECT_EQ(dream_expression_id("contempt"), -1);
+}
+
+TEST(ExpressionMethods, PresetsAndModifiers) {
+  auto base = expression_method("lbp_svm");
+  ASSERT_TRUE(base.has_value());
+  EXPECT_EQ(base->classifier, ClassifierKind::kOneVsRestSvm);
+  EXPECT_DOUBLE_EQ(base->svm.c, 0.1);
+  EXPECT_EQ(base->features.blocks, std::vector<std::string>{"lbp1"});
+  auto m = expression_method("lbp_hog:l2=0.5:train_mirror:blocks=hog+geometry");
+  ASSERT_TRUE(m.has_value()) << m.error().message;
+  EXPECT_DOUBLE_EQ(m->softmax.l2, 0.5);
+  EXPECT_TRUE(m->train_mirrored);
+  EXPECT_FALSE(m->test_mirrored);
+  EXPECT_EQ(m->features.blocks, (std::vector<std::string>{"hog", "geometry"}));
+  EXPECT_FALSE(expression_method("deep_magic").has_value());
+  EXPECT_FALSE(expression_method("lbp_hog:what=1").has_value());
+  EXPECT_FALSE(expression_method("lbp_hog:blocks=lbp1+colour").has_value());
+}
+
+vision::AlignedFace synthetic_face(int size, int seed) {
+  vision::AlignedFace f;
+  f.grey = cv::Mat(size, size, CV_8UC1);
+  cv::RNG rng(seed);
+  rng.fill(f.grey, cv::RNG::UNIFORM, 0, 255);
+  f.crop_from_image = cv::Matx23d(1, 0, 0, 0, 1, 0);
+  f.landmarks = vision::mean_face_landmarks(size);
+  return f;
+}
+
+TEST(ExpressionFeatures, BlockLengthsAndLandmarkFlag) {
+  ExpressionFeatureOptions o;
+  o.blocks = {"lbp1", "lbp2", "hog", "geometry"};
+  auto e = ExpressionFeatureExtractor::create(o);
+  ASSERT_TRUE(e.has_value()) << e.error().message;
+  vision::AlignedFace f = synthetic_face(o.alignment.size, 1);
+  const auto v = e->extract(f.grey, f);
+  EXPECT_EQ(v.size(), e->length());
+  EXPECT_EQ(e->block_length("lbp1"), 64u * 59u);
+  EXPECT_EQ(e->block("geometry", f.grey, f).back(), 1.f);
+  f.landmarks.clear();
+  EXPECT_EQ(e->block("geometry", f.grey, f).back(), 0.f);
+  EXPECT_TRUE(e->face_api_hash().empty());
+}
+
+// Three classes told apart by the brightness of one region of the face.
+void synthetic_set(const ExpressionMethod& m, cv::Mat& x, std::vector<int>& y, int seed) {
+  auto e = ExpressionFeatureExtractor::create(m.features);
+  ASSERT_TRUE(e.has_value());
+  const int s = m.features.alignment.size;
+  for (int i = 0; i < 60; ++i) {
+    vision::AlignedFace f = synthetic_face(s, seed * 1000 + i);
+    cv::GaussianBlur(f.grey, f.grey, cv::Size(0, 0), 2.0);
+    const int c = i % 3;
+    cv::rectangle(f.grey, cv::Rect(c * s / 3, s / 2, s / 3, s / 4), cv::Scalar(255), cv::FILLED);
+    const auto v = e->extract(f.grey, f);
+    x.push_back(
+        cv::Mat(1, static_cast<int>(v.size()), CV_32F, const_cast<float*>(v.data())).clone());
+    y.push_back(c);
+  }
+}
+
+TEST(ExpressionModel, TrainsPredictsAndRoundTrips) {
+  for (const char* name : {"lbp_hog", "lbp_svm"}) {
+    auto m = expression_method(name);
+    ASSERT_TRUE(m.has_value());
+    cv::Mat x, xt;
+    std::vector<int> y, yt;
+    synthetic_set(*m, x, y, 1);
+    synthetic_set(*m, xt, yt, 2);
+    auto model = ExpressionModel::train(*m, x, y, {"happy", "sadness", "anger"}, {"synthetic", 60});
+    ASSERT_TRUE(model.has_value()) << model.error().message;
+    int ok = 0;
+    for (int i = 0; i < xt.rows; ++i) {
+      const auto p =
+          model->predict(std::vector<float>(xt.ptr<float>(i), xt.ptr<float>(i) + xt.cols));
+      ok += p.index == yt[i];
+      EXPECT_NEAR(std::accumulate(p.probabilities.begin(), p.probabilities.end(), 0.0), 1.0, 1e-5);
+    }
+    EXPECT_GE(ok, 57) << name;
+    const auto path = std::filesystem::temp_directory_path() / "ds_expression_model.yaml";
+    ASSERT_TRUE(model->save(path).has_value());
+    auto loaded = ExpressionModel::load(path);
+    ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+    EXPECT_EQ(loaded->labels(), model->labels());
+    EXPECT_EQ(loaded->method().name, name);
+    const std::vector<float> row(xt.ptr<float>(0), xt.ptr<float>(0) + xt.cols);
+    EXPECT_EQ(loaded->predict(row).probabilities, model->predict(row).probabilities);
+    std::filesystem::remove(path);
+  }
+}
+
+TEST(ExpressionModel, VersionCorruptionAndMissingFilesAreErrorsNamingTheFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "ds_expression_bad";
+  std::filesystem::create_directories(dir);
+  EXPECT_EQ(ExpressionModel::load(dir / "none.yaml").error().code, ErrorCode::kNotFound);
+  std::ofstream(dir / "garbage.yaml") << "{{{ not yaml";
+  auto g = ExpressionModel::load(dir / "garbage.yaml");
+  ASSERT_FALSE(g.has_value());
+  EXPECT_NE(g.error().message.find("garbage.yaml"), std::string::npos);
+  std::ofstream(dir / "future.yaml")
+      << "%YAML:1.0\n---\nformat: dreamsense-expression-model\nversion: 99\n";
+  auto f = ExpressionModel::load(dir / "future.yaml");
+  ASSERT_FALSE(f.has_value());
+  EXPECT_EQ(f.error().code, ErrorCode::kUnsupported);
+  EXPECT_NE(f.error().message.find("version 99"), std::string::npos);
+  std::ofstream(dir / "other.yaml") << "%YAML:1.0\n---\nformat: something-else\nversion: 1\n";
+  EXPECT_EQ(ExpressionModel::load(dir / "other.yaml").error().code, ErrorCode::kCorruptData);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ExpressionModel, RecognizerRefusesAModelOfOtherNetworkWeights) {
+  auto m = expression_method("lbp_svm");
+  cv::Mat x;
+  std::vector<int> y;
+  synthetic_set(*m, x, y, 3);
+  auto model = ExpressionModel::train(*m, x, y, {"a", "b", "c"}, {}, "0123456789abcdef");
+  ASSERT_TRUE(model.has_value());
+  auto r = ExpressionRecognizer::create(*model);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().code, ErrorCode::kUnsupported);
+}
+
+ExpressionPrediction pred(std::vector<float> p) {
+  ExpressionPrediction e;
+  e.probabilities = p;
+  e.index = static_cast<int>(std::max_element(p.begin(), p.end()) - p.begin());
+  e.confidence = p[static_cast<size_t>(e.index)];
+  e.label = e.index == 0 ? "happy" : "neutral";
+  return e;
+}
+
+TEST(ExpressionSmoothing, NoFlickerButSustainedChangesGetThrough) {
+  ExpressionSmoother s({"happy", "neutral"}, {0.4, 0.1, 1.0});
+  const int64_t frame = 33'333'333;  // 30 fps
+  EXPECT_EQ(s.update(7, 0, pred({0.9f, 0.1f})).label, "happy");
+  // Single-frame blips of "neutral" do not change the label.
+  int changes = 0;
+  for (int i = 1; i < 30; ++i) {
+    const auto out = s.update(7, i * frame, i % 2 ? pred({0.45f, 0.55f}) : pred({0.8f, 0.2f}));
+    changes += out.label != "happy";
+  }
+  EXPECT_EQ(changes, 0);
+  // A sustained change wins within about a second.
+  int frames_to_switch = -1;
+  for (int i = 30; i < 90; ++i)
+    if (s.update(7, i * frame, pred({0.1f, 0.9f})).label == "neutral") {
+      frames_to_switch = i - 30;
+      break;
+    }
+  EXPECT_GE(frames_to_switch, 2);
+  EXPECT_LE(frames_to_switch, 30);
+  // Another track is independent; a long gap restarts a track.
+  EXPECT_EQ(s.update(8, 0, pred({0.2f, 0.8f})).label, "neutral");
+  EXPECT_EQ(s.update(7, 200LL * frame, pred({0.7f, 0.3f})).label, "happy");
+  EXPECT_EQ(s.tracks(), 2u);
+}
+
+}  // namespace
+}  // namespace dreamsense::expression

@@ -1,0 +1,92 @@
+#pragma once
+// The face expression network of face-api.js (V. Muehler; maintained fork @vladmandic/face-api,
+// npm, MIT), loaded by our own C++ from the package's TF.js weights (JSON manifest + uint8
+// quantised binary) and run with OpenCV's dnn module. Nothing is downloaded: tools/setup.sh
+// installs the npm package; the weights stay in the package folder.
+//
+// Network (src/faceFeatureExtractor, src/faceExpressionNet of the package): input 112x112 RGB,
+// minus the mean (122.782, 117.001, 104.298), / 255; four dense blocks (conv 3x3 stride 2 or
+// depthwise-separable stride 2, then three depthwise-separable 3x3 convs with dense residual
+// sums and ReLU; 32, 64, 128, 256 channels), average pooling to 256 features, a 256x7 fully
+// connected layer, softmax over neutral, happy, sad, angry, fearful, disgusted, surprised.
+// TF "same" padding (stride 2: the extra row/column at the bottom/right).
+
+#include "dreamsense/core/status.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace dreamsense::vision {
+
+// Where setup installs the package's model folder; DREAMSENSE_FACE_API_DIR overrides it.
+std::filesystem::path default_face_api_model_dir();
+
+inline constexpr int kFaceApiInputPx = 112;
+inline constexpr int kFaceApiFeatures = 256;
+inline constexpr std::array<const char*, 7> kFaceApiExpressionLabels{
+    "neutral", "happy", "sad", "angry", "fearful", "disgusted", "surprised"};
+
+struct FaceApiOutput {
+  std::vector<float> features;  // 256 pooled features (the input of the classifier layer)
+  std::vector<float> logits;    // 7 scores of the package's own classifier (before softmax)
+};
+
+// One loaded network. run() is not thread-safe (cv::dnn::Net); one per thread.
+class FaceApiExpressionNet {
+ public:
+  // Loads <model_dir>/face_expression_model-weights_manifest.json and its binary shard(s).
+  // Errors name the file: missing (with the install hint), malformed manifest, wrong sizes.
+  static Result<FaceApiExpressionNet> load(const std::filesystem::path& model_dir);
+  FaceApiExpressionNet(FaceApiExpressionNet&&) noexcept;
+  FaceApiExpressionNet& operator=(FaceApiExpressionNet&&) noexcept;
+  ~FaceApiExpressionNet();
+
+  // `face`: CV_8UC1 grey or CV_8UC3 BGR, already cropped as the package crops faces (see
+  // face_api_crop); it is padded to a square (black, centred) and resized to 112x112.
+  FaceApiOutput run(const cv::Mat& face);
+  // FNV-1a 64-bit hash of the weight binaries (hex): a model trained on these features records
+  // it, so weights of another package version are detected.
+  const std::string& weights_hash() const;
+
+ private:
+  struct Impl;
+  explicit FaceApiExpressionNet(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// The face recognition network of the same package (src/faceRecognitionNet: a port of dlib's
+// ResNet-34-like metric network, dlib_face_recognition_resnet_model_v1, D. King, 99.38 % on LFW):
+// input 150x150 RGB normalised as above; 7x7/2 conv, 3x3/2 max pool, residual stages of 32, 64,
+// 128, 256 channels (3x3 convs; each conv followed by a per-channel scale, folded into it
+// here), global average, 256x128 fully connected: a 128-D descriptor; faces of one person lie
+// within Euclidean distance ~0.6.
+inline constexpr int kFaceApiRecognitionInputPx = 150;
+inline constexpr int kFaceApiDescriptorLength = 128;
+
+class FaceApiRecognitionNet {
+ public:
+  // Loads <model_dir>/face_recognition_model-weights_manifest.json and its binary shard(s).
+  static Result<FaceApiRecognitionNet> load(const std::filesystem::path& model_dir);
+  FaceApiRecognitionNet(FaceApiRecognitionNet&&) noexcept;
+  FaceApiRecognitionNet& operator=(FaceApiRecognitionNet&&) noexcept;
+  ~FaceApiRecognitionNet();
+  // `face`: CV_8UC1 or CV_8UC3 BGR face crop (padded to a square, resized to 150x150).
+  std::vector<float> describe(const cv::Mat& face);
+  const std::string& weights_hash() const;
+
+ private:
+  struct Impl;
+  explicit FaceApiRecognitionNet(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// The package's face crop from 68 landmarks (FaceLandmarks.align(): the landmarks' bounding box
+// grown by 10 % of its size on each side), clipped to the image. Empty rect for < 68 points.
+cv::Rect face_api_crop(const std::vector<cv::Point2d>& landmarks, cv::Size image_size);
+
+}  // namespace dreamsense::vision

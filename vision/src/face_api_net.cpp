@@ -1,0 +1,441 @@
+#include "dreamsense/vision/face_api_net.hpp"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/dnn.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+
+namespace dreamsense::vision {
+namespace {
+
+struct Tensor {
+  std::vector<int> shape;
+  std::vector<float> values;
+};
+
+std::string fnv1a_hex(const std::string& bytes, uint64_t h = 1469598103934665603ull) {
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return fmt::format("{:016x}", h);
+}
+
+Result<std::string> read_file(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in)
+    return make_error(ErrorCode::kNotFound,
+                      "{}: face-api weights not found (tools/setup.sh installs the npm package "
+                      "@vladmandic/face-api; or set DREAMSENSE_FACE_API_DIR to its model folder)",
+                      p.string());
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// TF.js weights manifest: [{paths: [...], weights: [{name, shape, dtype, quantization}]}].
+Result<std::map<std::string, Tensor>> load_weights(const std::filesystem::path& manifest_path,
+                                                   std::string& hash) {
+  auto text = read_file(manifest_path);
+  if (!text) return tl::unexpected(text.error());
+  const std::string where = manifest_path.string();
+  std::map<std::string, Tensor> out;
+  nlohmann::json manifest;
+  try {
+    manifest = nlohmann::json::parse(*text);
+  } catch (const nlohmann::json::exception& e) {
+    return make_error(ErrorCode::kCorruptData, "{}: not JSON ({})", where, e.what());
+  }
+  if (!manifest.is_array())
+    return make_error(ErrorCode::kCorruptData, "{}: manifest must be a JSON array", where);
+  std::string all_bytes;
+  try {
+    for (const auto& group : manifest) {
+      std::string bytes;
+      for (const auto& p : group.at("paths")) {
+        auto b = read_file(manifest_path.parent_path() / p.get<std::string>());
+        if (!b) return tl::unexpected(b.error());
+        bytes += *b;
+      }
+      all_bytes += bytes;
+      size_t offset = 0;
+      for (const auto& w : group.at("weights")) {
+        Tensor t;
+        size_t n = 1;
+        for (const auto& d : w.at("shape")) {
+          t.shape.push_back(d.get<int>());
+          n *= static_cast<size_t>(d.get<int>());
+        }
+        t.values.resize(n);
+        const std::string name = w.at("name").get<std::string>();
+        if (w.contains("quantization")) {
+          const auto& q = w["quantization"];
+          const std::string dtype = q.at("dtype").get<std::string>();
+          const double scale = q.at("scale").get<double>(), min = q.at("min").get<double>();
+          const size_t width = dtype == "uint8" ? 1 : dtype == "uint16" ? 2 : 0;
+          if (width == 0)
+            return make_error(ErrorCode::kUnsupported, "{}: {}: quantisation {} unsupported", where,
+                              name, dtype);
+          if (offset + n * width > bytes.size())
+            return make_error(ErrorCode::kCorruptData, "{}: {}: weight file too short", where,
+                              name);
+          for (size_t i = 0; i < n; ++i) {
+            unsigned v = static_cast<unsigned char>(bytes[offset + i * width]);
+            if (width == 2)
+              v |= static_cast<unsigned>(static_cast<unsigned char>(bytes[offset + i * 2 + 1]))
+                   << 8;
+            t.values[i] = static_cast<float>(v * scale + min);
+          }
+          offset += n * width;
+        } else {
+          if (w.value("dtype", "float32") != "float32")
+            return make_error(ErrorCode::kUnsupported, "{}: {}: dtype unsupported", where, name);
+          if (offset + n * 4 > bytes.size())
+            return make_error(ErrorCode::kCorruptData, "{}: {}: weight file too short", where,
+                              name);
+          std::memcpy(t.values.data(), bytes.data() + offset, n * 4);
+          offset += n * 4;
+        }
+        out[name] = std::move(t);
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    return make_error(ErrorCode::kCorruptData, "{}: malformed manifest ({})", where, e.what());
+  }
+  hash = fnv1a_hex(all_bytes);
+  return out;
+}
+
+}  // namespace
+
+std::filesystem::path default_face_api_model_dir() {
+  if (const char* env = std::getenv("DREAMSENSE_FACE_API_DIR"); env && *env) return env;
+  return "/usr/lib/node_modules/@vladmandic/face-api/model";
+}
+
+struct NetBuilder {
+  cv::dnn::Net net;
+  cv::Mat fc_weights;  // 7 x 256
+  std::vector<float> fc_bias;
+  std::string hash;
+  std::map<std::string, Tensor> weights;
+  std::string error;
+
+  const Tensor* get(const std::string& name, const std::vector<int>& shape) {
+    auto it = weights.find(name);
+    if (it == weights.end()) {
+      error = "missing tensor " + name;
+      return nullptr;
+    }
+    if (it->second.shape != shape) {
+      error = "tensor " + name + " has an unexpected shape";
+      return nullptr;
+    }
+    return &it->second;
+  }
+
+  int add(const std::string& name, const std::string& type, cv::dnn::LayerParams& lp,
+          const std::vector<int>& inputs) {
+    lp.name = name;
+    lp.type = type;
+    const int id = net.addLayer(name, type, lp);
+    for (size_t i = 0; i < inputs.size(); ++i) net.connect(inputs[i], 0, id, static_cast<int>(i));
+    return id;
+  }
+
+  // TF HWIO (or HW,in,multiplier for depthwise) -> OpenCV OIHW.
+  int conv(const std::string& name, int input, const Tensor& f, const Tensor* bias, int stride,
+           bool depthwise, const std::string& pad_mode = "SAME", const Tensor* scale_w = nullptr,
+           const Tensor* scale_b = nullptr) {
+    const int kh = f.shape[0], kw = f.shape[1], cin = f.shape[2];
+    const int cout = depthwise ? cin : f.shape[3];
+    cv::Mat w({cout, depthwise ? 1 : cin, kh, kw}, CV_32F);
+    float* p = w.ptr<float>();
+    for (int o = 0; o < cout; ++o)
+      for (int i = 0; i < (depthwise ? 1 : cin); ++i)
+        for (int y = 0; y < kh; ++y)
+          for (int x = 0; x < kw; ++x) {
+            const size_t src = depthwise ? (static_cast<size_t>(y) * kw + x) * cin + o
+                                         : ((static_cast<size_t>(y) * kw + x) * cin + i) * cout + o;
+            *p++ = f.values[src] * (scale_w ? scale_w->values[static_cast<size_t>(o)] : 1.f);
+          }
+    cv::dnn::LayerParams lp;
+    lp.set("kernel_h", kh);
+    lp.set("kernel_w", kw);
+    lp.set("stride_h", stride);
+    lp.set("stride_w", stride);
+    if (!pad_mode.empty()) lp.set("pad_mode", pad_mode);
+    lp.set("num_output", cout);
+    lp.set("group", depthwise ? cin : 1);
+    lp.set("bias_term", bias != nullptr);
+    lp.blobs.push_back(w);
+    if (bias) {
+      // A following per-channel scale y = x * s + t folds into the convolution.
+      cv::Mat b(1, cout, CV_32F);
+      for (int o = 0; o < cout; ++o)
+        b.at<float>(o) =
+            scale_w ? bias->values[o] * scale_w->values[o] + scale_b->values[o] : bias->values[o];
+      lp.blobs.push_back(b);
+    }
+    return add(name, "Convolution", lp, {input});
+  }
+
+  int relu(const std::string& name, int input) {
+    cv::dnn::LayerParams lp;
+    return add(name, "ReLU", lp, {input});
+  }
+
+  int sum(const std::string& name, const std::vector<int>& inputs) {
+    cv::dnn::LayerParams lp;
+    lp.set("operation", "sum");
+    return add(name, "Eltwise", lp, inputs);
+  }
+
+  // Depthwise 3x3 (no bias) then pointwise 1x1 with bias: tf.separableConv2d + bias.
+  int separable(const std::string& p, int input, int cin, int cout, int stride) {
+    const Tensor* dw = get(p + "/depthwise_filter", {3, 3, cin, 1});
+    const Tensor* pw = get(p + "/pointwise_filter", {1, 1, cin, cout});
+    const Tensor* b = get(p + "/bias", {cout});
+    if (!dw || !pw || !b) return -1;
+    const int d = conv(p + "/dw", input, *dw, nullptr, stride, true);
+    return conv(p + "/pw", d, *pw, b, 1, false);
+  }
+
+  int dense_block(const std::string& p, int input, int cin, int cout, bool first) {
+    int out1;
+    if (first) {
+      const Tensor* f = get(p + "/conv0/filters", {3, 3, cin, cout});
+      const Tensor* b = get(p + "/conv0/bias", {cout});
+      if (!f || !b) return -1;
+      out1 = conv(p + "/conv0", input, *f, b, 2, false);
+    } else {
+      out1 = separable(p + "/conv0", input, cin, cout, 2);
+    }
+    if (out1 < 0) return -1;
+    out1 = relu(p + "/relu1", out1);
+    const int out2 = separable(p + "/conv1", out1, cout, cout, 1);
+    if (out2 < 0) return -1;
+    const int in3 = relu(p + "/relu3", sum(p + "/sum3", {out1, out2}));
+    const int out3 = separable(p + "/conv2", in3, cout, cout, 1);
+    if (out3 < 0) return -1;
+    const int in4 = relu(p + "/relu4", sum(p + "/sum4", {out1, out2, out3}));
+    const int out4 = separable(p + "/conv3", in4, cout, cout, 1);
+    if (out4 < 0) return -1;
+    return relu(p + "/relu5", sum(p + "/sum5", {out1, out2, out3, out4}));
+  }
+};
+
+struct FaceApiExpressionNet::Impl : NetBuilder {};
+
+// A blob of the face, padded to a square (zeros, centred, as the package's padToSquare),
+// resized to side x side, RGB, minus the package's mean, / 255.
+cv::Mat input_blob(const cv::Mat& face, int side) {
+  DS_CHECK(!face.empty() && (face.type() == CV_8UC1 || face.type() == CV_8UC3));
+  cv::Mat rgb;
+  if (face.type() == CV_8UC1)
+    cv::cvtColor(face, rgb, cv::COLOR_GRAY2RGB);
+  else
+    cv::cvtColor(face, rgb, cv::COLOR_BGR2RGB);
+  const int square = std::max(rgb.rows, rgb.cols);
+  if (rgb.rows != rgb.cols) {
+    const int top = (square - rgb.rows) / 2, left = (square - rgb.cols) / 2;
+    cv::copyMakeBorder(rgb, rgb, top, square - rgb.rows - top, left, square - rgb.cols - left,
+                       cv::BORDER_CONSTANT, cv::Scalar::all(0));
+  }
+  cv::Mat resized;
+  if (rgb.cols != side)
+    cv::resize(rgb, resized, cv::Size(side, side), 0, 0, cv::INTER_LINEAR);
+  else
+    resized = rgb;
+  cv::Mat blob({1, 3, side, side}, CV_32F);
+  const float mean[3] = {122.782f, 117.001f, 104.298f};
+  for (int c = 0; c < 3; ++c) {
+    float* dst = blob.ptr<float>(0, c);
+    for (int y = 0; y < side; ++y) {
+      const uint8_t* src = resized.ptr<uint8_t>(y);
+      for (int x = 0; x < side; ++x) *dst++ = (src[3 * x + c] - mean[c]) / 255.f;
+    }
+  }
+  return blob;
+}
+
+FaceApiExpressionNet::FaceApiExpressionNet(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+FaceApiExpressionNet::FaceApiExpressionNet(FaceApiExpressionNet&&) noexcept = default;
+FaceApiExpressionNet& FaceApiExpressionNet::operator=(FaceApiExpressionNet&&) noexcept = default;
+FaceApiExpressionNet::~FaceApiExpressionNet() = default;
+
+Result<FaceApiExpressionNet> FaceApiExpressionNet::load(const std::filesystem::path& model_dir) {
+  const auto manifest = model_dir / "face_expression_model-weights_manifest.json";
+  auto impl = std::make_unique<Impl>();
+  auto weights = load_weights(manifest, impl->hash);
+  if (!weights) return tl::unexpected(weights.error());
+  impl->weights = std::move(*weights);
+  impl->net.setInputsNames({"input"});
+  int x = 0;  // the input layer
+  const int channels[5] = {3, 32, 64, 128, 256};
+  for (int b = 0; b < 4 && x >= 0; ++b)
+    x = impl->dense_block("dense" + std::to_string(b), x, channels[b], channels[b + 1], b == 0);
+  const Tensor* fc_w = impl->get("fc/weights", {kFaceApiFeatures, 7});
+  const Tensor* fc_b = impl->get("fc/bias", {7});
+  if (x < 0 || !fc_w || !fc_b)
+    return make_error(ErrorCode::kCorruptData, "{}: {}", manifest.string(), impl->error);
+  cv::dnn::LayerParams pool;
+  pool.set("pool", "ave");
+  pool.set("global_pooling", true);
+  impl->add("pool", "Pooling", pool, {x});
+  impl->fc_weights.create(7, kFaceApiFeatures, CV_32F);
+  for (int o = 0; o < 7; ++o)
+    for (int i = 0; i < kFaceApiFeatures; ++i)
+      impl->fc_weights.at<float>(o, i) = fc_w->values[static_cast<size_t>(i) * 7 + o];
+  impl->fc_bias = fc_b->values;
+  impl->weights.clear();  // copied into the layers
+  impl->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  impl->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return FaceApiExpressionNet(std::move(impl));
+}
+
+const std::string& FaceApiExpressionNet::weights_hash() const { return impl_->hash; }
+
+FaceApiOutput FaceApiExpressionNet::run(const cv::Mat& face) {
+  const cv::Mat blob = input_blob(face, kFaceApiInputPx);
+  impl_->net.setInput(blob, "input");
+  cv::Mat pooled = impl_->net.forward("pool");
+  FaceApiOutput out;
+  out.features.assign(pooled.ptr<float>(), pooled.ptr<float>() + kFaceApiFeatures);
+  out.logits.resize(7);
+  for (int o = 0; o < 7; ++o) {
+    double acc = impl_->fc_bias[o];
+    const float* w = impl_->fc_weights.ptr<float>(o);
+    for (int i = 0; i < kFaceApiFeatures; ++i) acc += static_cast<double>(w[i]) * out.features[i];
+    out.logits[o] = static_cast<float>(acc);
+  }
+  return out;
+}
+
+cv::Rect face_api_crop(const std::vector<cv::Point2d>& pts, cv::Size image_size) {
+  if (pts.size() < 68) return {};
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (const cv::Point2d& p : pts) {
+    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
+    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+  }
+  const double w = x1 - x0, h = y1 - y0;
+  const cv::Rect box(cv::Point(static_cast<int>(std::floor(x0 - 0.1 * w)),
+                               static_cast<int>(std::floor(y0 - 0.1 * h))),
+                     cv::Point(static_cast<int>(std::ceil(x1 + 0.1 * w)),
+                               static_cast<int>(std::ceil(y1 + 0.1 * h))));
+  return box & cv::Rect(0, 0, image_size.width, image_size.height);
+}
+
+}  // namespace dreamsense::vision
+
+namespace dreamsense::vision {
+
+struct FaceApiRecognitionNet::Impl : NetBuilder {
+  cv::Mat fc;  // 256 x 128
+
+  int pool(const std::string& name, int input, const char* type, int k, int stride) {
+    cv::dnn::LayerParams lp;
+    lp.set("pool", type);
+    lp.set("kernel_h", k);
+    lp.set("kernel_w", k);
+    lp.set("stride_h", stride);
+    lp.set("stride_w", stride);
+    lp.set("ceil_mode", false);  // TF "valid": floor
+    return add(name, "Pooling", lp, {input});
+  }
+  int pad(const std::string& name, int input, std::vector<int> paddings) {
+    cv::dnn::LayerParams lp;
+    lp.set("paddings",
+           cv::dnn::DictValue::arrayInt(paddings.data(), static_cast<int>(paddings.size())));
+    return add(name, "Padding", lp, {input});
+  }
+  // conv + bias + folded scale (+ ReLU).
+  int conv_layer(const std::string& p, int input, int cin, int cout, int k, int stride,
+                 bool relu_after, const std::string& pad_mode) {
+    const Tensor* f = get(p + "/conv/filters", {k, k, cin, cout});
+    const Tensor* b = get(p + "/conv/bias", {cout});
+    const Tensor* sw = get(p + "/scale/weights", {cout});
+    const Tensor* sb = get(p + "/scale/biases", {cout});
+    if (!f || !b || !sw || !sb) return -1;
+    const int c = conv(p, input, *f, b, stride, false, pad_mode, sw, sb);
+    return relu_after ? relu(p + "/relu", c) : c;
+  }
+  int residual(const std::string& p, int x, int ch) {
+    const int a = conv_layer(p + "/conv1", x, ch, ch, 3, 1, true, "SAME");
+    if (a < 0) return -1;
+    const int b = conv_layer(p + "/conv2", a, ch, ch, 3, 1, false, "SAME");
+    if (b < 0) return -1;
+    return relu(p + "/out", sum(p + "/sum", {b, x}));
+  }
+  // Spatial sizes are tracked to reproduce the package's zero padding of a smaller branch.
+  int residual_down(const std::string& p, int x, int cin, int cout, int& size) {
+    const int a = conv_layer(p + "/conv1", x, cin, cout, 3, 2, true, "");  // valid
+    if (a < 0) return -1;
+    int b = conv_layer(p + "/conv2", a, cout, cout, 3, 1, false, "SAME");
+    if (b < 0) return -1;
+    const int conv_size = (size - 3) / 2 + 1, pool_size = size / 2;
+    if (conv_size != pool_size)
+      b = pad(p + "/pad_out", b, {0, 0, 0, 0, 0, pool_size - conv_size, 0, pool_size - conv_size});
+    int pooled = pool(p + "/avg", x, "ave", 2, 2);
+    if (cin != cout) pooled = pad(p + "/pad_channels", pooled, {0, 0, 0, cout - cin, 0, 0, 0, 0});
+    size = pool_size;
+    return relu(p + "/out", sum(p + "/sum", {pooled, b}));
+  }
+};
+
+FaceApiRecognitionNet::FaceApiRecognitionNet(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+FaceApiRecognitionNet::FaceApiRecognitionNet(FaceApiRecognitionNet&&) noexcept = default;
+FaceApiRecognitionNet& FaceApiRecognitionNet::operator=(FaceApiRecognitionNet&&) noexcept = default;
+FaceApiRecognitionNet::~FaceApiRecognitionNet() = default;
+const std::string& FaceApiRecognitionNet::weights_hash() const { return impl_->hash; }
+
+Result<FaceApiRecognitionNet> FaceApiRecognitionNet::load(const std::filesystem::path& model_dir) {
+  const auto manifest = model_dir / "face_recognition_model-weights_manifest.json";
+  auto impl = std::make_unique<Impl>();
+  auto weights = load_weights(manifest, impl->hash);
+  if (!weights) return tl::unexpected(weights.error());
+  impl->weights = std::move(*weights);
+  impl->net.setInputsNames({"input"});
+  Impl& n = *impl;
+  int x = n.conv_layer("conv32_down", 0, 3, 32, 7, 2, true, "");
+  int size = (kFaceApiRecognitionInputPx - 7) / 2 + 1;
+  if (x >= 0) x = n.pool("maxpool", x, "max", 3, 2);
+  size = (size - 3) / 2 + 1;
+  for (const char* r : {"conv32_1", "conv32_2", "conv32_3"})
+    if (x >= 0) x = n.residual(r, x, 32);
+  if (x >= 0) x = n.residual_down("conv64_down", x, 32, 64, size);
+  for (const char* r : {"conv64_1", "conv64_2", "conv64_3"})
+    if (x >= 0) x = n.residual(r, x, 64);
+  if (x >= 0) x = n.residual_down("conv128_down", x, 64, 128, size);
+  for (const char* r : {"conv128_1", "conv128_2"})
+    if (x >= 0) x = n.residual(r, x, 128);
+  if (x >= 0) x = n.residual_down("conv256_down", x, 128, 256, size);
+  for (const char* r : {"conv256_1", "conv256_2"})
+    if (x >= 0) x = n.residual(r, x, 256);
+  if (x >= 0) x = n.residual_down("conv256_down_out", x, 256, 256, size);
+  const Tensor* fc = x >= 0 ? n.get("fc", {256, kFaceApiDescriptorLength}) : nullptr;
+  if (x < 0 || !fc)
+    return make_error(ErrorCode::kCorruptData, "{}: {}", manifest.string(), n.error);
+  cv::dnn::LayerParams gap;
+  gap.set("pool", "ave");
+  gap.set("global_pooling", true);
+  n.add("gap", "Pooling", gap, {x});
+  n.fc =
+      cv::Mat(256, kFaceApiDescriptorLength, CV_32F, const_cast<float*>(fc->values.data())).clone();
+  n.weights.clear();
+  n.net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  n.net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return FaceApiRecognitionNet(std::move(impl));
+}
+
+std::vector<float> FaceApiRecognitionNet::describe(const cv::Mat& face) {
+  impl_->net.setInput(input_blob(face, kFaceApiRecognitionInputPx), "input");
+  const cv::Mat pooled = impl_->net.forward("gap");
+  const cv::Mat v = pooled.reshape(1, 1) * impl_->fc;  // 1 x 128
+  return std::vector<float>(v.ptr<float>(), v.ptr<float>() + kFaceApiDescriptorLength);
+}
+
+}  // namespace dreamsense::vision
