@@ -252,7 +252,7 @@ TEST_F(Cli, DamagedRecordsCostOnlyThemselves) {
   for (const auto& [id, d] : by_stream)
     if (id != "front.skeleton" && id != "mic_array" && id != "camera_left")
       EXPECT_EQ(d.at("damaged").get<int>() + d.at("torn_tail").get<int>(), 0) << id;
-  EXPECT_NE(slurp(out / "report.html").find("damaged recording: camera_left.mjpg"),
+  EXPECT_NE(slurp(out / "report.html").find("Damaged recording: camera_left.mjpg"),
             std::string::npos);
   // The undamaged tick count is kept: a damaged record does not end the session.
   EXPECT_EQ(summary.at("ticks"), json::parse(slurp(demo() / "summary.json")).at("ticks"));

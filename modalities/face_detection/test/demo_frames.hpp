@@ -44,6 +44,10 @@ inline Status ensure_demo(const std::filesystem::path& dir, double duration_s, u
   o.seed = seed;
   o.duration_s = duration_s;
   o.overwrite = true;
+  // The face analysers' own scene: the original gestures (the hands never near the face). The
+  // default demo's drive_car changes camera selection on this 3 s clip (0.92); over whole
+  // sessions it is measured by `eval session` (modalities/actions/README.md "Demo").
+  o.script.gestures = sim::DemoScriptOptions::GestureSet::kClassic;
   auto r = sim::generate_demo_session(o);
   if (!r) return tl::unexpected(r.error());
   return ok_status();
