@@ -1,6 +1,7 @@
 // `dreamsense demo [--out DIR] [--seed N] [--no-analyze]`
 
 #include "dreamsense/runner/analysis.hpp"
+#include "dreamsense/sim/demo_children.hpp"
 #include "dreamsense/sim/demo_session.hpp"
 
 #include <cstdio>
@@ -15,6 +16,7 @@ struct DemoFlags {
   std::string out;
   uint64_t seed = 1;
   double duration_s = 20;
+  int child = -1;  // -1: chosen by the seed
   bool no_analyze = false;
 };
 }  // namespace
@@ -32,6 +34,10 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--duration", flags->duration_s, "Session length in seconds")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 600.0));
+  cmd->add_option("--child", flags->child,
+                  "Which demo child (0 = the original; sim/demo_children.hpp); default: seed % "
+                  "number of children")
+      ->check(CLI::Range(0, static_cast<int>(sim::demo_children().size()) - 1));
   cmd->add_flag("--no-analyze", flags->no_analyze, "Only build the session");
   cmd->callback([flags, &g, &exit_code] {
     const std::filesystem::path out =
@@ -41,6 +47,7 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     o.out_dir = out;
     o.seed = flags->seed;
     o.duration_s = flags->duration_s;
+    o.child = flags->child >= 0 ? flags->child : sim::demo_child_for_seed(flags->seed);
     o.overwrite = true;
     Result<sim::DemoSummary> demo = with_progress("generate", g.quiet, [&](const auto& progress) {
       return sim::generate_demo_session(o, progress);
@@ -49,8 +56,8 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       exit_code = fail(demo.error());
       return;
     }
-    std::fprintf(stderr, "demo session (seed %llu, %.0f s) written to %s in %.1f s\n",
-                 static_cast<unsigned long long>(flags->seed), flags->duration_s,
+    std::fprintf(stderr, "demo session (seed %llu, child %d, %.0f s) written to %s in %.1f s\n",
+                 static_cast<unsigned long long>(flags->seed), o.child, flags->duration_s,
                  out.string().c_str(), demo->generation_s);
     if (flags->no_analyze) return;
     // The analysis goes beside the session, so the one folder holds everything.
