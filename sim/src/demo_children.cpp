@@ -35,7 +35,7 @@ const std::vector<DemoChild>& demo_children() {
     c[1].mask_centre_px = {275.0, 185.1};
     c[1].mask_axes_px = {152.5, 174.8};
     c[1].face_width_px = 193.1;
-    c[1].face_width_m = 0.135;  // a smaller face
+    c[1].face_width_m = 0.135;        // a smaller face
     c[1].eye_height_offset_m = 0.04;  // a smaller child: eyes 4 cm lower
 
     c[2].name = "tom_cruise";
@@ -57,8 +57,6 @@ const std::vector<DemoChild>& demo_children() {
   return children;
 }
 
-int demo_child_for_seed(uint64_t seed) {
-  return static_cast<int>(seed % demo_children().size());
-}
+int demo_child_for_seed(uint64_t seed) { return static_cast<int>(seed % demo_children().size()); }
 
 }  // namespace dreamsense::sim

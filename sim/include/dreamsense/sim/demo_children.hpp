@@ -19,8 +19,8 @@ struct DemoChild {
   std::string name;     // truth / metadata: which child
   std::string subject;  // session metadata `subject` (calibration folder name)
   std::filesystem::path portrait;
-  std::string package;  // Debian package that ships the portrait
-  std::string licence;  // of the portrait (sim/README.md, "Children")
+  std::string package;              // Debian package that ships the portrait
+  std::string licence;              // of the portrait (sim/README.md, "Children")
   std::filesystem::path landmarks;  // 68 landmarks of the portrait (data/demo)
   // Texture crop and feathered elliptic alpha mask (MeshFaceOptions); cheek-to-cheek width at eye
   // level in portrait pixels, and the physical width the face is given.
