@@ -2,6 +2,7 @@
 // the faces differ in size, and the seed chooses the child (child 0 = the original).
 
 #include "dreamsense/sim/demo_children.hpp"
+
 #include "dreamsense/sim/face_renderer.hpp"
 
 #include <gtest/gtest.h>
