@@ -520,7 +520,8 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   const cv::Matx33d head_from_generic(ex[0], ex[1], ex[2], ey[0], ey[1], ey[2], ez[0], ez[1],
                                       ez[2]);
   cv::Matx33d head_from_world = head_from_generic * G.R;
-  if (options.frontal == FrontalReference::kMeanShape2d) {
+  if (options.frontal == FrontalReference::kMeanShape2d ||
+      options.frontal == FrontalReference::kMeanWorldPitch) {
     // 1-D search of the pitch (about x) whose orthographic view best matches the mean frontal
     // shape in 2-D (similarity: scale, rotation, translation).
     double best = std::numeric_limits<double>::infinity(), best_deg = 0;
@@ -543,23 +544,41 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
     }
     head_from_world = rotation_from_ypr_deg(0, best_deg, 0) * head_from_world;
   }
-  // Upright: the eye-line frame's roll relative to the calibrated world's vertical, per used tick
-  // (world_from_head = mean_from_world^T head_from_mean^T); its median is taken as upright.
-  {
-    std::vector<double> rolls;
+  // Upright: the eye-line frame's roll (and with kMeanWorldPitch its pitch) relative to the
+  // calibrated world's vertical, per used tick (world_from_head = mean_from_world^T
+  // head_from_mean^T); the median over the ticks is taken as upright (level). Turning the frame
+  // by -m about its own x (pitch) or z (roll) axis shifts every tick's angle by -m (exactly for
+  // roll, to second order for pitch: two passes).
+  auto angles = [&](int k) {
+    std::vector<double> v;
     for (size_t f = 0; f < shapes.size(); ++f)
       if (used[f])
-        rolls.push_back(ypr_deg_from_rotation(mean_from_world[f].t() * head_from_world.t())[2]);
-    const double m = median(rolls);
+        v.push_back(ypr_deg_from_rotation(mean_from_world[f].t() * head_from_world.t())[k]);
+    return v;
+  };
+  auto robust_spread = [&](const std::vector<double>& v, double m) {
     std::vector<double> dev;
-    for (double r : rolls) dev.push_back(std::abs(r - m));
-    out.roll_spread_deg = 1.4826 * median(dev);
+    for (double r : v) dev.push_back(std::abs(r - m));
+    return 1.4826 * median(dev);
+  };
+  for (int pass = 0; pass < 2; ++pass) {
+    if (options.frontal == FrontalReference::kMeanWorldPitch) {
+      const auto pitches = angles(1);
+      const double m = median(pitches);
+      out.pitch_spread_deg = robust_spread(pitches, m);
+      if (std::isfinite(m) && out.pitch_spread_deg <= options.max_roll_spread_deg) {
+        head_from_world = rotation_from_ypr_deg(0, m, 0) * head_from_world;
+        out.level_pitch_correction_deg -= m;
+      }
+    }
+    const auto rolls = angles(2);
+    const double m = median(rolls);
+    out.roll_spread_deg = robust_spread(rolls, m);
     if (options.upright == UprightReference::kMeanWorldRoll && std::isfinite(m) &&
         out.roll_spread_deg <= options.max_roll_spread_deg) {
-      // world_from_head' = world_from_head Rz(-m) turns every tick's roll by -m.
       head_from_world = rotation_from_ypr_deg(0, 0, m) * head_from_world;
       out.upright = "mean_world_roll";
-      out.upright_roll_correction_deg = -m;
+      out.upright_roll_correction_deg -= m;
     }
   }
   out.model.name = fmt::format("self_{}", n_points);

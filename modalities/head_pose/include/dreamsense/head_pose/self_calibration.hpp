@@ -82,9 +82,12 @@ const char* to_string(SelfCalibrationStatus s);
 // How "straight ahead" (the head frame's pitch) is chosen for the self-calibrated shape; x is
 // always the axis through the two eye-opening centroids (the transverse axis of the head).
 enum class FrontalReference {
-  kGenericFace3d,  // pitch of the similarity alignment with the generic 3-D face
-  kMeanShape2d,    // the pitch from which the shape looks most like the mean frontal face photo
-                   // (dlib's mean 68-point shape, the generic model's x, y)
+  kGenericFace3d,   // pitch of the similarity alignment with the generic 3-D face
+  kMeanShape2d,     // the pitch from which the shape looks most like the mean frontal face photo
+                    // (dlib's mean 68-point shape, the generic model's x, y)
+  kMeanWorldPitch,  // kMeanShape2d, then the head's median pitch relative to the calibrated
+                    // world's horizontal over the ticks is taken as level (fails when the child
+                    // looks down at the table, or up, for most of the self-calibration stretch)
 };
 
 // How "upright" (the head frame's roll about its forward axis) is chosen.
@@ -99,7 +102,7 @@ enum class UprightReference {
 
 struct SelfCalibrationOptions {
   FaceTriangulationOptions triangulation;
-  FrontalReference frontal = FrontalReference::kMeanShape2d;
+  FrontalReference frontal = FrontalReference::kMeanWorldPitch;
   UprightReference upright = UprightReference::kMeanWorldRoll;
   // kMeanWorldRoll is used only when the rolls of the used ticks (eye-line frame) have a robust
   // spread (1.4826 x median absolute deviation) of at most this; otherwise the eye line is kept
@@ -143,6 +146,10 @@ struct SelfCalibration {
   std::string upright = "eye_line";
   double upright_roll_correction_deg = 0;
   double roll_spread_deg = 0;
+  // FrontalReference::kMeanWorldPitch: the pitch added to the kMeanShape2d frame (deg), and the
+  // robust spread of the ticks' pitches (deg).
+  double level_pitch_correction_deg = 0;
+  double pitch_spread_deg = 0;
   bool converged() const { return status == SelfCalibrationStatus::kConverged; }
 };
 
