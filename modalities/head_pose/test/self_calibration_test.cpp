@@ -227,6 +227,39 @@ TEST(SelfCalibration, UprightFromTheMedianWorldRoll) {
   EXPECT_EQ(kept.upright, "eye_line");
 }
 
+// A face whose proportions read as a tilt (rotated 6 deg in pitch in its own upright frame):
+// the world-level pitch takes the ticks' median pitch as level, whatever the proportions.
+TEST(SelfCalibration, LevelFromTheMedianWorldPitch) {
+  std::vector<cv::Point3d> face = subject_face();
+  const cv::Matx33d tilt = rotation_from_ypr_deg(0, 6, 0);
+  for (auto& p : face) {
+    const cv::Vec3d q = tilt * cv::Vec3d(p.x, p.y, p.z);
+    p = cv::Point3d(q[0], q[1], q[2]);
+  }
+  std::mt19937 rng(23);
+  Scene s = scene(60, rng);
+  SelfCalibrationOptions o;
+  o.frontal = FrontalReference::kMeanWorldPitch;
+  const auto cal = self_calibrate_face(frames_of(face, s, 0.7, rng), o);
+  ASSERT_TRUE(cal.converged()) << cal.reason;
+  std::vector<cv::Vec3d> a, b;
+  for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
+    const auto& p = cal.model.points_m[k];
+    const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
+    a.emplace_back(p.x, p.y, p.z);
+    b.emplace_back(q.x, q.y, q.z);
+  }
+  RigidTransform T;
+  ASSERT_TRUE(align_points(a, b, false, T));
+  std::vector<double> pitches;
+  for (const auto& P : s.poses) pitches.push_back(ypr_deg_from_rotation(P)[1]);
+  std::nth_element(pitches.begin(), pitches.begin() + 30, pitches.end());
+  // Left: the sampled poses' own median pitch, which the prior cannot know.
+  EXPECT_NEAR(ypr_deg_from_rotation(T.R)[1], -pitches[30], 0.6);
+  EXPECT_NE(cal.level_pitch_correction_deg, 0.0);
+  EXPECT_GT(cal.pitch_spread_deg, 2.0);
+}
+
 TEST(SelfCalibration, SaysWhyItDidNotConverge) {
   std::mt19937 rng(5);
   const auto face = subject_face();
