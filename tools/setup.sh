@@ -20,6 +20,8 @@ packages=(
   libfastrtps-dev libcpp-httplib-dev
   # models and media (the demo session is built from these; nothing is downloaded)
   opencv-data opencv-doc libdlib-data pocketsphinx-en-us pocketsphinx-testdata python3-skimage
+  # the demo's other children's portraits (sim/include/dreamsense/sim/demo_children.hpp)
+  python-matplotlib-data libdlib19.1
   # speech enrolment (train speech): sphinxtrain's bw and map_adapt, pocketsphinx_mdef_convert
   sphinxtrain pocketsphinx
   # skeleton actions (modalities/actions): liblinear and libsvm train the SVMs

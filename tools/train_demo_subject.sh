@@ -13,7 +13,7 @@ seeds=(101 102 103 104)
 mkdir -p "$work" "$out"
 sessions=()
 for s in "${seeds[@]}"; do
-  [[ -f $work/T$s/session.yaml ]] || "$bin" -q demo --out "$work/T$s" --seed "$s" --gestures classic --no-analyze
+  [[ -f $work/T$s/session.yaml ]] || "$bin" -q demo --out "$work/T$s" --seed "$s" --child 0 --gestures classic --no-analyze
   sessions+=(--session "$work/T$s")
 done
 "$bin" train face "${sessions[@]}" --out "$out/face_model.yaml"

@@ -2,6 +2,7 @@
 // [--no-analyze]`
 
 #include "dreamsense/runner/analysis.hpp"
+#include "dreamsense/sim/demo_children.hpp"
 #include "dreamsense/sim/demo_session.hpp"
 
 #include <cstdio>
@@ -16,6 +17,7 @@ struct DemoFlags {
   std::string out;
   uint64_t seed = 1;
   double duration_s = 20;
+  int child = -1;  // -1: chosen by the seed
   bool no_analyze = false;
   std::string gestures = "dream";  // dream (face in view), dream6, classic
 };
@@ -34,6 +36,10 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--duration", flags->duration_s, "Session length in seconds")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 600.0));
+  cmd->add_option("--child", flags->child,
+                  "Which demo child (0 = the original; sim/demo_children.hpp); default: seed % "
+                  "number of children")
+      ->check(CLI::Range(0, static_cast<int>(sim::demo_children().size()) - 1));
   cmd->add_flag("--no-analyze", flags->no_analyze, "Only build the session");
   cmd->add_option("--gestures", flags->gestures,
                   "The child's gestures (F20): dream (wave, fly, hands_on_head, drive_car: "
@@ -50,6 +56,7 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     o.out_dir = out;
     o.seed = flags->seed;
     o.duration_s = flags->duration_s;
+    o.child = flags->child >= 0 ? flags->child : sim::demo_child_for_seed(flags->seed);
     o.overwrite = true;
     if (flags->gestures == "classic")
       o.script.gestures = sim::DemoScriptOptions::GestureSet::kClassic;
@@ -63,8 +70,8 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       return;
     }
     if (!g.quiet)
-      std::fprintf(stderr, "demo session (seed %llu, %.0f s) written to %s in %.1f s\n",
-                   static_cast<unsigned long long>(flags->seed), flags->duration_s,
+      std::fprintf(stderr, "demo session (seed %llu, child %d, %.0f s) written to %s in %.1f s\n",
+                   static_cast<unsigned long long>(flags->seed), o.child, flags->duration_s,
                    out.string().c_str(), demo->generation_s);
     if (flags->no_analyze) return;
     // The analysis goes beside the session, so the one folder holds everything.

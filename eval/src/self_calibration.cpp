@@ -66,6 +66,11 @@ nlohmann::json SessionSelfCalibration::to_json() const {
   j["residual_rms_mm"] = 1000 * face.median_rms_m;
   j["reprojection_rms_px"] = face.median_reprojection_px;
   j["interocular_mm"] = 1000 * face.interocular_m;
+  j["upright"] = face.upright;
+  j["upright_roll_correction_deg"] = face.upright_roll_correction_deg;
+  j["roll_spread_deg"] = face.roll_spread_deg;
+  j["level_pitch_correction_deg"] = face.level_pitch_correction_deg;
+  j["pitch_spread_deg"] = face.pitch_spread_deg;
   j["cpu_s"] = cpu_s;
   if (face.converged()) {
     j["right_eyeball"] = {{"centre_head_m", vec_json(right_eyeball.centre_head_m)},

@@ -2,6 +2,7 @@
 
 #include "dreamsense/audio/audio_file.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
+#include "dreamsense/sim/demo_children.hpp"
 #include "dreamsense/sim/face_renderer.hpp"
 #include "dreamsense/sim/room_acoustics.hpp"
 #include "dreamsense/sim/scene_renderer.hpp"
@@ -225,6 +226,18 @@ Result<Media> load_media(const DemoOptions& o) {
     MeshFaceOptions fo;
     fo.portrait = o.portrait;
     fo.landmarks = o.portrait_landmarks;
+    if (o.child != 0) {  // another child (demo_children.hpp)
+      const DemoChild& c = demo_children().at(static_cast<size_t>(o.child));
+      if (!fs::exists(c.portrait))
+        return tl::unexpected(media_error(c.portrait, c.package.c_str()));
+      fo.portrait = c.portrait;
+      fo.landmarks = c.landmarks;
+      fo.crop_px = c.crop_px;
+      fo.mask_centre_px = c.mask_centre_px;
+      fo.mask_axes_px = c.mask_axes_px;
+      fo.face_width_px = c.face_width_px;
+      fo.face_width_m = c.face_width_m;
+    }
     auto face = MeshFaceRenderer::create(fo);
     if (!face) return tl::unexpected(face.error());
     m.face = std::move(*face);
@@ -411,12 +424,20 @@ struct Job {
   int64_t index;
 };
 
+// The scene geometry of the session's child (demo_children.hpp: eye height).
+DemoGeometry child_geometry(const DemoOptions& o) {
+  DemoGeometry g;
+  if (o.face_model == DemoOptions::FaceModel::kMesh)
+    g.head_rest_m[1] += demo_children().at(static_cast<size_t>(o.child)).eye_height_offset_m;
+  return g;
+}
+
 class Generator {
  public:
   Generator(const DemoOptions& o, Media media)
       : o_(o),
         media_(std::move(media)),
-        script_(o.seed, o.duration_s, DemoGeometry{}, o.script),
+        script_(o.seed, o.duration_s, child_geometry(o), o.script),
         cameras_(make_demo_cameras()) {
     const auto statics = static_scene(script_.geometry(), media_);
     for (const auto& cam : cameras_) {
@@ -713,6 +734,8 @@ Status DemoOptions::check() const {
   if (!(joint_noise_m >= 0 && joint_noise_m < 0.1)) bad += " joint_noise_m must be in [0, 0.1);";
   if (!(image_noise_sigma >= 0 && image_noise_sigma <= 40))
     bad += " image_noise_sigma must be in [0, 40];";
+  if (child < 0 || child >= static_cast<int>(demo_children().size()))
+    bad += fmt::format(" child must be in [0, {}];", demo_children().size() - 1);
   if (jpeg_quality < 1 || jpeg_quality > 100) bad += " jpeg_quality must be in [1, 100];";
   if (threads < 1 || threads > 64) bad += " threads must be in [1, 64];";
   if (auto s = script.check(); !s) bad += " script: " + s.error().message + ";";
@@ -928,8 +951,10 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
   // Who the child is (a pseudonymous id, as a therapy session log would have it): analysis looks
   // up the child's calibration (face model, gaze constants) under this name. Every seed shows the
   // same rendered child; the planar face is another subject without a calibration.
-  if (options.face_model == DemoOptions::FaceModel::kMesh)
-    manifest.metadata["subject"] = kDemoSubject;
+  if (options.face_model == DemoOptions::FaceModel::kMesh) {
+    const DemoChild& child = demo_children().at(static_cast<size_t>(options.child));
+    manifest.metadata["subject"] = options.child == 0 ? std::string(kDemoSubject) : child.subject;
+  }
   const int channels = static_cast<int>(g.mic_x_m.size());
   for (const auto& p : plans) {
     sources::StreamEntry e;
@@ -1108,6 +1133,13 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
     meta["truth_version"] = 1;
     meta["generator"] = kGenerator;
     meta["seed"] = options.seed;
+    if (options.face_model == DemoOptions::FaceModel::kMesh) {  // which child (demo_children.hpp)
+      const DemoChild& child = demo_children().at(static_cast<size_t>(options.child));
+      meta["child"] = {{"index", options.child},
+                       {"name", child.name},
+                       {"face_width_m", child.face_width_m},
+                       {"eye_height_offset_m", child.eye_height_offset_m}};
+    }
     meta["duration_ns"] = static_cast<int64_t>(std::llround(dur * 1e9));
     meta["frame_rate"] = options.camera_rate_hz;
     meta["robot_head_m"] = vec_json(g.robot_head_m);

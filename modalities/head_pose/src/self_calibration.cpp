@@ -1,5 +1,7 @@
 #include "dreamsense/head_pose/self_calibration.hpp"
 
+#include "dreamsense/head_pose/head_pose_estimator.hpp"
+
 #include <fmt/format.h>
 #include <opencv2/calib3d.hpp>
 
@@ -368,6 +370,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   std::vector<std::vector<cv::Vec3d>> aligned(shapes.size());
   std::vector<double> frame_rms(shapes.size(), kNaN);
   std::vector<char> used(shapes.size(), 0);
+  std::vector<cv::Matx33d> mean_from_world(shapes.size(), cv::Matx33d::eye());
   for (int round = 0; round < options.rounds; ++round) {
     for (size_t f = 0; f < shapes.size(); ++f) {
       const auto& pts = shapes[f].points_world;
@@ -397,6 +400,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
       double ss = 0;
       for (size_t j = 0; j < a2.size(); ++j) ss += std::pow(cv::norm(T.apply(a2[j]) - b2[j]), 2);
       frame_rms[f] = a2.empty() ? kNaN : std::sqrt(ss / static_cast<double>(a2.size()));
+      mean_from_world[f] = T.R;
       for (size_t k = 0; k < n_points; ++k)
         if (finite(pts[k])) aligned[f][k] = T.apply(pts[k]);
     }
@@ -516,7 +520,8 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   const cv::Matx33d head_from_generic(ex[0], ex[1], ex[2], ey[0], ey[1], ey[2], ez[0], ez[1],
                                       ez[2]);
   cv::Matx33d head_from_world = head_from_generic * G.R;
-  if (options.frontal == FrontalReference::kMeanShape2d) {
+  if (options.frontal == FrontalReference::kMeanShape2d ||
+      options.frontal == FrontalReference::kMeanWorldPitch) {
     // 1-D search of the pitch (about x) whose orthographic view best matches the mean frontal
     // shape in 2-D (similarity: scale, rotation, translation).
     double best = std::numeric_limits<double>::infinity(), best_deg = 0;
@@ -539,6 +544,43 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
     }
     head_from_world = rotation_from_ypr_deg(0, best_deg, 0) * head_from_world;
   }
+  // Upright: the eye-line frame's roll (and with kMeanWorldPitch its pitch) relative to the
+  // calibrated world's vertical, per used tick (world_from_head = mean_from_world^T
+  // head_from_mean^T); the median over the ticks is taken as upright (level). Turning the frame
+  // by -m about its own x (pitch) or z (roll) axis shifts every tick's angle by -m (exactly for
+  // roll, to second order for pitch: two passes).
+  auto angles = [&](int k) {
+    std::vector<double> v;
+    for (size_t f = 0; f < shapes.size(); ++f)
+      if (used[f])
+        v.push_back(ypr_deg_from_rotation(mean_from_world[f].t() * head_from_world.t())[k]);
+    return v;
+  };
+  auto robust_spread = [&](const std::vector<double>& v, double m) {
+    std::vector<double> dev;
+    for (double r : v) dev.push_back(std::abs(r - m));
+    return 1.4826 * median(dev);
+  };
+  for (int pass = 0; pass < 2; ++pass) {
+    if (options.frontal == FrontalReference::kMeanWorldPitch) {
+      const auto pitches = angles(1);
+      const double m = median(pitches);
+      out.pitch_spread_deg = robust_spread(pitches, m);
+      if (std::isfinite(m) && out.pitch_spread_deg <= options.max_roll_spread_deg) {
+        head_from_world = rotation_from_ypr_deg(0, m, 0) * head_from_world;
+        out.level_pitch_correction_deg -= m;
+      }
+    }
+    const auto rolls = angles(2);
+    const double m = median(rolls);
+    out.roll_spread_deg = robust_spread(rolls, m);
+    if (options.upright == UprightReference::kMeanWorldRoll && std::isfinite(m) &&
+        out.roll_spread_deg <= options.max_roll_spread_deg) {
+      head_from_world = rotation_from_ypr_deg(0, 0, m) * head_from_world;
+      out.upright = "mean_world_roll";
+      out.upright_roll_correction_deg -= m;
+    }
+  }
   out.model.name = fmt::format("self_{}", n_points);
   for (size_t k = 0; k < n_points; ++k) {
     if (!finite(mean[k])) continue;
@@ -555,10 +597,11 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   out.status = SelfCalibrationStatus::kConverged;
   out.reason = fmt::format(
       "{} of {} ticks used ({} with two or more cameras, {} triangulated consistently), {} "
-      "points, residual {:.2f} mm RMS, reprojection {:.2f} px, eyes {:.1f} mm apart",
+      "points, residual {:.2f} mm RMS, reprojection {:.2f} px, eyes {:.1f} mm apart, upright "
+      "{} (roll {:+.1f} deg, ticks' roll spread {:.1f} deg)",
       out.frames_used, out.frames_offered, out.frames_multi_view, out.frames_triangulated,
       out.model.points_m.size(), 1000 * out.median_rms_m, out.median_reprojection_px,
-      1000 * out.interocular_m);
+      1000 * out.interocular_m, out.upright, out.upright_roll_correction_deg, out.roll_spread_deg);
   if (out.views_dropped > 0)
     out.reason += fmt::format(
         "; {} camera views dropped as disagreeing with the others (a failed landmark fit or a "

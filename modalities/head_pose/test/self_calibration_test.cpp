@@ -175,6 +175,91 @@ TEST(SelfCalibration, RecoversASubjectsFaceWithoutTruth) {
   EXPECT_LT(jitter_self, 0.3 * err_generic) << jitter_self << " vs " << err_generic;
 }
 
+// A face whose eye line is not level in its own upright frame (4 deg): the eye-line frame
+// carries that tilt as a roll bias; taking the median roll over the ticks relative to the world's
+// vertical as upright removes it when the head rolls about upright (here uniformly in +-8 deg).
+TEST(SelfCalibration, UprightFromTheMedianWorldRoll) {
+  std::vector<cv::Point3d> face = subject_face();
+  const cv::Matx33d tilt = rotation_from_ypr_deg(0, 0, 4);
+  for (auto& p : face) {
+    const cv::Vec3d q = tilt * cv::Vec3d(p.x, p.y, p.z);
+    p = cv::Point3d(q[0], q[1], q[2]);
+  }
+  auto roll_offset = [&](UprightReference upright, SelfCalibration* out) {
+    std::mt19937 rng(21);
+    Scene s = scene(60, rng);
+    SelfCalibrationOptions o;
+    o.upright = upright;
+    auto cal = self_calibrate_face(frames_of(face, s, 0.7, rng), o);
+    EXPECT_TRUE(cal.converged()) << cal.reason;
+    std::vector<cv::Vec3d> a, b;
+    for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
+      const auto& p = cal.model.points_m[k];
+      const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
+      a.emplace_back(p.x, p.y, p.z);
+      b.emplace_back(q.x, q.y, q.z);
+    }
+    RigidTransform T;
+    EXPECT_TRUE(align_points(a, b, false, T));
+    if (out) *out = cal;
+    // The sample's median true roll (what the prior takes as upright).
+    std::vector<double> r;
+    for (const auto& P : s.poses) r.push_back(ypr_deg_from_rotation(P)[2]);
+    std::nth_element(r.begin(), r.begin() + 30, r.end());
+    return std::pair(ypr_deg_from_rotation(T.R)[2], r[30]);
+  };
+  SelfCalibration world;
+  const double eye_line = roll_offset(UprightReference::kEyeLine, nullptr).first;
+  const auto [mean_roll, median_truth_roll] = roll_offset(UprightReference::kMeanWorldRoll, &world);
+  EXPECT_NEAR(std::abs(eye_line), 4.0, 1.0);
+  // Left: the sampled poses' own median roll (1.7 deg here), which the prior cannot know.
+  EXPECT_NEAR(mean_roll, -median_truth_roll, 0.3) << "eye line " << eye_line;
+  EXPECT_LT(std::abs(mean_roll), 2.5);
+  EXPECT_EQ(world.upright, "mean_world_roll");
+  EXPECT_GT(world.roll_spread_deg, 2.0);
+  // A head rolling all over (spread beyond the limit) keeps the eye line.
+  std::mt19937 rng(21);
+  Scene s = scene(60, rng);
+  SelfCalibrationOptions o;
+  o.max_roll_spread_deg = 1.0;
+  const auto kept = self_calibrate_face(frames_of(face, s, 0.7, rng), o);
+  ASSERT_TRUE(kept.converged()) << kept.reason;
+  EXPECT_EQ(kept.upright, "eye_line");
+}
+
+// A face whose proportions read as a tilt (rotated 6 deg in pitch in its own upright frame):
+// the world-level pitch takes the ticks' median pitch as level, whatever the proportions.
+TEST(SelfCalibration, LevelFromTheMedianWorldPitch) {
+  std::vector<cv::Point3d> face = subject_face();
+  const cv::Matx33d tilt = rotation_from_ypr_deg(0, 6, 0);
+  for (auto& p : face) {
+    const cv::Vec3d q = tilt * cv::Vec3d(p.x, p.y, p.z);
+    p = cv::Point3d(q[0], q[1], q[2]);
+  }
+  std::mt19937 rng(23);
+  Scene s = scene(60, rng);
+  SelfCalibrationOptions o;
+  o.frontal = FrontalReference::kMeanWorldPitch;
+  const auto cal = self_calibrate_face(frames_of(face, s, 0.7, rng), o);
+  ASSERT_TRUE(cal.converged()) << cal.reason;
+  std::vector<cv::Vec3d> a, b;
+  for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
+    const auto& p = cal.model.points_m[k];
+    const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
+    a.emplace_back(p.x, p.y, p.z);
+    b.emplace_back(q.x, q.y, q.z);
+  }
+  RigidTransform T;
+  ASSERT_TRUE(align_points(a, b, false, T));
+  std::vector<double> pitches;
+  for (const auto& P : s.poses) pitches.push_back(ypr_deg_from_rotation(P)[1]);
+  std::nth_element(pitches.begin(), pitches.begin() + 30, pitches.end());
+  // Left: the sampled poses' own median pitch, which the prior cannot know.
+  EXPECT_NEAR(ypr_deg_from_rotation(T.R)[1], -pitches[30], 0.6);
+  EXPECT_NE(cal.level_pitch_correction_deg, 0.0);
+  EXPECT_GT(cal.pitch_spread_deg, 2.0);
+}
+
 TEST(SelfCalibration, SaysWhyItDidNotConverge) {
   std::mt19937 rng(5);
   const auto face = subject_face();

@@ -23,8 +23,11 @@
 namespace dreamsense::eval {
 
 struct SessionSelfCalibrationOptions {
-  double max_seconds = 10;  // of session time searched from the first frame
-  int tick_step = 2;        // every n-th tick
+  // The ticks are spread over up to 20 s (every 6th tick at 25 Hz: 0.24 s apart) rather than
+  // taken back to back: the same CPU, but the head frame's upright (the median roll over the
+  // ticks, head_pose::UprightReference::kMeanWorldRoll) averages a longer stretch of head motion.
+  double max_seconds = 20;  // of session time searched from the first frame
+  int tick_step = 6;        // every n-th tick
   int enough_frames = 60;   // stop once this many ticks had the face in two or more cameras
   // Colour streams used; empty = every calibrated colour stream with the role child_camera.
   std::vector<std::string> cameras;

@@ -43,6 +43,11 @@ struct DemoOptions {
   // (painted eyes: the truth eye gaze is then the head gaze).
   enum class FaceModel { kMesh, kPlanar };  // kMesh: session metadata subject = kDemoSubject
   FaceModel face_model = FaceModel::kMesh;
+  // Which child (index into demo_children(), demo_children.hpp; mesh face only): portrait, face
+  // width, eye height, metadata subject. `dreamsense demo` sets demo_child_for_seed(seed); the
+  // library keeps child 0 (the original child; `portrait` / `portrait_landmarks` below apply to
+  // it only).
+  int child = 0;
   // The child's gestures: by default DREAM's gestures that leave the face in view (wave, fly,
   // hands_on_head, drive_car: F20 is checkable on every demo); kDream: all six (also cover_eyes
   // and drink, hands over the face); kClassic: the original three (the demo before issue 13);

@@ -82,14 +82,32 @@ const char* to_string(SelfCalibrationStatus s);
 // How "straight ahead" (the head frame's pitch) is chosen for the self-calibrated shape; x is
 // always the axis through the two eye-opening centroids (the transverse axis of the head).
 enum class FrontalReference {
-  kGenericFace3d,  // pitch of the similarity alignment with the generic 3-D face
-  kMeanShape2d,    // the pitch from which the shape looks most like the mean frontal face photo
-                   // (dlib's mean 68-point shape, the generic model's x, y)
+  kGenericFace3d,   // pitch of the similarity alignment with the generic 3-D face
+  kMeanShape2d,     // the pitch from which the shape looks most like the mean frontal face photo
+                    // (dlib's mean 68-point shape, the generic model's x, y)
+  kMeanWorldPitch,  // kMeanShape2d, then the head's median pitch relative to the calibrated
+                    // world's horizontal over the ticks is taken as level (fails when the child
+                    // looks down at the table, or up, for most of the self-calibration stretch)
+};
+
+// How "upright" (the head frame's roll about its forward axis) is chosen.
+enum class UprightReference {
+  kEyeLine,        // x through the two eye-opening centroids: a face whose eyes are not level
+                   // (a tilted portrait, an asymmetric face) gets that tilt as a roll bias
+  kMeanWorldRoll,  // the head's median roll relative to the calibrated world's vertical over the
+                   // self-calibration ticks is zero: people hold their heads upright on average
+                   // (fails when the child keeps the head tilted during those seconds, e.g.
+                   // lying on one side, or when the world frame's y axis is not vertical)
 };
 
 struct SelfCalibrationOptions {
   FaceTriangulationOptions triangulation;
-  FrontalReference frontal = FrontalReference::kMeanShape2d;
+  FrontalReference frontal = FrontalReference::kMeanWorldPitch;
+  UprightReference upright = UprightReference::kMeanWorldRoll;
+  // kMeanWorldRoll is used only when the rolls of the used ticks (eye-line frame) have a robust
+  // spread (1.4826 x median absolute deviation) of at most this; otherwise the eye line is kept
+  // (a head rolling all over says little about its upright; SelfCalibration::upright says so).
+  double max_roll_spread_deg = 15;
   int min_points_per_frame = 40;  // triangulated points a tick needs to be used
   int min_frames = 12;            // usable ticks needed to converge
   int rounds = 4;                 // generalised Procrustes rounds
@@ -122,6 +140,16 @@ struct SelfCalibration {
   double median_rms_m = 0;              // median per-tick residual after alignment
   double median_reprojection_px = 0;
   double interocular_m = 0;  // between the eye-opening centroids
+  // Upright: "eye_line" or "mean_world_roll"; the roll added to the eye-line frame (deg; the
+  // median roll of the eye-line head frame over the used ticks), and the robust spread of the
+  // ticks' rolls (deg).
+  std::string upright = "eye_line";
+  double upright_roll_correction_deg = 0;
+  double roll_spread_deg = 0;
+  // FrontalReference::kMeanWorldPitch: the pitch added to the kMeanShape2d frame (deg), and the
+  // robust spread of the ticks' pitches (deg).
+  double level_pitch_correction_deg = 0;
+  double pitch_spread_deg = 0;
   bool converged() const { return status == SelfCalibrationStatus::kConverged; }
 };
 
