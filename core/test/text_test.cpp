@@ -12,12 +12,16 @@ TEST(Utf8, AcceptsWellFormedText) {
 }
 
 TEST(Utf8, FindsTheFirstMalformedByte) {
-  EXPECT_EQ(find_invalid_utf8("ab\xFF" "cd"), 2u);          // never valid
-  EXPECT_EQ(find_invalid_utf8("ab\xC3"), 2u);               // truncated sequence at the end
-  EXPECT_EQ(find_invalid_utf8("\xC0\xAF"), 0u);             // overlong '/'
-  EXPECT_EQ(find_invalid_utf8("x\xED\xA0\x80"), 1u);        // UTF-16 surrogate
-  EXPECT_EQ(find_invalid_utf8("\xF4\x90\x80\x80"), 0u);     // above U+10FFFF
-  EXPECT_EQ(find_invalid_utf8("ok\xE2\x82" "A"), 2u);       // bad continuation byte
+  EXPECT_EQ(find_invalid_utf8("ab\xFF"
+                              "cd"),
+            2u);                                         // never valid
+  EXPECT_EQ(find_invalid_utf8("ab\xC3"), 2u);            // truncated sequence at the end
+  EXPECT_EQ(find_invalid_utf8("\xC0\xAF"), 0u);          // overlong '/'
+  EXPECT_EQ(find_invalid_utf8("x\xED\xA0\x80"), 1u);     // UTF-16 surrogate
+  EXPECT_EQ(find_invalid_utf8("\xF4\x90\x80\x80"), 0u);  // above U+10FFFF
+  EXPECT_EQ(find_invalid_utf8("ok\xE2\x82"
+                              "A"),
+            2u);  // bad continuation byte
 }
 
 TEST(Utf8, LineOfOffsetCountsNewlines) {

@@ -319,8 +319,8 @@ Result<AnalysisSummary> analyze_video(const AnalysisOptions& options,
 }  // namespace
 
 const std::vector<std::string>& analysis_output_names() {
-  static const std::vector<std::string> names = {"primitives.jsonl", "events.log", "dream.json",
-                                                 "report.html", "overlay.mp4", "tables",
+  static const std::vector<std::string> names = {"primitives.jsonl", "events.log",  "dream.json",
+                                                 "report.html",      "overlay.mp4", "tables",
                                                  "summary.json"};
   return names;
 }
@@ -422,8 +422,7 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   po.sync.policy = SyncPolicy::kLatestWithinTolerance;
   po.pace_source = false;  // the devices deliver in real time
   return run_plan(options, std::move(*plan), manifest, capture, po, nullptr, Timestamp::unset(),
-                  Timestamp::unset(), fs::path("live"), manifest.name, {{"kind", "live"}},
-                  nullptr);
+                  Timestamp::unset(), fs::path("live"), manifest.name, {{"kind", "live"}}, nullptr);
 }
 
 }  // namespace dreamsense::runner
