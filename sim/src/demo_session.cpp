@@ -467,6 +467,7 @@ class Generator {
   }
 
   const DemoScript& script() const { return script_; }
+  const DemoOptions& options() const { return o_; }
   const std::vector<CameraModel>& cameras() const { return cameras_; }
   const Media& media() const { return media_; }
 
@@ -682,8 +683,11 @@ json face_record(const Generator& gen, int64_t stamp) {
   // faces (issue 12): who the face is (the mesh face is the session's subject; the planar face is
   // an uncalibrated stranger) and its expression: the NASA portrait smiles, and the renderer
   // does not animate the mouth, so it is "happy" throughout.
-  r["person"] = gen.media().moving_eyes ? json(kDemoSubject) : json(nullptr);
-  r["expression"] = "happy";
+  const DemoChild& child = demo_children().at(static_cast<size_t>(gen.options().child));
+  r["person"] = !gen.media().moving_eyes ? json(nullptr)
+                : child.in_shipped_gallery ? json(kDemoSubject)
+                                           : json("unknown");
+  r["expression"] = child.expression;
   return r;
 }
 

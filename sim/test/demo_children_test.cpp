@@ -26,6 +26,9 @@ TEST(DemoChildren, SeedChoosesTheChildAndChildZeroIsTheOriginal) {
   }
   EXPECT_EQ(seen.size(), children.size());
   EXPECT_EQ(demo_child_for_seed(3), 0);  // the CLI test's and golden replay's seed
+  EXPECT_EQ(demo_child_for_seed(1), 0);  // the default demo: the child whose calibration ships
+  EXPECT_EQ(demo_child_for_seed(2), 1);
+  EXPECT_EQ(demo_child_for_seed(4), 2);
   std::set<std::string> names, subjects;
   std::set<double> widths, heights;
   for (const auto& c : children) {

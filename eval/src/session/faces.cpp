@@ -2,8 +2,9 @@
 // (faces, issue 12). A tick counts when its truth face is visible in at least one camera.
 //  - face_identity_ok_rate: such ticks with an ok identifyFace / such ticks.
 //  - face_identity_accuracy: ok identifyFace answers naming the truth `person` (the gallery's
-//    name of the enrolled child, i.e. the session's subject) / ok answers; an answer of -1
-//    (unknown) is wrong. Not evaluated when the truth has no person.
+//    name of the enrolled child, i.e. the session's subject, or "unknown" for a face the gallery
+//    does not enrol, which must be answered -1) / ok answers. Not evaluated when the truth has no
+//    person.
 //  - expression_ok_rate, expression_accuracy: the same for identifyFaceExpression's label
 //    against the truth `expression` (the demo's portrait shows one expression throughout, so
 //    this checks the chain and the absence of flicker, not the discrimination of expressions).
@@ -68,7 +69,8 @@ MetricGroup face_recognition_metrics() {
     evaluate(PrimitiveId::kIdentifyFace, "person", "face_identity_ok_rate",
              "face_identity_accuracy", [](const primitives::PrimitiveRecord& r) {
                const auto* v = r.value_as<primitives::FaceIdentityValue>();
-               return v && v->id >= 0 ? v->name : std::string();
+               if (v == nullptr) return std::string();
+               return v->id >= 0 ? v->name : std::string("unknown");
              });
     evaluate(PrimitiveId::kIdentifyFaceExpression, "expression", "expression_ok_rate",
              "expression_accuracy", [](const primitives::PrimitiveRecord& r) {

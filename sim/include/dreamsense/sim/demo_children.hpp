@@ -32,6 +32,11 @@ struct DemoChild {
   // The child's eye height at rest relative to the original child's (world y points down, so
   // negative = taller).
   double eye_height_offset_m = 0;
+  // Truth for faces (issue 12): the portrait's expression (the renderer does not animate it), and
+  // whether the shipped face gallery (data/subjects/demo_child/face_gallery.yaml) enrols this
+  // child; a child it does not enrol must be answered as unknown (-1).
+  std::string expression = "happy";
+  bool in_shipped_gallery = false;
 };
 
 // Child 0 = the original demo child (astronaut.png); the others in a fixed order.
