@@ -36,9 +36,10 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--duration", flags->duration_s, "Session length in seconds")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 600.0));
-  cmd->add_option("--child", flags->child,
-                  "Which demo child (0 = the original, whose calibration ships; sim/demo_children.hpp); "
-                  "default: 0 on odd seeds, 1 and 2 alternately on even seeds")
+  cmd->add_option(
+         "--child", flags->child,
+         "Which demo child (0 = the original, whose calibration ships; sim/demo_children.hpp); "
+         "default: 0 on odd seeds, 1 and 2 alternately on even seeds")
       ->check(CLI::Range(0, static_cast<int>(sim::demo_children().size()) - 1));
   cmd->add_flag("--no-analyze", flags->no_analyze, "Only build the session");
   cmd->add_option("--gestures", flags->gestures,

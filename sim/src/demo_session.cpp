@@ -684,7 +684,7 @@ json face_record(const Generator& gen, int64_t stamp) {
   // an uncalibrated stranger) and its expression: the NASA portrait smiles, and the renderer
   // does not animate the mouth, so it is "happy" throughout.
   const DemoChild& child = demo_children().at(static_cast<size_t>(gen.options().child));
-  r["person"] = !gen.media().moving_eyes ? json(nullptr)
+  r["person"] = !gen.media().moving_eyes   ? json(nullptr)
                 : child.in_shipped_gallery ? json(kDemoSubject)
                                            : json("unknown");
   r["expression"] = child.expression;
