@@ -6,6 +6,7 @@
 #include <numeric>
 #include <set>
 
+#include "model_file.hpp"
 #include "svm_backends.hpp"
 
 namespace dreamsense::actions {
@@ -140,11 +141,14 @@ double centroid_distance(const cv::Mat& centroids, const cv::Mat& radii, const f
   return std::sqrt(s) / radii.at<float>(c, 0);
 }
 
+const ModelFileKind& file_kind() {
+  static const ModelFileKind kind{"actions model", ActionModel::kFormatName,
+                                  ActionModel::kFormatVersion, "dreamsense train actions"};
+  return kind;
+}
+
 Error corrupt(const fs::path& path, const std::string& what) {
-  std::string w = what;
-  std::replace(w.begin(), w.end(), '\n', ' ');
-  return Error{ErrorCode::kCorruptData,
-               fmt::format("{}: not a valid actions model ({})", path.string(), w)};
+  return model_corrupt(file_kind(), path, what);
 }
 
 }  // namespace
@@ -467,35 +471,13 @@ Status ActionModel::save(const fs::path& path) const {
   } catch (const cv::Exception& e) {
     return make_error(ErrorCode::kIoError, "{}: cannot write ({})", path.string(), e.msg);
   }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) return make_error(ErrorCode::kIoError, "{}: {}", path.string(), ec.message());
-  return ok_status();
+  return rename_model_file(tmp, path);
 }
 
 Result<ActionModel> ActionModel::load(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec))
-    return make_error(ErrorCode::kNotFound,
-                      "{}: actions model missing (write one with `dreamsense train actions`)",
-                      path.string());
   ActionModel m;
   try {
-    cv::FileStorage f(path.string(), cv::FileStorage::READ);
-    if (!f.isOpened()) return tl::unexpected(corrupt(path, "unreadable"));
-    std::string format;
-    if (f["format"].isString()) f["format"] >> format;
-    if (format != kFormatName)
-      return tl::unexpected(
-          corrupt(path, fmt::format("format is '{}', expected '{}'", format, kFormatName)));
-    if (!f["version"].isInt()) return tl::unexpected(corrupt(path, "no version key"));
-    int version = 0;
-    f["version"] >> version;
-    if (version != kFormatVersion)
-      return make_error(ErrorCode::kUnsupported,
-                        "{}: actions model format version {} is not supported (this build reads "
-                        "version {}; retrain with `dreamsense train actions`)",
-                        path.string(), version, kFormatVersion);
+    DS_ASSIGN_OR_RETURN(cv::FileStorage f, open_model_file(file_kind(), path));
     auto need = [&](const cv::FileNode& parent, const char* key,
                     const std::string& where) -> cv::FileNode {
       cv::FileNode n = parent[key];

@@ -7,6 +7,8 @@
 #include <limits>
 #include <map>
 
+#include "model_file.hpp"
+
 namespace dreamsense::actions {
 namespace fs = std::filesystem;
 namespace {
@@ -17,11 +19,14 @@ constexpr std::array<JointId, kGestureJoints> kArmJoints = {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+const ModelFileKind& file_kind() {
+  static const ModelFileKind kind{"gestures model", GestureModel::kFormatName,
+                                  GestureModel::kFormatVersion, "dreamsense train gestures"};
+  return kind;
+}
+
 Error corrupt(const fs::path& path, const std::string& what) {
-  std::string w = what;
-  std::replace(w.begin(), w.end(), '\n', ' ');
-  return Error{ErrorCode::kCorruptData,
-               fmt::format("{}: not a valid gestures model ({})", path.string(), w)};
+  return model_corrupt(file_kind(), path, what);
 }
 
 }  // namespace
@@ -317,35 +322,13 @@ Status GestureModel::save(const fs::path& path) const {
   } catch (const cv::Exception& e) {
     return make_error(ErrorCode::kIoError, "{}: cannot write ({})", path.string(), e.msg);
   }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) return make_error(ErrorCode::kIoError, "{}: {}", path.string(), ec.message());
-  return ok_status();
+  return rename_model_file(tmp, path);
 }
 
 Result<GestureModel> GestureModel::load(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec))
-    return make_error(ErrorCode::kNotFound,
-                      "{}: gestures model missing (write one with `dreamsense train gestures`)",
-                      path.string());
   GestureModel g;
   try {
-    cv::FileStorage f(path.string(), cv::FileStorage::READ);
-    if (!f.isOpened()) return tl::unexpected(corrupt(path, "unreadable"));
-    std::string format;
-    if (f["format"].isString()) f["format"] >> format;
-    if (format != kFormatName)
-      return tl::unexpected(
-          corrupt(path, fmt::format("format is '{}', expected '{}'", format, kFormatName)));
-    if (!f["version"].isInt()) return tl::unexpected(corrupt(path, "no version key"));
-    int version = 0;
-    f["version"] >> version;
-    if (version != kFormatVersion)
-      return make_error(ErrorCode::kUnsupported,
-                        "{}: gestures model format version {} is not supported (this build "
-                        "reads version {}; retrain with `dreamsense train gestures`)",
-                        path.string(), version, kFormatVersion);
+    DS_ASSIGN_OR_RETURN(cv::FileStorage f, open_model_file(file_kind(), path));
     auto need = [&](const cv::FileNode& parent, const char* key) -> cv::FileNode {
       cv::FileNode n = parent[key];
       if (n.empty()) throw std::runtime_error(std::string("missing key ") + key);
