@@ -33,9 +33,12 @@ packages=(
   chromium  # tests: report.html opened in a headless browser (apps/test/video_cli_test.cpp)
   # SRGS grammars (XML, modalities/speech); clang-tidy for tools/tidy.sh (CI, issue 19)
   libtinyxml2-dev clang-tidy
-  # faces (issue 12): GIF images (Yale faces); npm installs the face-api.js weights (below)
-  libgif-dev npm
+  # faces (issue 12): GIF images (Yale faces)
+  libgif-dev
 )
+# npm installs the face-api.js weights (below). Debian's npm package only where no npm is on the
+# machine: next to a vendor Node.js (nodesource ships its own npm) apt refuses it as broken.
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -58,7 +61,8 @@ fi
 
 # faces (issue 12): face-api.js network weights (MIT, npm @vladmandic/face-api), read by our own
 # C++ (vision/face_api_net.cpp): identifyFace's descriptor and the expression network features.
-if [[ ! -f /usr/lib/node_modules/@vladmandic/face-api/model/face_recognition_model.bin ]]; then
+npm_root=$(npm root -g 2>/dev/null || echo /usr/lib/node_modules)
+if [[ ! -f $npm_root/@vladmandic/face-api/model/face_recognition_model.bin ]]; then
   echo "setup: installing the npm package @vladmandic/face-api@1.7.15" >&2
   if [[ $(id -u) -eq 0 ]]; then npm_sudo=(); else npm_sudo=(sudo); fi
   "${npm_sudo[@]}" npm install -g --no-fund --no-audit @vladmandic/face-api@1.7.15 >/dev/null

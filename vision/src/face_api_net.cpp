@@ -112,6 +112,13 @@ Result<std::map<std::string, Tensor>> load_weights(const std::filesystem::path& 
 
 std::filesystem::path default_face_api_model_dir() {
   if (const char* env = std::getenv("DREAMSENSE_FACE_API_DIR"); env && *env) return env;
+  // npm's global root: /usr/lib with Debian's or nodesource's Node.js, /usr/local/lib with a
+  // Node.js built or unpacked by hand.
+  for (const char* root : {"/usr/lib/node_modules", "/usr/local/lib/node_modules"}) {
+    std::filesystem::path dir = std::filesystem::path(root) / "@vladmandic/face-api/model";
+    std::error_code ec;
+    if (std::filesystem::is_directory(dir, ec)) return dir;
+  }
   return "/usr/lib/node_modules/@vladmandic/face-api/model";
 }
 
