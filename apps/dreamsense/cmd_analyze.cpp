@@ -298,8 +298,10 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", flags->out, "Output folder (created if needed)")->required();
   cmd->add_option("--record", flags->record, "Also record the session into this new folder");
-  cmd->add_option("--duration", flags->duration_s,
-                  "Stop after this many seconds (default: until Ctrl-C or SIGTERM)")
+  cmd->add_option(
+         "--duration", flags->duration_s,
+         "Stop after this many seconds of analysis, counted from when the analysers are ready "
+         "(default: until Ctrl-C or SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--publish", flags->publish,
                   "Publish the primitives as they are produced: dds (ROS 2 topics "
@@ -380,12 +382,17 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                    flags->duration_s > 0 ? fmt::format("{} s", flags->duration_s).c_str()
                                          : "Ctrl-C to stop");
     std::atomic<bool> analysis_done{false};
+    std::atomic<bool> analysis_ready{false};
+    o.on_ready = [&analysis_ready] { analysis_ready = true; };
     Result<runner::AnalysisSummary> result = make_error(ErrorCode::kInternal, "not run");
     std::thread analysis([&] {
       result = runner::analyze_live(o, **capture);
       analysis_done = true;
       (*capture)->stop();  // an analysis error ends the capture too
     });
+    // --duration counts analysed time: from when the analysers are ready (models loaded).
+    while (!analysis_done && !analysis_ready && !g_stop_live)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     const auto start = std::chrono::steady_clock::now();
     while (!analysis_done && !g_stop_live &&
            !(flags->duration_s > 0 &&

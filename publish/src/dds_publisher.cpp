@@ -155,6 +155,11 @@ struct DdsPublisher::Impl {
 
   ~Impl() {
     if (participant == nullptr) return;
+    // Reliable delivery of the last samples to readers already matched, bounded so a vanished
+    // reader cannot hold the shutdown.
+    for (auto& [name, topic_writer] : writers)
+      if (topic_writer.second != nullptr)
+        topic_writer.second->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(1, 0));
     participant->delete_contained_entities();
     dds::DomainParticipantFactory::get_instance()->delete_participant(participant);
   }
@@ -169,7 +174,9 @@ struct DdsPublisher::Impl {
     wq.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
     wq.history().kind = dds::KEEP_LAST_HISTORY_QOS;
     wq.history().depth = 10;
-    wq.durability().kind = dds::VOLATILE_DURABILITY_QOS;
+    // Transient-local: a reader whose discovery completes late (a loaded machine) still gets the
+    // last `depth` samples; volatile readers (the ROS 2 default) match it as well.
+    wq.durability().kind = dds::TRANSIENT_LOCAL_DURABILITY_QOS;
     wq.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
     dds::DataWriter* w = publisher->create_datawriter(topic, wq);
     writers[primitive] = {topic, w};
@@ -271,6 +278,9 @@ Result<std::unique_ptr<DdsStringSubscriber>> DdsStringSubscriber::create(
                       dds_topic_name(options, primitive));
   dds::DataReaderQos rq = dds::DATAREADER_QOS_DEFAULT;
   rq.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
+  rq.durability().kind = dds::TRANSIENT_LOCAL_DURABILITY_QOS;
+  rq.history().kind = dds::KEEP_LAST_HISTORY_QOS;
+  rq.history().depth = 100;
   rq.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
   if (sub->create_datareader(topic, rq, m.get()) == nullptr)
     return make_error(ErrorCode::kIoError, "DDS: cannot create a reader on {}",

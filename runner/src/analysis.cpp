@@ -421,6 +421,7 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   PipelineOptions po = pipeline_options(manifest);
   po.sync.policy = SyncPolicy::kLatestWithinTolerance;
   po.pace_source = false;  // the devices deliver in real time
+  if (options.on_ready) options.on_ready();
   return run_plan(options, std::move(*plan), manifest, capture, po, nullptr, Timestamp::unset(),
                   Timestamp::unset(), fs::path("live"), manifest.name, {{"kind", "live"}}, nullptr);
 }

@@ -54,6 +54,9 @@ struct AnalysisOptions {
   std::function<Status(const std::vector<primitives::PrimitiveRecord>&)> on_records;
   // Called with every tick's frames before its primitives (e.g. the operator page's cameras).
   std::function<void(const MultiFrame&)> on_tick_frames;
+  // live: called once the analysers are built (models loaded), before the first tick; `live
+  // --duration` counts from here, so a slow start does not eat the analysed time.
+  std::function<void()> on_ready;
   Status check() const;
 };
 
