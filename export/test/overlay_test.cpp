@@ -315,9 +315,18 @@ TEST(OverlayWriter, CostPerFrame) {
   fs::remove_all(dir);
 }
 
+// A fine black and white checkerboard (3 px squares): every blurred pixel turns grey.
+cv::Mat checkerboard(cv::Size size = {1280, 960}) {
+  cv::Mat img(size, CV_8UC3);
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x)
+      img.at<cv::Vec3b>(y, x) = cv::Vec3b::all(((x / 3 + y / 3) % 2) ? 230 : 20);
+  return img;
+}
+
 // --blur-faces (privacy): pixels inside the regions change, pixels outside do not.
 TEST(BlurRegions, ChangesTheRegionsOnlyAndRemovesTheirDetail) {
-  const cv::Mat original = scene(7);
+  const cv::Mat original = checkerboard();
   cv::Mat img = original.clone();
   const cv::Rect face(400, 300, 200, 200);
   blur_regions(img, {face, cv::Rect(1200, 900, 500, 500) /* clipped */, cv::Rect(5, 5, 1, 1)});
@@ -356,11 +365,13 @@ TEST(DrawOverlay, BlurFacesPixelatesTheFaceBoxAndNothingElse) {
   OverlayOptions o;
   o.cameras["camera_middle"] = middle_model();
   Blackboard bb;
-  const MultiFrame mf = tick_with(3, {{"camera_middle", scene(1)}});
+  const MultiFrame mf = tick_with(3, {{"camera_middle", checkerboard()}});
   write_all(bb, mf.stamp, /*mutual=*/true);
-  const cv::Mat plain = draw_overlay(scene(1), "camera_middle", mf, bb.snapshot(), o, {960, 720});
+  const cv::Mat plain =
+      draw_overlay(checkerboard(), "camera_middle", mf, bb.snapshot(), o, {960, 720});
   o.blur_faces = true;
-  const cv::Mat blurred = draw_overlay(scene(1), "camera_middle", mf, bb.snapshot(), o, {960, 720});
+  const cv::Mat blurred =
+      draw_overlay(checkerboard(), "camera_middle", mf, bb.snapshot(), o, {960, 720});
   // The face box (400, 300, 200, 200) and the landmarks, shown at 0.75 and grown by 25 % each
   // side: every change lies inside (the drawing on top is the same in both).
   const cv::Rect grown(350 * 3 / 4 - 1, 250 * 3 / 4 - 1, 300 * 3 / 4 + 3, 300 * 3 / 4 + 3);
@@ -382,7 +393,7 @@ TEST(DrawOverlay, BlurFacesCoversAFaceTrackTheDetectorMissed) {
   o.cameras["camera_middle"] = middle_model();
   o.blur_faces = true;
   Blackboard bb;
-  const MultiFrame mf = tick_with(5, {{"camera_middle", scene(2)}});
+  const MultiFrame mf = tick_with(5, {{"camera_middle", checkerboard()}});
   {
     BlackboardWriter w("tracks");
     FaceDetections det;  // this frame: the detector found nothing
@@ -402,9 +413,10 @@ TEST(DrawOverlay, BlurFacesCoversAFaceTrackTheDetectorMissed) {
   const cv::Mat plain = [&] {
     OverlayOptions p = o;
     p.blur_faces = false;
-    return draw_overlay(scene(2), "camera_middle", mf, bb.snapshot(), p, {960, 720});
+    return draw_overlay(checkerboard(), "camera_middle", mf, bb.snapshot(), p, {960, 720});
   }();
-  const cv::Mat blurred = draw_overlay(scene(2), "camera_middle", mf, bb.snapshot(), o, {960, 720});
+  const cv::Mat blurred =
+      draw_overlay(checkerboard(), "camera_middle", mf, bb.snapshot(), o, {960, 720});
   const cv::Rect shown(static_cast<int>(regions[0].x * 0.75) - 1,
                        static_cast<int>(regions[0].y * 0.75) - 1,
                        static_cast<int>(regions[0].width * 0.75) + 3,
