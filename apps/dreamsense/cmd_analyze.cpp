@@ -108,8 +108,9 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
                "(refused by default)");
   cmd.add_flag("--include-names", flags.include_names,
                "Also write people's names: enrolment folder names of speakers (identifyVoice "
-               "name), face gallery names (identifyFace name), the session's name and metadata. "
-               "Default: ids only (speaker_1, child, therapist, gallery ids; docs/outputs.md)");
+               "name), face gallery names (identifyFace name), the session's own name. Default: "
+               "ids only (speaker_1, child, therapist, gallery ids; the session folder's name; "
+               "session.yaml metadata is never written; docs/outputs.md)");
   cmd.add_flag("--blur-faces", flags.blur_faces,
                "Pixelate the faces (detections, landmarks, face tracks) in every picture "
                "written: overlay.mp4, the report's key frames (and live's operator page)");
