@@ -34,6 +34,8 @@ struct AnalyzeFlags {
   bool force = false;  // replace an earlier analysis in the output folder
   bool allow_damaged = false;
   bool follow_links = false;
+  bool include_names = false;  // privacy: names of speakers, faces, the session (default: ids)
+  bool blur_faces = false;     // privacy: faces pixelated in overlay.mp4 and the key frames
   SubjectFlags subject;
   std::string mutual_mode;
   std::vector<double> robot_head;
@@ -104,6 +106,14 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
   cmd.add_flag("--follow-links", flags.follow_links,
                "Read session files that are symbolic links to files outside the session folder "
                "(refused by default)");
+  cmd.add_flag("--include-names", flags.include_names,
+               "Also write people's names: enrolment folder names of speakers (identifyVoice "
+               "name), face gallery names (identifyFace name), the session's own name. Default: "
+               "ids only (speaker_1, child, therapist, gallery ids; the session folder's name; "
+               "session.yaml metadata is never written; docs/outputs.md)");
+  cmd.add_flag("--blur-faces", flags.blur_faces,
+               "Pixelate the faces (detections, landmarks, face tracks) in every picture "
+               "written: overlay.mp4, the report's key frames (and live's operator page)");
   add_subject_flags(cmd, flags.subject);
   cmd.add_option("--mutual-gaze", flags.mutual_mode,
                  "Mutual-gaze test: 3d (ray within 0.2 m of the robot head) or camera-plane "
@@ -128,6 +138,8 @@ Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& 
   o.replace_existing = flags.force;
   o.allow_damaged = flags.allow_damaged;
   o.follow_links_outside = flags.follow_links;
+  o.plan.include_names = flags.include_names;
+  o.blur_faces = flags.blur_faces;
   apply_subject_flags(flags.subject, o);
   o.policy = flags.policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
   runner::PlanOptions& plan = o.plan;
@@ -349,6 +361,7 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       ui::OperatorPageOptions uo;
       uo.port = flags->ui_port;
       uo.host = flags->ui_host;
+      uo.blur_faces = flags->blur_faces;
       auto p = ui::OperatorPage::start(uo);
       if (!p) {
         exit_code = fail(p.error());

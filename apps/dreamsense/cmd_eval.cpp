@@ -28,6 +28,9 @@ Result<std::filesystem::path> analyse_for_eval(const std::string& session,
   runner::AnalysisOptions a;
   a.session_dir = session;
   a.out_dir = temp;
+  // Identity metrics compare with the truth's names (face gallery names, enrolment folders): the
+  // analysis is private to this process and removed after scoring.
+  a.plan.include_names = true;
   SubjectFlags sf;
   sf.subject = subject;
   if (!subject.empty()) apply_subject_flags(sf, a);

@@ -5,6 +5,7 @@
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/face_tracks.hpp"
 #include "dreamsense/perception/gaze.hpp"
 #include "dreamsense/perception/head_pose.hpp"
 
@@ -93,6 +94,81 @@ void draw_segment(cv::Mat& canvas, const Mapping& map, const CameraModel* model,
 
 }  // namespace
 
+std::vector<cv::Rect> face_regions_px(const SensorId& camera, Timestamp tick,
+                                      const BlackboardView& view, const CameraModel* model,
+                                      cv::Size shown) {
+  std::vector<cv::Rect2d> found;
+  const Duration max_age = Duration::from_seconds(1.0);
+  auto recent = [&](Timestamp stamp) { return stamp <= tick && tick - stamp <= max_age; };
+  if (const auto e = view.get(keys::kFaceDetections); e && e->present() && recent(e->stamp)) {
+    const auto cam = e->value->cameras.find(camera);
+    if (cam != e->value->cameras.end()) {
+      const double k = rescale(cam->second.image_size, shown);
+      for (const DetectedFace& f : cam->second.faces)
+        found.emplace_back(f.box_px.x * k, f.box_px.y * k, f.box_px.width * k, f.box_px.height * k);
+    }
+  }
+  if (const auto e = view.get(keys::kFaceLandmarks); e && e->present() && recent(e->stamp) &&
+                                                     e->value->camera == camera &&
+                                                     !e->value->points_px.empty()) {
+    const double k = rescale(e->value->image_size, shown);
+    std::vector<cv::Point2f> pts;
+    for (const cv::Point2d& p : e->value->points_px)
+      pts.emplace_back(static_cast<float>(p.x * k), static_cast<float>(p.y * k));
+    found.push_back(cv::Rect2d(cv::boundingRect(pts)));
+  }
+  if (const auto e = view.get(keys::kFaceTracks);
+      model != nullptr && e && e->present() && recent(e->stamp)) {
+    for (const FaceTrack& t : e->value->tracks) {
+      const double dt = (tick - t.last_update).seconds();
+      if (dt < 0 || dt > max_age.seconds()) continue;
+      const cv::Vec3d centre = t.position_world_m + t.velocity_world_mps * dt;
+      const cv::Vec3d c = model->to_camera(centre);
+      if (!(c[2] > 0.05)) continue;
+      const auto px = project(model, shown, centre);
+      if (!px) continue;
+      // Half of a 0.24 m square at the head's depth, in shown pixels.
+      const double half = model->K(0, 0) * 0.12 / c[2] * rescale(model->image_size, shown);
+      if (!(half > 0) || half > 1e5) continue;
+      found.emplace_back(px->x - half, px->y - half, 2 * half, 2 * half);
+    }
+  }
+  std::vector<cv::Rect> out;
+  const cv::Rect2d frame(0, 0, shown.width, shown.height);
+  for (const cv::Rect2d& r : found) {
+    if (!(r.width > 0 && r.height > 0)) continue;
+    const double mx = 0.25 * r.width, my = 0.25 * r.height;
+    const cv::Rect2d grown =
+        cv::Rect2d(r.x - mx, r.y - my, r.width + 2 * mx, r.height + 2 * my) & frame;
+    if (grown.width < 1 || grown.height < 1) continue;
+    out.emplace_back(static_cast<int>(std::floor(grown.x)), static_cast<int>(std::floor(grown.y)),
+                     static_cast<int>(std::ceil(grown.br().x) - std::floor(grown.x)),
+                     static_cast<int>(std::ceil(grown.br().y) - std::floor(grown.y)));
+    out.back() &= cv::Rect(0, 0, shown.width, shown.height);
+  }
+  return out;
+}
+
+void blur_regions(cv::Mat& image, const std::vector<cv::Rect>& regions) {
+  for (cv::Rect r : regions) {
+    r &= cv::Rect(0, 0, image.cols, image.rows);
+    if (r.width < 2 || r.height < 2) continue;
+    cv::Mat roi = image(r);
+    const int cells = 8;
+    const double f = static_cast<double>(cells) / std::max(r.width, r.height);
+    cv::Mat small;
+    cv::resize(roi, small,
+               {std::max(1, static_cast<int>(std::lround(r.width * f))),
+                std::max(1, static_cast<int>(std::lround(r.height * f)))},
+               0, 0, cv::INTER_AREA);
+    cv::Mat big;
+    cv::resize(small, big, r.size(), 0, 0, cv::INTER_NEAREST);
+    const int k = (std::max(r.width, r.height) / cells) | 1;
+    cv::GaussianBlur(big, big, {k, k}, 0, 0, cv::BORDER_REPLICATE);
+    big.copyTo(roi);
+  }
+}
+
 Status OverlayOptions::check() const {
   std::string bad;
   if (camera.empty()) bad += " camera must be \"selected\" or a stream id;";
@@ -146,6 +222,19 @@ cv::Mat draw_overlay(const cv::Mat& image, const SensorId& camera, const MultiFr
   const Timestamp t = tick.stamp;
   const auto model_it = options.cameras.find(camera);
   const CameraModel* model = model_it == options.cameras.end() ? nullptr : &model_it->second;
+  if (options.blur_faces && !image.empty()) {
+    // In the shown picture's pixels, moved to the canvas; before anything is drawn on it.
+    std::vector<cv::Rect> regions = face_regions_px(camera, t, view, model, shown);
+    const cv::Rect picture(
+        cv::Point(static_cast<int>(map.offset.x), static_cast<int>(map.offset.y)),
+        cv::Size(static_cast<int>(std::lround(shown.width * map.scale)),
+                 static_cast<int>(std::lround(shown.height * map.scale))));
+    for (cv::Rect& r : regions) {
+      const cv::Point tl = map(cv::Point2d(r.x, r.y)), br = map(cv::Point2d(r.br().x, r.br().y));
+      r = cv::Rect(tl, br) & picture;
+    }
+    blur_regions(canvas, regions);
+  }
 
   std::shared_ptr<const SelectedCamera> sel_keep;
   const SelectedCamera* sel = this_tick(view, keys::kSelectedCamera, t, sel_keep);

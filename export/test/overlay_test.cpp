@@ -6,6 +6,7 @@
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/face_tracks.hpp"
 #include "dreamsense/perception/gaze.hpp"
 #include "dreamsense/perception/head_pose.hpp"
 
@@ -312,6 +313,120 @@ TEST(OverlayWriter, CostPerFrame) {
   std::cout << "[overlay 1280x960 -> 960x720] draw " << draw_ms / ticks.size()
             << " ms/frame, add (draw + mp4v encode) " << add_ms / ticks.size() << " ms/frame\n";
   fs::remove_all(dir);
+}
+
+// A fine black and white checkerboard (3 px squares): every blurred pixel turns grey.
+cv::Mat checkerboard(cv::Size size = {1280, 960}) {
+  cv::Mat img(size, CV_8UC3);
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x)
+      img.at<cv::Vec3b>(y, x) = cv::Vec3b::all(((x / 3 + y / 3) % 2) ? 230 : 20);
+  return img;
+}
+
+// --blur-faces (privacy): pixels inside the regions change, pixels outside do not.
+TEST(BlurRegions, ChangesTheRegionsOnlyAndRemovesTheirDetail) {
+  const cv::Mat original = checkerboard();
+  cv::Mat img = original.clone();
+  const cv::Rect face(400, 300, 200, 200);
+  blur_regions(img, {face, cv::Rect(1200, 900, 500, 500) /* clipped */, cv::Rect(5, 5, 1, 1)});
+  cv::Mat diff;
+  cv::absdiff(original, img, diff);
+  cv::Mat outside = diff.clone();
+  outside(face).setTo(cv::Scalar::all(0));
+  outside(cv::Rect(1200, 900, 80, 60)).setTo(cv::Scalar::all(0));
+  EXPECT_EQ(cv::countNonZero(outside.reshape(1)), 0) << "pixels outside the regions changed";
+  // Inside: the circles' edges are gone (little high-frequency energy left).
+  auto detail = [](const cv::Mat& m) {
+    cv::Mat grey, lap;
+    cv::cvtColor(m, grey, cv::COLOR_BGR2GRAY);
+    cv::Laplacian(grey, lap, CV_64F);
+    cv::Scalar mean, sd;
+    cv::meanStdDev(lap, mean, sd);
+    return sd[0];
+  };
+  EXPECT_GT(detail(original(face)), 5.0) << "the test scene has detail there";
+  EXPECT_LT(detail(img(face)), 0.3 * detail(original(face)));
+  EXPECT_GT(cv::mean(diff(face))[0], 1.0);
+}
+
+// Count of pixels that differ between two pictures inside / outside `r`.
+std::pair<int, int> changed_inside_outside(const cv::Mat& a, const cv::Mat& b, cv::Rect r) {
+  cv::Mat diff, any;
+  cv::absdiff(a, b, diff);
+  cv::cvtColor(diff, any, cv::COLOR_BGR2GRAY);
+  any = any > 0;
+  r &= cv::Rect(0, 0, a.cols, a.rows);
+  const int inside = cv::countNonZero(any(r));
+  return {inside, cv::countNonZero(any) - inside};
+}
+
+TEST(DrawOverlay, BlurFacesPixelatesTheFaceBoxAndNothingElse) {
+  OverlayOptions o;
+  o.cameras["camera_middle"] = middle_model();
+  Blackboard bb;
+  const MultiFrame mf = tick_with(3, {{"camera_middle", checkerboard()}});
+  write_all(bb, mf.stamp, /*mutual=*/true);
+  const cv::Mat plain =
+      draw_overlay(checkerboard(), "camera_middle", mf, bb.snapshot(), o, {960, 720});
+  o.blur_faces = true;
+  const cv::Mat blurred =
+      draw_overlay(checkerboard(), "camera_middle", mf, bb.snapshot(), o, {960, 720});
+  // The face box (400, 300, 200, 200) and the landmarks, shown at 0.75 and grown by 25 % each
+  // side: every change lies inside (the drawing on top is the same in both).
+  const cv::Rect grown(350 * 3 / 4 - 1, 250 * 3 / 4 - 1, 300 * 3 / 4 + 3, 300 * 3 / 4 + 3);
+  const auto [inside, outside] = changed_inside_outside(plain, blurred, grown);
+  EXPECT_EQ(outside, 0);
+  EXPECT_GT(inside, grown.area() / 4);
+  // The regions themselves (in shown pixels).
+  const auto regions = face_regions_px("camera_middle", mf.stamp, bb.snapshot(),
+                                       &o.cameras["camera_middle"], {1280, 960});
+  ASSERT_GE(regions.size(), 2u);  // the box and the landmarks
+  EXPECT_EQ(regions[0], cv::Rect(350, 250, 300, 300));
+  // Another camera's faces are not this camera's regions.
+  EXPECT_EQ(face_regions_px("camera_right", mf.stamp, bb.snapshot(), nullptr, {1280, 960}).size(),
+            0u);
+}
+
+TEST(DrawOverlay, BlurFacesCoversAFaceTrackTheDetectorMissed) {
+  OverlayOptions o;
+  o.cameras["camera_middle"] = middle_model();
+  o.blur_faces = true;
+  Blackboard bb;
+  const MultiFrame mf = tick_with(5, {{"camera_middle", checkerboard()}});
+  {
+    BlackboardWriter w("tracks");
+    FaceDetections det;  // this frame: the detector found nothing
+    det.cameras["camera_middle"] = CameraFaces{mf.stamp, 0, {1280, 960}, {}};
+    w.set(keys::kFaceDetections, det, mf.stamp, 0.f);
+    FaceTracks tracks;  // a face 1 m ahead of the camera, last seen 0.2 s ago, still
+    tracks.tracks.push_back({7, {0, 0, 1.0}, {0, 0, 0}, mf.stamp - Duration::from_ms(200), 12});
+    w.set(keys::kFaceTracks, tracks, mf.stamp, 1.f);
+    bb.commit(w, mf.stamp);
+  }
+  const auto regions = face_regions_px("camera_middle", mf.stamp, bb.snapshot(),
+                                       &o.cameras["camera_middle"], {1280, 960});
+  ASSERT_EQ(regions.size(), 1u);
+  // Centre (640, 480); half side 1100 * 0.12 / 1.0 = 132 px, grown by 25 %: 198 px.
+  EXPECT_NEAR(regions[0].x, 640 - 198, 2);
+  EXPECT_NEAR(regions[0].width, 2 * 198, 3);
+  const cv::Mat plain = [&] {
+    OverlayOptions p = o;
+    p.blur_faces = false;
+    return draw_overlay(checkerboard(), "camera_middle", mf, bb.snapshot(), p, {960, 720});
+  }();
+  const cv::Mat blurred =
+      draw_overlay(checkerboard(), "camera_middle", mf, bb.snapshot(), o, {960, 720});
+  const cv::Rect shown(static_cast<int>(regions[0].x * 0.75) - 1,
+                       static_cast<int>(regions[0].y * 0.75) - 1,
+                       static_cast<int>(regions[0].width * 0.75) + 3,
+                       static_cast<int>(regions[0].height * 0.75) + 3);
+  const auto [inside, outside] = changed_inside_outside(plain, blurred, shown);
+  EXPECT_EQ(outside, 0);
+  EXPECT_GT(inside, shown.area() / 4);
+  // Without the camera model the track cannot be placed, and nothing else is there to blur.
+  EXPECT_TRUE(
+      face_regions_px("camera_middle", mf.stamp, bb.snapshot(), nullptr, {1280, 960}).empty());
 }
 
 }  // namespace

@@ -102,7 +102,7 @@ std::map<SensorId, CameraModel> child_cameras(const PipelinePlan& plan) {
 void add_key_frame(exporters::HtmlReport& report, const MultiFrame& tick,
                    const BlackboardView& view,
                    const std::vector<primitives::PrimitiveRecord>& records,
-                   const std::map<SensorId, CameraModel>& cameras) {
+                   const std::map<SensorId, CameraModel>& cameras, bool blur_faces) {
   SensorId camera;
   for (const auto& r : records)
     if (r.id == primitives::PrimitiveId::kGetFaces && r.ok()) camera = r.source;
@@ -118,6 +118,7 @@ void add_key_frame(exporters::HtmlReport& report, const MultiFrame& tick,
   if (image == nullptr || image->image.empty()) return;
   exporters::OverlayOptions oo;
   oo.cameras = cameras;
+  oo.blur_faces = blur_faces;
   const int w = 480;
   const int h = std::max(2, image->image.rows * w / std::max(1, image->image.cols)) & ~1;
   report.add_key_frame(tick.stamp, camera,
@@ -140,6 +141,15 @@ Result<AnalysisSummary> run_plan(
     staging = std::move(*created);
   }
   auto out = [&](const char* name) { return staging.staged(name); };
+
+  // Privacy (docs/outputs.md "Names"): the session's own name and its free metadata (which may
+  // hold a participant's or operator's name, a date) reach the outputs only with --include-names;
+  // otherwise the report and dream.json show the session folder's name (as summary.json does).
+  sources::SessionManifest shown = manifest;
+  if (!options.plan.include_names) {
+    shown.name = session_name;
+    shown.metadata.clear();
+  }
 
   AnalysisSummary summary;
   summary.input = std::move(input);
@@ -167,6 +177,7 @@ Result<AnalysisSummary> run_plan(
     exporters::OverlayOptions oo;
     oo.cameras = overlay_cameras;
     oo.fps = manifest.frame_rate > 0 ? manifest.frame_rate : 25.0;
+    oo.blur_faces = options.blur_faces;
     DS_RETURN_IF_ERROR(overlay.open(out("overlay.mp4"), oo));
   }
   auto on_tick = [&](const MultiFrame& tick, const BlackboardView& view) -> Status {
@@ -192,7 +203,7 @@ Result<AnalysisSummary> run_plan(
     DS_RETURN_IF_ERROR(events.write(records));
     report.add(records);
     if (report.wants_key_frame(tick.stamp))
-      add_key_frame(report, tick, view, records, plan_cameras);
+      add_key_frame(report, tick, view, records, plan_cameras, options.blur_faces);
     dream_export.add(view, tick.stamp, options.evaluator.freshness);
     return ok_status();
   };
@@ -209,7 +220,7 @@ Result<AnalysisSummary> run_plan(
     DS_RETURN_IF_ERROR(jsonl.commit());
     DS_RETURN_IF_ERROR(events.commit());
     if (want_overlay) DS_RETURN_IF_ERROR(overlay.commit());
-    DS_RETURN_IF_ERROR(dream_export.write(out("dream.json"), manifest));
+    DS_RETURN_IF_ERROR(dream_export.write(out("dream.json"), shown));
     const auto& ps = (*pipeline)->stats();
     exporters::ReportContext rc;
     rc.input = summary.input;
@@ -224,7 +235,7 @@ Result<AnalysisSummary> run_plan(
             "Damaged recording: {}: {} of {} records skipped, {} torn at the end, {} empty lines{}",
             d.file, d.damaged, d.records, d.torn_tail, d.empty_lines,
             d.first.empty() ? "" : " (first: " + d.first.front().what + ")"));
-    DS_RETURN_IF_ERROR(report.write(out("report.html"), manifest, rc));
+    DS_RETURN_IF_ERROR(report.write(out("report.html"), shown, rc));
     if (options.csv.value_or(summary.input.value("kind", "") == "video")) {
       exporters::CsvTablesOptions co;
       co.approximate_calibration = summary.input.value("approximate_calibration", false);
@@ -239,6 +250,7 @@ Result<AnalysisSummary> run_plan(
     DS_RETURN_IF_ERROR(f.open(out("summary.json")));
     nlohmann::json sj = summary.to_json();
     sj["session"] = session_name;
+    sj["names"] = options.plan.include_names ? "included" : "ids only";
     DS_RETURN_IF_ERROR(f.write(sj.dump(2) + "\n"));
     DS_RETURN_IF_ERROR(f.commit());
     DS_RETURN_IF_ERROR(staging.publish(analysis_output_names(), "summary.json"));
@@ -421,9 +433,12 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   PipelineOptions po = pipeline_options(manifest);
   po.sync.policy = SyncPolicy::kLatestWithinTolerance;
   po.pace_source = false;  // the devices deliver in real time
+  // The live configuration's session name may name the participant: "live" unless names are in.
+  const std::string session_name =
+      options.plan.include_names && !manifest.name.empty() ? manifest.name : std::string("live");
   if (options.on_ready) options.on_ready();
   return run_plan(options, std::move(*plan), manifest, capture, po, nullptr, Timestamp::unset(),
-                  Timestamp::unset(), fs::path("live"), manifest.name, {{"kind", "live"}}, nullptr);
+                  Timestamp::unset(), fs::path("live"), session_name, {{"kind", "live"}}, nullptr);
 }
 
 }  // namespace dreamsense::runner

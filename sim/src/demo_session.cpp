@@ -687,6 +687,11 @@ json face_record(const Generator& gen, int64_t stamp) {
   r["person"] = !gen.media().moving_eyes   ? json(nullptr)
                 : child.in_shipped_gallery ? json(kDemoSubject)
                                            : json("unknown");
+  // The same as the gallery's numeric id (person 0 of data/subjects/demo_child/face_gallery.yaml;
+  // -1 = not enrolled), for analyses that carry ids only (no --include-names).
+  r["person_id"] = !gen.media().moving_eyes   ? json(nullptr)
+                   : child.in_shipped_gallery ? json(0)
+                                              : json(-1);
   r["expression"] = child.expression;
   return r;
 }

@@ -1,6 +1,7 @@
 #include "dreamsense/ui/operator_page.hpp"
 
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/export/overlay.hpp"
 #include "dreamsense/export/primitive_json.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -97,6 +98,8 @@ struct OperatorPage::Impl {
   int64_t stamp_ns = 0;
   std::map<std::string, nlohmann::json> records;  // by primitive name, catalogue order below
   std::map<SensorId, FramePtr> frames;
+  // The latest getFaces answer's boxes per camera (full-resolution pixels), for blur_faces.
+  std::map<SensorId, std::vector<cv::Rect2d>> face_boxes;
   nlohmann::json status = nlohmann::json::object();
 
   ~Impl() {
@@ -115,15 +118,25 @@ struct OperatorPage::Impl {
 
   bool camera_jpeg(const std::string& id, std::string& jpeg) {
     FramePtr f;
+    std::vector<cv::Rect2d> boxes;
     {
       std::lock_guard lock(mutex);
       auto it = frames.find(id);
       if (it == frames.end()) return false;
       f = it->second;
+      if (auto b = face_boxes.find(id); b != face_boxes.end()) boxes = b->second;
     }
     const auto* c = std::get_if<ColorImage>(&f->payload);
     if (c == nullptr || c->image.empty()) return false;
     cv::Mat img = c->image;
+    if (options.blur_faces && !boxes.empty()) {
+      std::vector<cv::Rect> regions;
+      for (const cv::Rect2d& b : boxes)
+        regions.emplace_back(
+            cv::Rect2d(b.x - 0.25 * b.width, b.y - 0.25 * b.height, 1.5 * b.width, 1.5 * b.height));
+      img = img.clone();
+      exporters::blur_regions(img, regions);
+    }
     if (img.cols > options.max_image_width) {
       const double s = static_cast<double>(options.max_image_width) / img.cols;
       cv::resize(img, img, cv::Size(), s, s, cv::INTER_AREA);
@@ -220,6 +233,12 @@ Result<std::unique_ptr<OperatorPage>> OperatorPage::start(const OperatorPageOpti
 void OperatorPage::update(const std::vector<primitives::PrimitiveRecord>& records) {
   std::lock_guard lock(impl_->mutex);
   for (const auto& r : records) {
+    if (r.id == primitives::PrimitiveId::kGetFaces) {  // the faces to blur (none: none found)
+      impl_->face_boxes.clear();
+      if (const auto* v = r.value_as<primitives::FacesValue>(); v != nullptr && r.ok())
+        for (const auto& [cam, list] : v->cameras)
+          for (const auto& d : list) impl_->face_boxes[cam].push_back(d.box_px);
+    }
     impl_->records[primitives::info(r.id).name] = exporters::to_json(r);
     impl_->stamp_ns = std::max(impl_->stamp_ns, r.stamp.ns());
   }

@@ -79,6 +79,44 @@ TEST(OperatorPage, ServesLatestPrimitivesFramesAndStatus) {
   EXPECT_EQ(missing->status, 404);
 }
 
+// live --blur-faces: the served picture is pixelated inside the latest getFaces boxes only.
+TEST(OperatorPage, BlurFacesPixelatesTheFaceBoxesOfTheServedPicture) {
+  OperatorPageOptions o;
+  o.port = 0;
+  o.blur_faces = true;
+  auto page = OperatorPage::start(o);
+  ASSERT_TRUE(page) << page.error().message;
+  // A fine black/white checkerboard (2 px squares): blurred, it turns grey.
+  cv::Mat board(480, 640, CV_8UC3);
+  for (int y = 0; y < board.rows; ++y)
+    for (int x = 0; x < board.cols; ++x)
+      board.at<cv::Vec3b>(y, x) = cv::Vec3b::all(((x / 2 + y / 2) % 2) ? 255 : 0);
+  PrimitiveRecord faces;
+  faces.id = PrimitiveId::kGetFaces;
+  faces.status = PrimitiveStatus::kOk;
+  faces.stamp = Timestamp::from_ns(40'000'000);
+  primitives::FacesValue v;
+  v.cameras["camera_middle"].push_back({cv::Rect2d(200, 100, 160, 160), 0.9f, 1.f});
+  faces.value = v;
+  (*page)->update({faces});
+  (*page)->update_frame("camera_middle",
+                        make_frame("camera_middle", faces.stamp, 0, ColorImage{board}));
+  httplib::Client client("127.0.0.1", (*page)->port());
+  auto jpeg = client.Get("/camera/camera_middle.jpg");
+  ASSERT_TRUE(jpeg);
+  ASSERT_EQ(jpeg->status, 200);
+  const cv::Mat img =
+      cv::imdecode(std::vector<uchar>(jpeg->body.begin(), jpeg->body.end()), cv::IMREAD_GRAYSCALE);
+  ASSERT_EQ(img.size(), cv::Size(640, 480));
+  auto contrast = [&](cv::Rect r) {
+    cv::Scalar mean, sd;
+    cv::meanStdDev(img(r), mean, sd);
+    return sd[0];
+  };
+  EXPECT_LT(contrast({240, 140, 80, 80}), 30) << "inside the face box: blurred";
+  EXPECT_GT(contrast({480, 300, 80, 80}), 50) << "elsewhere: the checkerboard is untouched";
+}
+
 // DNS rebinding: a page elsewhere that resolves its own name to 127.0.0.1 sends its own Host.
 TEST(OperatorPage, RefusesForeignHostHeaders) {
   OperatorPageOptions o;

@@ -48,8 +48,9 @@ MetricGroup speech_metrics() {
 }
 
 // Each truth utterance with a `speaker` against the ok identifyVoice record whose utterance
-// [start_ns, end_ns] overlaps it most; right when its speaker_id is the truth speaker (child /
-// therapist). A truth utterance no identity overlaps counts as wrong (missed).
+// [start_ns, end_ns] overlaps it most; right when its speaker_id (or, in an analysis made with
+// --include-names, its name) is the truth speaker (child / therapist, or an enrolled name). A truth
+// utterance no identity overlaps counts as wrong (missed).
 MetricGroup speaker_metrics() {
   MetricGroup g;
   g.name = "speaker";
@@ -63,13 +64,17 @@ MetricGroup speaker_metrics() {
       if (!t->contains("speaker")) continue;
       const int64_t s = t->value("start_ns", int64_t{0}), e = t->value("end_ns", int64_t{0});
       int64_t best = 0;
-      std::string said;
+      const primitives::VoiceValue* said = nullptr;
       for (const auto* v : decided) {
         const int64_t overlap = std::min(e, v->end_ns) - std::max(s, v->start_ns);
-        if (overlap > best) best = overlap, said = v->speaker_id;
+        if (overlap > best) best = overlap, said = v;
       }
       ++total;
-      right += !said.empty() && said == t->value("speaker", "");
+      // The truth names a role (child / therapist) or an enrolled speaker: speaker_id is the
+      // public id (a role word, or speaker_<k> for a name), name the enrolled name when the
+      // analysis included names (privacy, docs/outputs.md).
+      const std::string want = t->value("speaker", "");
+      right += said != nullptr && !want.empty() && (said->speaker_id == want || said->name == want);
     }
     if (total == 0) {
       not_evaluated["speaker_accuracy"] = "the truth has no speech records with a speaker";

@@ -67,7 +67,7 @@ class FaceIdentityAnalyzer : public Analyzer {
     const IdentityResult r = identifier_.identify(extractor_.extract(grey, *face));
     FaceIdentity id;
     id.id = r.id;
-    id.name = r.name;
+    if (options_.include_names) id.name = r.name;  // ids only by default (privacy)
     id.score = r.score;
     id.best_id = r.best_id;
     id.track_id = track;

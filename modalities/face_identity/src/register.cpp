@@ -16,6 +16,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
     FaceIdentityAnalyzerOptions o;
     DS_RETURN_IF_ERROR(options.get("gallery", o.gallery));
     DS_RETURN_IF_ERROR(options.get("refresh_s", o.refresh_s));
+    o.include_names = ctx.include_names;
     std::string where = "option gallery";
     // Where the gallery comes from: the option, the session's metadata `face_gallery`, or the
     // child's subject folder (face_gallery.yaml).
@@ -47,7 +48,11 @@ void register_analyzers(AnalyzerRegistry& registry) {
       return PlannedAnalyzers::skip(analyzer.error().message);
     if (!analyzer) return tl::unexpected(analyzer.error());
     PlannedAnalyzers p;
-    p.notes.push_back("gallery " + o.gallery.string() + " (" + where + ")");
+    // The gallery's folder may be named after the person (a subject folder): its file name only
+    // unless names are asked for.
+    p.notes.push_back("gallery " +
+                      (ctx.include_names ? o.gallery.string() : o.gallery.filename().string()) +
+                      " (" + where + ")");
     p.analyzers.push_back(std::move(*analyzer));
     return p;
   };

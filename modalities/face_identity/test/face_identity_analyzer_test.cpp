@@ -81,11 +81,12 @@ class FaceIdentityAnalyzerTest : public ::testing::Test {
     fs::remove(*gallery_);
     delete gallery_;
   }
-  testing::AnalyzerRunner runner(double refresh_s) {
+  testing::AnalyzerRunner runner(double refresh_s, bool include_names = true) {
     FaceIdentityAnalyzerOptions o;
     o.cameras = {kCam};
     o.gallery = *gallery_;
     o.refresh_s = refresh_s;
+    o.include_names = include_names;
     auto a = make_face_identity_analyzer(o);
     EXPECT_TRUE(a) << a.error().message;
     return testing::AnalyzerRunner(std::move(*a));
@@ -135,6 +136,15 @@ TEST_F(FaceIdentityAnalyzerTest, EnrolledPersonFoundStrangerUnknown) {
   id = tick(r, t + Duration::from_ms(80), person_image(17, 0));  // never enrolled
   ASSERT_TRUE(id);
   EXPECT_EQ(id->id, -1) << "a stranger must be rejected, score " << id->score;
+}
+
+// Privacy: the gallery's name only when asked for (--include-names); the id identifies.
+TEST_F(FaceIdentityAnalyzerTest, IdsOnlyUnlessNamesAreIncluded) {
+  auto r = runner(0, /*include_names=*/false);
+  const auto id = tick(r, Timestamp::from_seconds(1), person_image(1, 7));
+  ASSERT_TRUE(id);
+  EXPECT_EQ(id->id, 1);
+  EXPECT_EQ(id->name, "");
 }
 
 TEST_F(FaceIdentityAnalyzerTest, ResultReusedWithinATrackUntilRefresh) {

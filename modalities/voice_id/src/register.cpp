@@ -28,6 +28,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
     VoiceIdAnalyzerOptions o;
     o.audio_sensor = s->id;
     o.method = method;
+    o.include_names = ctx.include_names;
     PlannedAnalyzers p;
     if (method == VoiceIdMethod::kGmmUbm) {
       if (!model_file.empty()) {
@@ -44,7 +45,8 @@ void register_analyzers(AnalyzerRegistry& registry) {
         if (!m) return make_error(m.error().code, "{}: {}", enroll->string(), m.error().message);
         std::string who;
         for (const auto& sp : m->speakers)
-          who += fmt::format("{}{} ({:.1f} s)", who.empty() ? "" : ", ", sp.id,
+          who += fmt::format("{}{} ({:.1f} s)", who.empty() ? "" : ", ",
+                             ctx.include_names ? sp.id : public_speaker_id(*m, sp.id),
                              sp.frames * m->features.hop_s);
         p.notes.push_back("voice models from the session's enrolment: " + who);
         o.model = std::make_shared<const VoiceModel>(std::move(*m));

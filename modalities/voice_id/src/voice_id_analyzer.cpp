@@ -138,8 +138,9 @@ class VoiceIdAnalyzer : public Analyzer {
                         rate_);
       if (!r) return tl::unexpected(r.error());
       if (r->frames == 0) return ok_status();  // nothing speech-like in it
-      id.speaker_id = r->speaker_id;
-      id.name = r->name;
+      // Enrolment folder names may be people's names: the public id unless names are asked for.
+      id.speaker_id = public_speaker_id(*model_, r->speaker_id);
+      id.name = options_.include_names ? r->name : id.speaker_id;
       id.score = r->score;
     } else {
       direction_rule(u, id);

@@ -359,6 +359,18 @@ Identification identify_features(const VoiceModel& model, const cv::Mat& feature
   return r;
 }
 
+bool is_role_speaker_id(std::string_view id) {
+  return id == "child" || id == "therapist" || id == kUnknownSpeaker;
+}
+
+std::string public_speaker_id(const VoiceModel& model, const std::string& speaker_id) {
+  if (speaker_id == kUnknownSpeaker) return kUnknownSpeaker;
+  for (size_t k = 0; k < model.speakers.size(); ++k)
+    if (model.speakers[k].id == speaker_id)
+      return is_role_speaker_id(speaker_id) ? speaker_id : fmt::format("speaker_{}", k + 1);
+  return kUnknownSpeaker;
+}
+
 Result<Identification> identify(const VoiceModel& model, std::span<const float> samples,
                                 int sample_rate) {
   auto f = compute_mfcc(samples, sample_rate, model.features, model.cmn_prior);

@@ -93,6 +93,37 @@ std::vector<float> quiet(double seconds) {
   return std::vector<float>(size_t(seconds * kRate), 0.f);
 }
 
+// Privacy: enrolment folders named after people are reported as speaker_<k> (enrolment order)
+// unless names are included; role words stay; speaker_id never changes with include_names.
+TEST(VoiceIdAnalyzer, PeoplesNamesOnlyWithIncludeNames) {
+  VoiceModel named = *model();
+  ASSERT_EQ(named.speakers.size(), 2u);
+  for (auto& sp : named.speakers) sp.name = sp.id = sp.id == "child" ? "Zoe Example" : "therapist";
+  EXPECT_EQ(public_speaker_id(named, "Zoe Example"), "speaker_1");
+  EXPECT_EQ(public_speaker_id(named, "therapist"), "therapist");
+  EXPECT_EQ(public_speaker_id(named, "unknown"), "unknown");
+  EXPECT_EQ(public_speaker_id(named, "not enrolled"), "unknown");
+  std::vector<float> s = quiet(0.5);
+  append(s, synth_utterance(kChild, 1.2, kRate, 501, 0, 0));
+  append(s, quiet(1.0));
+  append(s, synth_utterance(kTherapist, 1.2, kRate, 502, 0, 0));
+  append(s, quiet(1.0));
+  for (bool include : {false, true}) {
+    VoiceIdAnalyzerOptions o;
+    o.audio_sensor = "mic";
+    o.model = std::make_shared<const VoiceModel>(named);
+    o.include_names = include;
+    auto a = make_voice_id_analyzer(o);
+    ASSERT_TRUE(a) << a.error().message;
+    const auto ids = run(**a, s);
+    ASSERT_EQ(ids.size(), 2u);
+    EXPECT_EQ(ids[0].speaker_id, "speaker_1");
+    EXPECT_EQ(ids[0].name, include ? "Zoe Example" : "speaker_1");
+    EXPECT_EQ(ids[1].speaker_id, "therapist");
+    EXPECT_EQ(ids[1].name, "therapist");
+  }
+}
+
 TEST(VoiceIdAnalyzer, GmmUbmNamesEachUtterance) {
   VoiceIdAnalyzerOptions o;
   o.audio_sensor = "mic";

@@ -41,6 +41,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace dreamsense::exporters {
 
@@ -52,8 +53,26 @@ struct OverlayOptions {
   std::map<SensorId, CameraModel> cameras;  // for head axes and gaze rays (world -> pixels)
   double head_axis_length_m = 0.08;
   double gaze_length_m = 0.3;
+  // Privacy (`--blur-faces`, docs/outputs.md "Names and faces"): pixelate every face region of
+  // the shown camera (face_regions_px) before anything is drawn on it.
+  bool blur_faces = false;
   Status check() const;
 };
+
+// The face regions of `camera` for the tick at `tick`, in pixels of an image of `shown` size (the
+// camera's frame, possibly scaled): every face box (keys::kFaceDetections), the landmarks' bounding
+// box (keys::kFaceLandmarks) and, projected with `model` when given, every face track
+// (keys::kFaceTracks: a 0.24 m square around the predicted head centre, so a face the detector
+// misses in this frame is still covered). Entries up to 1 s older than the tick are used (a
+// region a little stale is better than a face shown); each region is enlarged by 25 % on every
+// side (hair, chin) and clipped to the image.
+std::vector<cv::Rect> face_regions_px(const SensorId& camera, Timestamp tick,
+                                      const BlackboardView& view, const CameraModel* model,
+                                      cv::Size shown);
+// Pixelates `regions` of `image` in place (at most 8 cells across the larger side, then a
+// Gaussian blur over the cells), so that no face can be recognised; pixels outside the regions
+// are unchanged.
+void blur_regions(cv::Mat& image, const std::vector<cv::Rect>& regions);
 
 // Colours used (BGR), e.g. to find them in a decoded frame.
 namespace overlay_colors {

@@ -67,6 +67,10 @@ struct PlanContext {
   // Live capture: the manifest comes from the operator's own configuration, whose file
   // references are absolute paths; a recorded session's must stay inside the session folder.
   bool absolute_paths_allowed = false;
+  // Privacy (docs/outputs.md "Names"): false (the default) = analysers write ids only
+  // (pseudonymous or role ids: speaker_1, child, a gallery's numeric id) to the blackboard and
+  // their notes; true (`--include-names`) = also the names of enrolment folders and galleries.
+  bool include_names = false;
 
   std::vector<const StreamDescription*> with_role(std::string_view role) const;
   const StreamDescription* first_with_role(std::string_view role) const;

@@ -49,6 +49,9 @@ struct AnalysisOptions {
   bool follow_links_outside = false;
   // Also write overlay.mp4 (boxes, landmarks, head axes, gaze rays, selected camera).
   bool overlay = false;
+  // Privacy (--blur-faces): faces pixelated in every picture written (overlay.mp4, the report's
+  // key frames; export/overlay.hpp face_regions_px).
+  bool blur_faces = false;
   // Called with every tick's primitive records as they are produced (e.g. DDS publishing in
   // `live --publish dds`); an error ends the analysis.
   std::function<Status(const std::vector<primitives::PrimitiveRecord>&)> on_records;

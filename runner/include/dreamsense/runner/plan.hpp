@@ -47,6 +47,9 @@ struct PlanOptions {
   std::filesystem::path face_model, gaze_model, speech_model;
   // Live capture: the manifest's metadata files are the operator's absolute paths.
   bool absolute_paths_allowed = false;
+  // Privacy (--include-names): false = ids only in every output (PlanContext::include_names;
+  // docs/outputs.md "Names"), the session's name and metadata values left out of the outputs.
+  bool include_names = false;
   // Assumed intrinsics of colour streams that have no calibration file (a plain video): the
   // factories get them as the stream's camera, flagged approximate_calibration.
   std::map<SensorId, CameraModel> assumed_cameras;

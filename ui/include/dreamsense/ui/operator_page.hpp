@@ -31,6 +31,9 @@ struct OperatorPageOptions {
   int port = 8080;                 // 0 = any free port (see OperatorPage::port())
   int jpeg_quality = 75;
   int max_image_width = 640;
+  // Privacy (`live --blur-faces`): pixelate the faces of the latest getFaces answer (each camera's
+  // boxes grown by 25 %) in the camera pictures served (export/overlay.hpp blur_regions).
+  bool blur_faces = false;
   Status check() const;
 };
 

@@ -25,6 +25,9 @@ struct FaceIdentityAnalyzerOptions {
   std::filesystem::path gallery;  // `dreamsense enroll faces` output (required)
   double refresh_s = 1.0;  // re-identify a track after this much stream time (0: every frame)
   std::filesystem::path face_api_dir;  // empty: vision::default_face_api_model_dir()
+  // Privacy (README "Names"): the gallery's name of the person only when set
+  // (`--include-names`); by default FaceIdentity::name stays empty and the numeric id identifies.
+  bool include_names = false;
   Status check() const;
 };
 

@@ -53,6 +53,9 @@ struct VoiceIdAnalyzerOptions {
   // Utterances (audio::UtteranceSegmenter, as the speech analyser) on channel 0; the stream's
   // rate is filled in from the first chunk.
   audio::UtteranceSegmenterOptions segmenter = default_voice_segmenter();
+  // Privacy: speaker_id is always the public id (public_speaker_id: role word or speaker_<k>);
+  // name is the enrolled name only when this is set (`--include-names`), else the public id.
+  bool include_names = false;
   Status check() const;
 };
 

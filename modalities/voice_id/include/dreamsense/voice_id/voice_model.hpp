@@ -16,6 +16,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace dreamsense::voice_id {
@@ -107,5 +108,15 @@ Result<Identification> identify(const VoiceModel& model, std::span<const float> 
                                 int sample_rate);
 // Same from features already computed with model.features.
 Identification identify_features(const VoiceModel& model, const cv::Mat& features);
+
+// Privacy (README "Names"; docs/outputs.md): enrolment folder names are often people's names,
+// so analyses report speakers by a public id. True for the role words a therapy session uses
+// (child, therapist, unknown): they are not names and are reported as they are.
+bool is_role_speaker_id(std::string_view id);
+// The public id of the model's speaker `speaker_id`: the id itself when it is a role word,
+// otherwise "speaker_<k>" for the k-th enrolled speaker (1-based, in the model's order, which is
+// the enrolment folders' name order). kUnknownSpeaker and ids the model does not hold map to
+// kUnknownSpeaker.
+std::string public_speaker_id(const VoiceModel& model, const std::string& speaker_id);
 
 }  // namespace dreamsense::voice_id
