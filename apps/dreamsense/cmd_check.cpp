@@ -30,7 +30,8 @@ void add_check(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                   "damaged records dropped; exit 0 when the copy is complete and sound");
   cmd->add_flag("--force", flags->force, "With --repair: replace the contents of a non-empty OUT")
       ->needs("--repair");
-  cmd->add_option("--json", flags->json, "Write the check (and repair) as JSON to FILE, or - for stdout");
+  cmd->add_option("--json", flags->json,
+                  "Write the check (and repair) as JSON to FILE, or - for stdout");
   cmd->add_flag("--follow-links", flags->follow_links,
                 "Follow session files that are links to files outside the session folder");
   cmd->callback([flags, &g, &exit_code] {
@@ -63,14 +64,14 @@ void add_check(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       std::fprintf(stderr, "\nrepaired copy: %s\n", flags->repair.c_str());
       for (const auto& r : repair->streams)
         if (r.dropped + r.torn_cut + r.recovered > 0 || r.removed || r.calibration_removed)
-          std::fprintf(stderr,
-                       "  %s: %llu kept, %llu damaged dropped, %llu torn cut, %llu indexed again%s%s\n",
-                       r.stream.c_str(), static_cast<unsigned long long>(r.kept),
-                       static_cast<unsigned long long>(r.dropped),
-                       static_cast<unsigned long long>(r.torn_cut),
-                       static_cast<unsigned long long>(r.recovered),
-                       r.removed ? ", stream left out" : "",
-                       r.calibration_removed ? ", calibration left out" : "");
+          std::fprintf(
+              stderr,
+              "  %s: %llu kept, %llu damaged dropped, %llu torn cut, %llu indexed again%s%s\n",
+              r.stream.c_str(), static_cast<unsigned long long>(r.kept),
+              static_cast<unsigned long long>(r.dropped),
+              static_cast<unsigned long long>(r.torn_cut),
+              static_cast<unsigned long long>(r.recovered), r.removed ? ", stream left out" : "",
+              r.calibration_removed ? ", calibration left out" : "");
       for (const auto& n : repair->notes) std::fprintf(stderr, "  note: %s\n", n.c_str());
       std::fprintf(stderr, "  the copy is %s (complete: %s)\n",
                    repair->after.sound() ? "sound" : "NOT sound",

@@ -100,9 +100,8 @@ int64_t median(std::vector<int64_t> v) {
 }
 
 // Reads every record of one stream alone.
-void read_stream(const fs::path& dir, const StreamEntry& s,
-                 const SessionCheckOptions& options, StreamCheck& c,
-                 std::vector<RecordLocation>& records, int64_t& audio_samples) {
+void read_stream(const fs::path& dir, const StreamEntry& s, const SessionCheckOptions& options,
+                 StreamCheck& c, std::vector<RecordLocation>& records, int64_t& audio_samples) {
   SessionReaderOptions ro = reader_options(options);
   ro.only = {s.id};
   QuietLog quiet;  // what the reader would warn about is in the check's result
@@ -149,7 +148,8 @@ Status SessionCheckOptions::check() const {
 
 bool SessionCheck::sound() const {
   if (!manifest_ok || !session_problems.empty()) return false;
-  return std::all_of(streams.begin(), streams.end(), [](const StreamCheck& s) { return s.sound(); });
+  return std::all_of(streams.begin(), streams.end(),
+                     [](const StreamCheck& s) { return s.sound(); });
 }
 
 namespace {
@@ -216,8 +216,8 @@ Result<SessionCheck> check_session_impl(const fs::path& dir, const SessionCheckO
       if (d.damaged > 0) {
         std::string where;
         if (!d.first.empty()) where = fmt::format("; first: {}", d.first.front().what);
-        c.problems.push_back(fmt::format("{}: {} damaged record(s) of {}{}", s.file, d.damaged,
-                                         d.records, where));
+        c.problems.push_back(
+            fmt::format("{}: {} damaged record(s) of {}{}", s.file, d.damaged, d.records, where));
       }
       if (d.torn_tail > 0)
         c.problems.push_back(
@@ -234,7 +234,8 @@ Result<SessionCheck> check_session_impl(const fs::path& dir, const SessionCheckO
     ro.only = readable;
     ro.decode_threads = 0;
     QuietLog quiet;
-    if (auto r = SessionReader::open(dir, ro); !r) out.session_problems.push_back(r.error().message);
+    if (auto r = SessionReader::open(dir, ro); !r)
+      out.session_problems.push_back(r.error().message);
   }
 
   // The audio against the session clock: it should cover what the other streams cover.
@@ -278,8 +279,11 @@ nlohmann::json SessionCheck::to_json() const {
   using nlohmann::json;
   json streams_json = json::array();
   for (const StreamCheck& c : streams) {
-    json s = {{"stream", c.stream}, {"kind", c.kind}, {"encoding", c.encoding},
-              {"file", c.file},     {"sound", c.sound()}};
+    json s = {{"stream", c.stream},
+              {"kind", c.kind},
+              {"encoding", c.encoding},
+              {"file", c.file},
+              {"sound", c.sound()}};
     if (!c.index.empty()) s["index"] = c.index;
     if (c.error) s["error"] = *c.error;
     s["records"] = c.damage.records;
@@ -291,7 +295,8 @@ nlohmann::json SessionCheck::to_json() const {
     s["last_ns"] = c.last_ns ? json(*c.last_ns) : json(nullptr);
     s["median_step_ns"] = c.median_step_ns;
     json gaps = json::array();
-    for (const StampGap& g : c.gaps) gaps.push_back({{"after_ns", g.after_ns}, {"length_ns", g.length_ns}});
+    for (const StampGap& g : c.gaps)
+      gaps.push_back({{"after_ns", g.after_ns}, {"length_ns", g.length_ns}});
     s["gaps"] = {{"count", c.gap_count}, {"total_ns", c.gap_total_ns}, {"first", gaps}};
     json damaged = json::array();
     for (const DamagedRecord& d : c.damage.first)
@@ -300,8 +305,9 @@ nlohmann::json SessionCheck::to_json() const {
                          {"what", d.what}});
     s["damaged_records"] = damaged;
     if (!c.calibration.empty())
-      s["calibration"] = {{"file", c.calibration},
-                          {"error", c.calibration_error ? json(*c.calibration_error) : json(nullptr)}};
+      s["calibration"] = {
+          {"file", c.calibration},
+          {"error", c.calibration_error ? json(*c.calibration_error) : json(nullptr)}};
     if (c.audio_seconds)
       s["audio"] = {{"seconds", *c.audio_seconds},
                     {"missing_start_ns", c.audio_missing_start_ns},
@@ -309,8 +315,10 @@ nlohmann::json SessionCheck::to_json() const {
     s["problems"] = c.problems;
     streams_json.push_back(std::move(s));
   }
-  return {{"session", dir.string()}, {"sound", sound()},
-          {"complete", complete},    {"problems", session_problems},
+  return {{"session", dir.string()},
+          {"sound", sound()},
+          {"complete", complete},
+          {"problems", session_problems},
           {"streams", streams_json}};
 }
 
@@ -356,7 +364,8 @@ namespace {
 
 Result<std::string> read_all(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
-  if (!in) return make_error(ErrorCode::kIoError, "{}: cannot read: {}", p.string(), std::strerror(errno));
+  if (!in)
+    return make_error(ErrorCode::kIoError, "{}: cannot read: {}", p.string(), std::strerror(errno));
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
@@ -399,9 +408,8 @@ std::optional<size_t> jpeg_end(const std::string& d, size_t p) {
     i += 2 + len;
     if (marker != 0xDA) continue;
     // Entropy-coded data: up to the next marker that is not a stuffed 0xFF00 or a restart.
-    while (i + 1 < d.size() &&
-           !(at(i) == 0xFF && at(i + 1) != 0x00 && at(i + 1) != 0xFF &&
-             !(at(i + 1) >= 0xD0 && at(i + 1) <= 0xD7)))
+    while (i + 1 < d.size() && !(at(i) == 0xFF && at(i + 1) != 0x00 && at(i + 1) != 0xFF &&
+                                 !(at(i + 1) >= 0xD0 && at(i + 1) <= 0xD7)))
       ++i;
   }
   return std::nullopt;
@@ -424,7 +432,7 @@ std::optional<size_t> png_end(const std::string& d, size_t p) {
 
 // Frames in the data after the last indexed one (an index cut short): [offset, size) each.
 std::vector<std::pair<uint64_t, uint64_t>> find_frames(const std::string& tail,
-                                                        const StreamEntry& s) {
+                                                       const StreamEntry& s) {
   std::vector<std::pair<uint64_t, uint64_t>> out;
   size_t p = 0;
   const size_t raw = static_cast<size_t>(s.width) * static_cast<size_t>(s.height) * 2;
@@ -469,7 +477,8 @@ Status write_indexed(const fs::path& src_data, const fs::path& out_root, const S
     offset += r.size;
   }
   data.close();
-  if (!data) return make_error(ErrorCode::kIoError, "{}: cannot write", (out_root / s.file).string());
+  if (!data)
+    return make_error(ErrorCode::kIoError, "{}: cannot write", (out_root / s.file).string());
   return write_all(out_root / s.index, index);
 }
 
@@ -478,7 +487,8 @@ Status rewrite_wav(const fs::path& src, const fs::path& dst) {
   SF_INFO info{};
   SNDFILE* in = sf_open(src.c_str(), SFM_READ, &info);
   if (in == nullptr)
-    return make_error(ErrorCode::kCorruptData, "{}: unreadable: {}", src.string(), sf_strerror(nullptr));
+    return make_error(ErrorCode::kCorruptData, "{}: unreadable: {}", src.string(),
+                      sf_strerror(nullptr));
   SF_INFO out_info{};
   out_info.samplerate = info.samplerate;
   out_info.channels = info.channels;
@@ -486,7 +496,8 @@ Status rewrite_wav(const fs::path& src, const fs::path& dst) {
   SNDFILE* out = sf_open(dst.c_str(), SFM_WRITE, &out_info);
   if (out == nullptr) {
     sf_close(in);
-    return make_error(ErrorCode::kIoError, "{}: cannot write: {}", dst.string(), sf_strerror(nullptr));
+    return make_error(ErrorCode::kIoError, "{}: cannot write: {}", dst.string(),
+                      sf_strerror(nullptr));
   }
   // Integer samples pass through unscaled (doubles hold 32-bit integers exactly).
   sf_command(in, SFC_SET_NORM_DOUBLE, nullptr, SF_FALSE);
@@ -502,7 +513,8 @@ Status rewrite_wav(const fs::path& src, const fs::path& dst) {
     }
   }
   sf_close(in);
-  if (sf_close(out) != 0 && st) st = make_error(ErrorCode::kIoError, "{}: cannot close", dst.string());
+  if (sf_close(out) != 0 && st)
+    st = make_error(ErrorCode::kIoError, "{}: cannot close", dst.string());
   return st;
 }
 
@@ -524,7 +536,8 @@ Status copy_other_files(const fs::path& src, const fs::path& dst, const std::set
       const fs::path target = fs::canonical(it->path(), ec);
       const auto m = std::mismatch(root.begin(), root.end(), target.begin(), target.end());
       if (ec || m.first != root.end()) {
-        notes.push_back(fmt::format("{}: a link out of the session folder, not copied", rel.string()));
+        notes.push_back(
+            fmt::format("{}: a link out of the session folder, not copied", rel.string()));
         ec.clear();
         if (it->is_directory()) it.disable_recursion_pending();
         continue;
@@ -552,7 +565,8 @@ Status write_stream(const fs::path& src_dir, const fs::path& out_root, const Str
     const std::set<int64_t> delivered(c.delivered_stamps.begin(), c.delivered_stamps.end());
     std::vector<IndexedRecord> out;
     for (const RecordLocation& l : in.records)
-      if (delivered.count(l.stamp_ns) != 0) out.push_back({l.sequence, l.stamp_ns, l.offset, l.size});
+      if (delivered.count(l.stamp_ns) != 0)
+        out.push_back({l.sequence, l.stamp_ns, l.offset, l.size});
     r.kept = out.size();
     r.dropped = c.damage.damaged;
     r.torn_cut = c.damage.torn_tail;
@@ -560,7 +574,8 @@ Status write_stream(const fs::path& src_dir, const fs::path& out_root, const Str
     // stamps continued at the stream's median step.
     std::error_code ec;
     const uint64_t data_size = fs::file_size(src_dir / s.file, ec);
-    const uint64_t covered = in.records.empty() ? 0 : in.records.back().offset + in.records.back().size;
+    const uint64_t covered =
+        in.records.empty() ? 0 : in.records.back().offset + in.records.back().size;
     if (!ec && !in.records.empty() && data_size > covered) {
       // In a session marked complete the reader counted these frames as damaged, estimated from
       // the mean frame size (SessionReader, IndexedReader::open): they are not dropped.
@@ -677,7 +692,8 @@ Result<SessionRepair> repair_session(const fs::path& session_dir, const fs::path
     rep.before = std::move(*before);
   }
   if (!rep.before.manifest_ok)
-    return make_error(ErrorCode::kCorruptData, "cannot repair: {}", rep.before.session_problems.at(0));
+    return make_error(ErrorCode::kCorruptData, "cannot repair: {}",
+                      rep.before.session_problems.at(0));
   auto manifest = read_manifest(session_dir);
   if (!manifest) return tl::unexpected(manifest.error());
   SessionManifest m = std::move(*manifest);
@@ -715,14 +731,16 @@ Result<SessionRepair> repair_session(const fs::path& session_dir, const fs::path
     if (c.calibration_error) {
       r.calibration_removed = true;
       complete = false;
-      rep.notes.push_back(fmt::format("stream {}: calibration left out: {}", s.id, *c.calibration_error));
+      rep.notes.push_back(
+          fmt::format("stream {}: calibration left out: {}", s.id, *c.calibration_error));
       s.calibration.clear();
     }
     if (s.encoding == "video" && c.damage.damaged > 0) {
       complete = false;
-      rep.notes.push_back(fmt::format("stream {}: a video is copied as it is (its {} damaged "
-                                      "frame(s) stay)",
-                                      s.id, c.damage.damaged));
+      rep.notes.push_back(
+          fmt::format("stream {}: a video is copied as it is (its {} damaged "
+                      "frame(s) stay)",
+                      s.id, c.damage.damaged));
     }
     if (c.audio_missing_start_ns > options.check.audio_tolerance.ns() ||
         c.audio_missing_end_ns > options.check.audio_tolerance.ns()) {
@@ -765,7 +783,8 @@ Result<SessionRepair> repair_session(const fs::path& session_dir, const fs::path
       StreamRepair second;
       const fs::path tmp = root / (copy.streams[i].file + ".repair");
       fs::rename(root / copy.streams[i].file, tmp, ec);
-      if (ec) return make_error(ErrorCode::kIoError, "{}: cannot rename: {}", tmp.string(), ec.message());
+      if (ec)
+        return make_error(ErrorCode::kIoError, "{}: cannot rename: {}", tmp.string(), ec.message());
       if (auto st = write_indexed(tmp, root, copy.streams[i],
                                   [&] {
                                     std::set<int64_t> ok(c.delivered_stamps.begin(),
@@ -797,7 +816,8 @@ Result<SessionRepair> repair_session(const fs::path& session_dir, const fs::path
     rep.after.session_problems.push_back(fmt::format(
         "{}: complete: false (the repair could not restore everything)", kManifestName));
   }
-  if (auto st = staged->publish(options.force ? existing : std::vector<std::string>{}, kManifestName);
+  if (auto st =
+          staged->publish(options.force ? existing : std::vector<std::string>{}, kManifestName);
       !st)
     return tl::unexpected(st.error());
   return rep;

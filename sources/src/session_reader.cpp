@@ -231,8 +231,7 @@ class StreamReader {
     if ((log_damage_ || reading) && damage_.damaged == 0)
       log::warn("{} (skipped; damaged records are counted in summary.json)", what);
     damage_.damaged++;
-    if (damage_.first.size() < listed_)
-      damage_.first.push_back({record, stamp, std::move(what)});
+    if (damage_.first.size() < listed_) damage_.first.push_back({record, stamp, std::move(what)});
   }
   // A partly written last record (or several, for frame streams), dropped with a warning.
   void note_torn_tail(uint64_t records, const std::string& what) {
@@ -404,13 +403,12 @@ class IndexedReader : public StreamReader {
         usable.push_back(e);
         continue;
       }
-      note_damaged(
-          e.frame, e.stamp_ns,
-          fmt::format("{}: frame {} (offset {}, {} bytes) is {}", entry_.file, e.frame, e.offset,
-                      e.size,
-                      !inside(e) ? "outside the data file"
-                      : png16    ? "not a PNG (no PNG signature)"
-                                 : "not a complete JPEG (no SOI/EOI marker)"));
+      note_damaged(e.frame, e.stamp_ns,
+                   fmt::format("{}: frame {} (offset {}, {} bytes) is {}", entry_.file, e.frame,
+                               e.offset, e.size,
+                               !inside(e) ? "outside the data file"
+                               : png16    ? "not a PNG (no PNG signature)"
+                                          : "not a complete JPEG (no SOI/EOI marker)"));
     }
     entries_ = std::move(usable);
 
@@ -453,13 +451,12 @@ class IndexedReader : public StreamReader {
   }
 
   Result<FramePtr> read() override;
-  uint64_t last_read_index() const override {
-    return next_ == 0 ? 0 : entries_[next_ - 1].frame;
-  }
+  uint64_t last_read_index() const override { return next_ == 0 ? 0 : entries_[next_ - 1].frame; }
   std::vector<RecordLocation> records() const override {
     std::vector<RecordLocation> out;
     out.reserve(entries_.size());
-    for (const Entry& e : entries_) out.push_back({e.frame, e.sequence, e.stamp_ns, e.offset, e.size});
+    for (const Entry& e : entries_)
+      out.push_back({e.frame, e.sequence, e.stamp_ns, e.offset, e.size});
     return out;
   }
 
@@ -479,8 +476,8 @@ class IndexedReader : public StreamReader {
           ::pread(fd_, buffer.data() + done, e.size - done, static_cast<off_t>(e.offset + done));
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0)
-        return make_error(ErrorCode::kCorruptData, "{}: frame {}: read failed: {}", entry_.file, e.frame,
-                          n < 0 ? errno_text(errno) : "unexpected end of file");
+        return make_error(ErrorCode::kCorruptData, "{}: frame {}: read failed: {}", entry_.file,
+                          e.frame, n < 0 ? errno_text(errno) : "unexpected end of file");
       done += static_cast<size_t>(n);
     }
     const Timestamp stamp = Timestamp::from_ns(e.stamp_ns);
@@ -501,8 +498,8 @@ class IndexedReader : public StreamReader {
     const JpegDecode direct = decode_jpeg_direct(buffer, &image);
     if (direct == JpegDecode::kDamaged)
       return make_error(ErrorCode::kCorruptData,
-                        "{}: corrupt: frame {} (offset {}) holds corrupt JPEG data", entry_.file, e.frame,
-                        e.offset);
+                        "{}: corrupt: frame {} (offset {}) holds corrupt JPEG data", entry_.file,
+                        e.frame, e.offset);
     if (direct == JpegDecode::kNotHandled) {
       try {
         image = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);

@@ -207,7 +207,8 @@ TEST_F(SessionCheckTest, NonMonotonicStamps) {
 }
 
 TEST_F(SessionCheckTest, MissingCalibrationFile) {
-  replace_in_file(dir_ / kManifestName, "frame: cam", "frame: cam\n    calibration: calib/cam.yaml");
+  replace_in_file(dir_ / kManifestName, "frame: cam",
+                  "frame: cam\n    calibration: calib/cam.yaml");
   const SessionCheck c = check(dir_);
   EXPECT_FALSE(c.sound());
   const StreamCheck& s = stream(c, "cam");

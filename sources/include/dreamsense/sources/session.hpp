@@ -147,10 +147,10 @@ struct DamagedRecord {
 struct StreamDamage {
   SensorId stream;
   std::string file;
-  uint64_t records = 0;              // records the stream holds, damaged ones included
-  uint64_t damaged = 0;              // skipped in the middle (unreadable, undecodable, implausible)
-  uint64_t torn_tail = 0;            // dropped at the end (a partly written last record)
-  uint64_t empty_lines = 0;          // blank lines in a line-based file (skipped, counted)
+  uint64_t records = 0;      // records the stream holds, damaged ones included
+  uint64_t damaged = 0;      // skipped in the middle (unreadable, undecodable, implausible)
+  uint64_t torn_tail = 0;    // dropped at the end (a partly written last record)
+  uint64_t empty_lines = 0;  // blank lines in a line-based file (skipped, counted)
   // The first damaged records (at most SessionReaderOptions::listed_damage, default kListed).
   std::vector<DamagedRecord> first;
   static constexpr size_t kListed = 20;
