@@ -430,23 +430,40 @@ std::optional<size_t> png_end(const std::string& d, size_t p) {
   return std::nullopt;
 }
 
-// Frames in the data after the last indexed one (an index cut short): [offset, size) each.
-std::vector<std::pair<uint64_t, uint64_t>> find_frames(const std::string& tail,
-                                                       const StreamEntry& s) {
-  std::vector<std::pair<uint64_t, uint64_t>> out;
+// A frame found in the data after the last indexed one (an index cut short).
+struct FoundFrame {
+  uint64_t offset = 0, size = 0;
+  bool complete = true;  // false: it starts like a frame but breaks before the next one
+};
+
+// Walks the data after the last indexed frame: one slot per frame start (JPEG SOI, PNG signature,
+// raw16 frame size). A frame that breaks is skipped up to the next frame start (so the frames
+// after it keep their places); a broken frame at the very end is a torn tail, not a slot.
+std::vector<FoundFrame> find_frames(const std::string& tail, const StreamEntry& s) {
+  std::vector<FoundFrame> out;
   size_t p = 0;
   const size_t raw = static_cast<size_t>(s.width) * static_cast<size_t>(s.height) * 2;
+  static const std::string kJpegStart("\xFF\xD8\xFF", 3);
+  static const std::string kPngStart("\x89PNG\r\n\x1A\n", 8);
+  const std::string& start = s.encoding == "mjpeg" ? kJpegStart : kPngStart;
   while (p < tail.size()) {
-    std::optional<size_t> end;
-    if (s.encoding == "mjpeg")
-      end = jpeg_end(tail, p);
-    else if (s.encoding == "png16")
-      end = png_end(tail, p);
-    else if (raw > 0 && tail.size() - p >= raw)
-      end = p + raw;
-    if (!end) break;
-    out.emplace_back(p, *end - p);
-    p = *end;
+    if (s.encoding == "raw16") {
+      if (raw == 0 || tail.size() - p < raw) break;
+      out.push_back({p, raw, true});
+      p += raw;
+      continue;
+    }
+    if (tail.compare(p, start.size(), start) != 0) break;  // not a frame start: stop
+    const std::optional<size_t> end = s.encoding == "mjpeg" ? jpeg_end(tail, p) : png_end(tail, p);
+    if (end) {
+      out.push_back({p, *end - p, true});
+      p = *end;
+      continue;
+    }
+    const size_t next = tail.find(start, p + start.size());
+    if (next == std::string::npos) break;  // torn at the end
+    out.push_back({p, next - p, false});
+    p = next;
   }
   return out;
 }
@@ -593,12 +610,16 @@ Status write_stream(const fs::path& src_dir, const fs::path& out_root, const Str
         if (step <= 0) step = static_cast<int64_t>(1e9 / (s.rate_hz > 0 ? s.rate_hz : 25.0));
         const RecordLocation& last = in.records.back();
         uint64_t k = 0;
-        for (const auto& [off, size] : find_frames(tail, s)) {
+        for (const FoundFrame& f : find_frames(tail, s)) {
           ++k;
+          if (!f.complete) {
+            r.dropped++;
+            continue;
+          }
           out.push_back({last.sequence + k, last.stamp_ns + static_cast<int64_t>(k) * step,
-                         covered + off, size});
+                         covered + f.offset, f.size});
+          r.recovered++;
         }
-        r.recovered = k;
       }
     }
     return write_indexed(src_dir / s.file, out_root, s, out);

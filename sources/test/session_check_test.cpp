@@ -176,6 +176,44 @@ TEST_F(SessionCheckTest, IndexCutShortIsRebuilt) {
   EXPECT_EQ(read_file(fixed() / "cam.mjpg"), read_file(dir_ / "cam.mjpg"));
 }
 
+// The frames after a short index are found by walking the data: PNG chunks (png16) and frame
+// sizes (raw16) as well as JPEG markers.
+TEST(SessionCheckDepth, ShortDepthIndexIsRebuilt) {
+  for (const char* encoding : {"png16", "raw16"}) {
+    TempDir tmp;
+    const fs::path dir = tmp.path() / "s";
+    write_session(dir, kTicks, make_manifest(encoding));
+    const std::string original_index = read_file(dir / "depth.idx");
+    std::string cut = original_index;
+    for (int i = 0; i < 3; ++i) cut.resize(cut.rfind('\n', cut.size() - 2) + 1);
+    write_file(dir / "depth.idx", cut);
+    auto c = check_session(dir);
+    ASSERT_TRUE(c);
+    EXPECT_FALSE(c->sound()) << encoding;
+    auto r = repair_session(dir, tmp.path() / "fixed");
+    ASSERT_TRUE(r) << r.error().message;
+    EXPECT_TRUE(r->complete) << encoding << "\n" << r->after.table();
+    EXPECT_EQ(r->streams.at(1).recovered, 3u) << encoding;
+    EXPECT_EQ(read_file(tmp.path() / "fixed" / "depth.idx"), original_index) << encoding;
+  }
+}
+
+// Frames after a short index that do not decode are found by the second check of the copy and
+// dropped: the copy is sound.
+TEST_F(SessionCheckTest, RecoveredFrameThatDoesNotDecodeIsDropped) {
+  corrupt_frame(kTicks - 2);
+  auto lines = index_lines(dir_ / "cam.idx");
+  std::string cut = "# dreamsense mjpeg index v1\n";
+  for (size_t i = 0; i + 4 < lines.size(); ++i) cut += lines[i] + "\n";
+  write_file(dir_ / "cam.idx", cut);
+  const SessionRepair r = repair();
+  EXPECT_TRUE(r.complete) << r.after.table();
+  EXPECT_TRUE(r.after.sound()) << r.after.table();
+  EXPECT_EQ(r.streams.at(0).recovered, 3u);
+  EXPECT_EQ(r.streams.at(0).dropped, 1u);
+  EXPECT_EQ(stream(r.after, "cam").delivered, static_cast<uint64_t>(kTicks - 1));
+}
+
 TEST_F(SessionCheckTest, IndexPointingPastTheData) {
   const auto last = fields(index_lines(dir_ / "cam.idx").back());
   fs::resize_file(dir_ / "cam.mjpg", last[2] + last[3] / 2);
