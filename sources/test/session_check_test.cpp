@@ -283,6 +283,28 @@ TEST_F(SessionCheckTest, IncompleteSessionIsReported) {
   EXPECT_TRUE(r.after.sound());
 }
 
+// What a recorder killed between two flushes leaves: complete: false, frames written after the
+// index's last flush. The repair indexes them again and closes the copy.
+TEST_F(SessionCheckTest, CrashedRecordingIsClosedByTheRepair) {
+  replace_in_file(dir_ / kManifestName, "complete: true", "complete: false");
+  const std::string original_index = read_file(dir_ / "cam.idx");
+  auto lines = index_lines(dir_ / "cam.idx");
+  std::string cut = "# dreamsense mjpeg index v1\n";
+  for (size_t i = 0; i + 3 < lines.size(); ++i) cut += lines[i] + "\n";
+  write_file(dir_ / "cam.idx", cut);
+  const SessionCheck c = check(dir_);
+  EXPECT_FALSE(c.sound());
+  EXPECT_EQ(stream(c, "cam").damage.damaged, 0u) << "an index lagging after a crash is normal";
+  const SessionRepair r = repair();
+  EXPECT_TRUE(r.complete) << r.after.table();
+  EXPECT_EQ(r.streams.at(0).recovered, 3u);
+  EXPECT_EQ(r.streams.at(0).dropped, 0u);
+  EXPECT_EQ(read_file(fixed() / "cam.idx"), original_index);
+  auto m = read_manifest(fixed());
+  ASSERT_TRUE(m);
+  EXPECT_TRUE(m->complete);
+}
+
 TEST_F(SessionCheckTest, RepairRefusesANonEmptyFolderUnlessForced) {
   fs::create_directories(fixed());
   write_file(fixed() / "old.txt", "x");
