@@ -326,7 +326,7 @@ std::string SessionCheck::table(size_t listed) const {
   std::string out;
   size_t w = 6;
   for (const StreamCheck& c : streams) w = std::max(w, c.stream.size());
-  out += fmt::format("{:<{}}  {:<8} {:<8} {:>8} {:>8} {:>5} {:>5} {:>12}  {:<11} {}\n", "stream", w,
+  out += fmt::format("{:<{}}  {:<8} {:<8} {:>8} {:>8} {:>5} {:>5} {:>17}  {:<11} {}\n", "stream", w,
                      "kind", "encoding", "records", "damaged", "torn", "gaps", "span (s)",
                      "calibration", "status");
   for (const StreamCheck& c : streams) {
@@ -334,7 +334,7 @@ std::string SessionCheck::table(size_t listed) const {
         c.first_ns ? fmt::format("{}-{}", seconds(*c.first_ns), seconds(*c.last_ns)) : "-";
     const std::string calib = c.calibration.empty() ? "-" : c.calibration_error ? "BAD" : "ok";
     const std::string status = c.error ? "UNREADABLE" : c.sound() ? "ok" : "DAMAGED";
-    out += fmt::format("{:<{}}  {:<8} {:<8} {:>8} {:>8} {:>5} {:>5} {:>12}  {:<11} {}\n", c.stream,
+    out += fmt::format("{:<{}}  {:<8} {:<8} {:>8} {:>8} {:>5} {:>5} {:>17}  {:<11} {}\n", c.stream,
                        w, c.kind, c.encoding, c.damage.records, c.damage.damaged,
                        c.damage.torn_tail, c.gap_count, span, calib, status);
   }
