@@ -39,6 +39,7 @@ void add_bench(CLI::App& app, const GlobalFlags& g, int& exit_code);
 void add_record(CLI::App& app, const GlobalFlags& g, int& exit_code);  // cmd_record.cpp
 void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code);    // cmd_analyze.cpp
 void add_batch(CLI::App& app, const GlobalFlags& g, int& exit_code);   // cmd_batch.cpp
+void add_check(CLI::App& app, const GlobalFlags& g, int& exit_code);   // cmd_check.cpp
 
 // Verbs of other modules, each in its own file (cmd_<module>.cpp).
 void add_calibrate(CLI::App& app, const GlobalFlags& g, int& exit_code);  // cmd_calibrate.cpp

@@ -50,6 +50,7 @@ int main(int argc, char** argv) {
   app::add_demo(app, g, exit_code);
   app::add_analyze(app, g, exit_code);
   app::add_batch(app, g, exit_code);  // cmd_batch.cpp
+  app::add_check(app, g, exit_code);  // cmd_check.cpp
   app::add_eval(app, g, exit_code);
   app::add_bench(app, g, exit_code);
   app::add_record(app, g, exit_code);

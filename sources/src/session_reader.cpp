@@ -231,8 +231,7 @@ class StreamReader {
     if ((log_damage_ || reading) && damage_.damaged == 0)
       log::warn("{} (skipped; damaged records are counted in summary.json)", what);
     damage_.damaged++;
-    if (damage_.first.size() < StreamDamage::kListed)
-      damage_.first.push_back({record, stamp, std::move(what)});
+    if (damage_.first.size() < listed_) damage_.first.push_back({record, stamp, std::move(what)});
   }
   // A partly written last record (or several, for frame streams), dropped with a warning.
   void note_torn_tail(uint64_t records, const std::string& what) {
@@ -240,6 +239,9 @@ class StreamReader {
     if (log_damage_) log::warn("{} (a torn tail: {} record(s) at the end dropped)", what, records);
   }
   void set_log_damage(bool on) { log_damage_ = on; }
+  void set_listed_damage(size_t n) { listed_ = n; }
+  // The records kept at open() and where they are in the data file (SessionReader::records).
+  virtual std::vector<RecordLocation> records() const { return {}; }
   // Beyond the policy's threshold: an error, unless allowed. In a session marked complete a torn
   // tail is lost data too (a crash leaves one record at most), so it counts.
   Status check_damage_limit(const SessionReaderOptions& options) const {
@@ -267,6 +269,7 @@ class StreamReader {
   StreamDamage damage_;
   bool log_damage_ = true;
   bool torn_tail_counts_ = false;
+  size_t listed_ = StreamDamage::kListed;
 };
 
 class ReadAhead;
@@ -334,6 +337,7 @@ class IndexedReader : public StreamReader {
                                  entry_.index, l.number, shorten(t)));
         continue;
       }
+      e.frame = damage_.records - 1;  // the frame's place among the index's records
       e.sequence = static_cast<uint64_t>(values[0]);
       e.stamp_ns = values[1];
       e.offset = static_cast<uint64_t>(values[2]);
@@ -399,12 +403,12 @@ class IndexedReader : public StreamReader {
         usable.push_back(e);
         continue;
       }
-      note_damaged(
-          k, e.stamp_ns,
-          fmt::format("{}: frame {} (offset {}, {} bytes) is {}", entry_.file, k, e.offset, e.size,
-                      !inside(e) ? "outside the data file"
-                      : png16    ? "not a PNG (no PNG signature)"
-                                 : "not a complete JPEG (no SOI/EOI marker)"));
+      note_damaged(e.frame, e.stamp_ns,
+                   fmt::format("{}: frame {} (offset {}, {} bytes) is {}", entry_.file, e.frame,
+                               e.offset, e.size,
+                               !inside(e) ? "outside the data file"
+                               : png16    ? "not a PNG (no PNG signature)"
+                                          : "not a complete JPEG (no SOI/EOI marker)"));
     }
     entries_ = std::move(usable);
 
@@ -447,7 +451,14 @@ class IndexedReader : public StreamReader {
   }
 
   Result<FramePtr> read() override;
-  uint64_t last_read_index() const override { return next_ == 0 ? 0 : next_ - 1; }
+  uint64_t last_read_index() const override { return next_ == 0 ? 0 : entries_[next_ - 1].frame; }
+  std::vector<RecordLocation> records() const override {
+    std::vector<RecordLocation> out;
+    out.reserve(entries_.size());
+    for (const Entry& e : entries_)
+      out.push_back({e.frame, e.sequence, e.stamp_ns, e.offset, e.size});
+    return out;
+  }
 
   size_t frame_count() const { return entries_.size(); }
   int64_t stamp_of(size_t k) const { return entries_[k].stamp_ns; }
@@ -465,8 +476,8 @@ class IndexedReader : public StreamReader {
           ::pread(fd_, buffer.data() + done, e.size - done, static_cast<off_t>(e.offset + done));
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0)
-        return make_error(ErrorCode::kCorruptData, "{}: frame {}: read failed: {}", entry_.file, k,
-                          n < 0 ? errno_text(errno) : "unexpected end of file");
+        return make_error(ErrorCode::kCorruptData, "{}: frame {}: read failed: {}", entry_.file,
+                          e.frame, n < 0 ? errno_text(errno) : "unexpected end of file");
       done += static_cast<size_t>(n);
     }
     const Timestamp stamp = Timestamp::from_ns(e.stamp_ns);
@@ -482,13 +493,13 @@ class IndexedReader : public StreamReader {
       d.depth_mm = depth;
       return make_frame(entry_.id, stamp, e.sequence, std::move(d));
     }
-    if (entry_.encoding == "png16") return decode_png16(k, e, stamp, buffer);
+    if (entry_.encoding == "png16") return decode_png16(e, stamp, buffer);
     cv::Mat image;
     const JpegDecode direct = decode_jpeg_direct(buffer, &image);
     if (direct == JpegDecode::kDamaged)
       return make_error(ErrorCode::kCorruptData,
-                        "{}: corrupt: frame {} (offset {}) holds corrupt JPEG data", entry_.file, k,
-                        e.offset);
+                        "{}: corrupt: frame {} (offset {}) holds corrupt JPEG data", entry_.file,
+                        e.frame, e.offset);
     if (direct == JpegDecode::kNotHandled) {
       try {
         image = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
@@ -498,15 +509,15 @@ class IndexedReader : public StreamReader {
     }
     if (image.empty())
       return make_error(ErrorCode::kCorruptData,
-                        "{}: corrupt: frame {} (offset {}) does not decode", entry_.file, k,
+                        "{}: corrupt: frame {} (offset {}) does not decode", entry_.file, e.frame,
                         e.offset);
     if (image.cols != entry_.width || image.rows != entry_.height)
       return make_error(ErrorCode::kCorruptData,
-                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, k,
+                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, e.frame,
                         image.cols, image.rows, entry_.width, entry_.height);
     if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3))
       return make_error(ErrorCode::kUnsupported, "{}: frame {}: unsupported image type {}",
-                        entry_.file, k, image.type());
+                        entry_.file, e.frame, image.type());
     ColorImage c;
     c.image = image;
     return make_frame(entry_.id, stamp, e.sequence, std::move(c));
@@ -514,11 +525,12 @@ class IndexedReader : public StreamReader {
 
  private:
   struct Entry {
+    uint64_t frame = 0;  // place among the index's records (damaged ones included), from 0
     uint64_t sequence = 0;
     int64_t stamp_ns = 0;
     uint64_t offset = 0, size = 0;
   };
-  Result<FramePtr> decode_png16(size_t k, const Entry& e, Timestamp stamp,
+  Result<FramePtr> decode_png16(const Entry& e, Timestamp stamp,
                                 const std::vector<uchar>& buffer) const {
     cv::Mat depth;
     try {
@@ -528,16 +540,16 @@ class IndexedReader : public StreamReader {
     }
     if (depth.empty())
       return make_error(ErrorCode::kCorruptData,
-                        "{}: corrupt: frame {} (offset {}) does not decode", entry_.file, k,
+                        "{}: corrupt: frame {} (offset {}) does not decode", entry_.file, e.frame,
                         e.offset);
     if (depth.type() != CV_16UC1)
       return make_error(ErrorCode::kCorruptData,
                         "{}: corrupt: frame {} (offset {}) is not a 16-bit grey PNG (decodes to "
                         "OpenCV type {})",
-                        entry_.file, k, e.offset, depth.type());
+                        entry_.file, e.frame, e.offset, depth.type());
     if (depth.cols != entry_.width || depth.rows != entry_.height)
       return make_error(ErrorCode::kCorruptData,
-                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, k,
+                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, e.frame,
                         depth.cols, depth.rows, entry_.width, entry_.height);
     DepthImage d;
     d.depth_mm = depth;
@@ -825,6 +837,9 @@ class SkeletonReader : public StreamReader {
         continue;
       }
       frames_.push_back(std::move(*frame));
+      locations_.push_back({static_cast<uint64_t>(l.number), frames_.back()->sequence,
+                            frames_.back()->stamp.ns(),
+                            static_cast<uint64_t>(l.text.data() - text->data()), l.text.size()});
     }
     return check_damage_limit(ctx.options);
   }
@@ -841,6 +856,7 @@ class SkeletonReader : public StreamReader {
     return frames_.back()->stamp.ns();
   }
   Result<FramePtr> read() override { return frames_.at(next_++); }
+  std::vector<RecordLocation> records() const override { return locations_; }
 
  private:
   Result<FramePtr> parse_line(const Line& l) const {
@@ -909,6 +925,7 @@ class SkeletonReader : public StreamReader {
   }
 
   std::vector<FramePtr> frames_;
+  std::vector<RecordLocation> locations_;  // where each of frames_ is in the file
   size_t next_ = 0;
 };
 
@@ -1113,7 +1130,7 @@ Result<std::unique_ptr<SessionReader>> SessionReader::open(const std::filesystem
     if (!options.only.empty() &&
         std::find(options.only.begin(), options.only.end(), s.id) == options.only.end())
       continue;
-    if (!s.calibration.empty()) {
+    if (!s.calibration.empty() && options.require_calibration_files) {
       if (auto st = require_file(ctx, s.calibration); !st) return tl::unexpected(st.error());
     }
     std::unique_ptr<StreamReader> r;
@@ -1129,6 +1146,7 @@ Result<std::unique_ptr<SessionReader>> SessionReader::open(const std::filesystem
       return make_error(ErrorCode::kUnsupported, "{}: stream {}: unknown encoding '{}'",
                         kManifestName, s.id, s.encoding);
     r->set_log_damage(options.log_damage);
+    r->set_listed_damage(options.listed_damage);
     r->set_torn_tail_counts(m.complete);
     if (auto st = r->open(ctx); !st) return tl::unexpected(st.error());
     impl.streams.push_back(std::move(r));
@@ -1191,6 +1209,12 @@ Result<std::unique_ptr<SessionReader>> SessionReader::open(const std::filesystem
     }
   }
   return reader;
+}
+
+std::vector<RecordLocation> SessionReader::records(const SensorId& id) const {
+  for (const auto& r : impl_->streams)
+    if (r->entry().id == id) return r->records();
+  return {};
 }
 
 std::vector<StreamDamage> SessionReader::damage() const {

@@ -126,6 +126,12 @@ struct SessionReaderOptions {
   // Log each stream's first damaged record and torn tail (warnings); off for a second reader of
   // the same session.
   bool log_damage = true;
+  // How many damaged records each stream lists in StreamDamage::first (`dreamsense check` lists
+  // them all).
+  size_t listed_damage = 20;
+  // A stream's `calibration` file must exist (open() fails naming it otherwise). `dreamsense
+  // check` turns this off to check the stream's data and report the calibration itself.
+  bool require_calibration_files = true;
   Status check() const;  // every bad field in one message
 };
 
@@ -141,16 +147,27 @@ struct DamagedRecord {
 struct StreamDamage {
   SensorId stream;
   std::string file;
-  uint64_t records = 0;              // records the stream holds, damaged ones included
-  uint64_t damaged = 0;              // skipped in the middle (unreadable, undecodable, implausible)
-  uint64_t torn_tail = 0;            // dropped at the end (a partly written last record)
-  uint64_t empty_lines = 0;          // blank lines in a line-based file (skipped, counted)
-  std::vector<DamagedRecord> first;  // the first damaged records (at most kListed)
+  uint64_t records = 0;      // records the stream holds, damaged ones included
+  uint64_t damaged = 0;      // skipped in the middle (unreadable, undecodable, implausible)
+  uint64_t torn_tail = 0;    // dropped at the end (a partly written last record)
+  uint64_t empty_lines = 0;  // blank lines in a line-based file (skipped, counted)
+  // The first damaged records (at most SessionReaderOptions::listed_damage, default kListed).
+  std::vector<DamagedRecord> first;
   static constexpr size_t kListed = 20;
   bool any() const { return damaged > 0 || torn_tail > 0 || empty_lines > 0; }
   double damaged_fraction() const {
     return records == 0 ? 0.0 : static_cast<double>(damaged) / static_cast<double>(records);
   }
+};
+
+// Where one record the reader kept at open() lies in its stream's data file: a frame of an
+// indexed stream (mjpeg, raw16, png16) or a line of a skeleton file (without its newline).
+// `dreamsense check --repair` copies records byte for byte from these.
+struct RecordLocation {
+  uint64_t record = 0;  // frame number in the index (indexed streams) or line number (skeleton)
+  uint64_t sequence = 0;
+  int64_t stamp_ns = 0;
+  uint64_t offset = 0, size = 0;
 };
 
 // Replays a session as a Source: frames of all streams merged in stamp order (ties broken by
@@ -175,6 +192,10 @@ class SessionReader : public Source {
   // Per stream read (manifest order): what the damage policy skipped so far (complete after the
   // last next()). Streams without damage are included with zero counts.
   std::vector<StreamDamage> damage() const;
+  // The records of stream `id` that passed the checks of open(), in stream order (frames that do
+  // not decode are still in it: next() finds those); empty for audio and video streams and for a
+  // stream that is not read.
+  std::vector<RecordLocation> records(const SensorId& id) const;
 
  private:
   SessionReader();
