@@ -17,7 +17,7 @@ namespace {
 struct EvalSpeechFlags {
   std::vector<std::string> dataset;  // NAME DIR
   speech::SpeechEvalOptions options;
-  std::string json, resampler = "soxr", speakers, indices;
+  std::string json, resampler = "soxr", speakers, indices, decoys;
   double garbage_weight = 0, min_confidence = -1, pad = -1, warp = 0;
 };
 
@@ -89,8 +89,15 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   auto& r = flags->options.recognizer;
   cmd->add_option("--model", r.model_dir,
                   "PocketSphinx acoustic model folder, also one adapted by train speech "
-                  "(pocketsphinx, speech-commands, list, and fsdd with --fsdd-model en-us)")
-      ->default_val(r.model_dir.string());
+                  "(pocketsphinx, speech-commands, list, and fsdd with --fsdd-model en-us); "
+                  "speech-commands without --model: the shipped model adapted on the "
+                  "development clips (modalities/speech/models/speech_commands)")
+      ->default_val(r.model_dir.string())
+      ->each([flags](const std::string&) { flags->options.commands_shipped_model = false; });
+  cmd->add_option("--decoys", flags->decoys,
+                  "speech-commands: decoy words decoded beside the commands (a decoy heard = "
+                  "_unknown_): FILE (one word per line) or none (default: the model folder's "
+                  "decoys.txt)");
   cmd->add_option("--dict", r.dictionary, "Pronunciation dictionary")
       ->default_val(r.dictionary.string());
   cmd->add_option("--grammar", flags->options.grammar,
@@ -169,6 +176,16 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
     o.recognizer.resampler = *resampler;
     if (flags->garbage_weight != 0) o.garbage_phone_weight = flags->garbage_weight;
     if (flags->min_confidence >= 0) o.min_confidence = flags->min_confidence;
+    if (flags->decoys == "none") {
+      o.decoy_words = std::vector<std::string>{};
+    } else if (!flags->decoys.empty()) {
+      auto d = speech::read_decoy_words(flags->decoys);
+      if (!d) {
+        exit_code = fail(d.error());
+        return;
+      }
+      o.decoy_words = std::move(*d);
+    }
     if (flags->pad >= 0) o.pad_seconds = flags->pad;
     if (flags->warp != 0) o.frequency_warp = flags->warp;
     o.fsdd.speakers = split_commas(flags->speakers);

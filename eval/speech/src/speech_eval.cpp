@@ -12,6 +12,7 @@
 #include <map>
 #include <random>
 #include <regex>
+#include <sstream>
 
 namespace dreamsense::speech {
 namespace {
@@ -574,17 +575,54 @@ Result<eval::EvalReport> run_fsdd(const SpeechEvalOptions& o,
   return j;
 }
 
+}  // namespace
+
+std::filesystem::path commands_model_dir() {
+  return fs::path(DREAMSENSE_SPEECH_MODELS_DIR) / "speech_commands";
+}
+
+Result<std::vector<std::string>> read_decoy_words(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) return make_error(ErrorCode::kNotFound, "{}: cannot read the decoy words", path.string());
+  std::vector<std::string> words;
+  for (std::string line; std::getline(in, line);) {
+    if (auto h = line.find('#'); h != std::string::npos) line.erase(h);
+    std::istringstream ls(line);
+    for (std::string w; ls >> w;) words.push_back(w);
+  }
+  if (words.empty())
+    return make_error(ErrorCode::kInvalidArgument, "{}: no decoy words", path.string());
+  return words;
+}
+
+namespace {
+
 Result<eval::EvalReport> run_speech_commands(const SpeechEvalOptions& o,
                                              const std::function<void(double)>& progress) {
   if (auto st = o.presence.check(); !st) return tl::unexpected(st.error());
   auto items = load_speech_commands(o.dir);
   if (!items) return tl::unexpected(items.error());
   RecognizerOptions ro = o.recognizer;
+  // A means-only model decodes from its base model's folder; its decoys stay in its own.
+  const fs::path model_folder = ro.means_file.empty() ? ro.model_dir : ro.means_file.parent_path();
   ro.garbage_phone_weight = o.garbage_phone_weight.value_or(kCommandsGarbageWeight);
   ro.min_confidence = o.min_confidence.value_or(kCommandsMinConfidence);
+  std::vector<std::string> decoys;
+  if (o.decoy_words) {
+    decoys = *o.decoy_words;
+  } else if (std::error_code ec; fs::exists(model_folder / "decoys.txt", ec)) {
+    auto d = read_decoy_words(model_folder / "decoys.txt");
+    if (!d) return tl::unexpected(d.error());
+    decoys = std::move(*d);
+  }
+  std::erase_if(decoys, [](const std::string& w) {
+    return std::find(std::begin(kCommandWords), std::end(kCommandWords), w) !=
+           std::end(kCommandWords);
+  });
   std::string jsgf = "#JSGF V1.0;\ngrammar commands;\npublic <command> = ";
   for (size_t i = 0; i < std::size(kCommandWords); ++i)
     jsgf += std::string(i ? " | " : "") + kCommandWords[i];
+  for (const auto& w : decoys) jsgf += " | " + w;
   jsgf += ";\n";
   auto grammar = Grammar::from_jsgf(jsgf, "<speech-commands words>");
   if (!grammar) return tl::unexpected(grammar.error());
@@ -625,6 +663,7 @@ Result<eval::EvalReport> run_speech_commands(const SpeechEvalOptions& o,
       if (!r) return tl::unexpected(r.error());
       d = *r;
       hyp = d.accepted && !d.grammar_hypothesis.empty() ? d.grammar_hypothesis : kUnknownLabel;
+      if (std::find(decoys.begin(), decoys.end(), hyp) != decoys.end()) hyp = kUnknownLabel;
     }
     const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const bool ok = hyp == it.label;
@@ -664,9 +703,13 @@ Result<eval::EvalReport> run_speech_commands(const SpeechEvalOptions& o,
   j.extra["dataset_dir"] = fs::absolute(o.dir).string();
   j.protocol = fmt::format(
       "12 classes (10 words, _unknown_, _silence_): voiced-energy silence check, then "
-      "PocketSphinx en-us under the 10-word grammar with phone-loop rejection (garbage weight "
-      "{}) and confidence >= {}; rejected -> _unknown_; no training",
-      ro.garbage_phone_weight, ro.min_confidence);
+      "PocketSphinx ({}) under the 10-word grammar{} with phone-loop rejection (garbage weight "
+      "{}) and confidence >= {}; rejected{} -> _unknown_",
+      model_folder.string(),
+      decoys.empty() ? std::string() : fmt::format(" plus {} decoy words", decoys.size()),
+      ro.garbage_phone_weight, ro.min_confidence, decoys.empty() ? "" : " or a decoy");
+  j.extra["model"] = model_folder.string();
+  j.extra["decoy_words"] = decoys;
   j.metrics = {
       {"accuracy", ratio(correct, items->size())},
       {"false_accept_rate", ratio(false_accepts, negatives)},
@@ -762,6 +805,9 @@ Result<eval::EvalReport> run_list(const SpeechEvalOptions& o,
 Result<eval::EvalReport> run_speech_eval(const SpeechEvalOptions& options,
                                          const std::function<void(double)>& progress) {
   SpeechEvalOptions o = options;
+  if (o.dataset == "speech-commands" && o.commands_shipped_model &&
+      o.recognizer.model_dir == RecognizerOptions{}.model_dir)
+    o.recognizer.model_dir = commands_model_dir();
   // A model folder from `train speech` is decoded with the front end it was adapted with
   // (fsdd: its --fsdd-model folder, handled by fsdd_recognizer).
   if (o.dataset != "fsdd" && fs::exists(o.recognizer.model_dir / kAdaptationFileName))

@@ -6,13 +6,28 @@ namespace dreamsense::speech {
 namespace fs = std::filesystem;
 
 Status use_acoustic_model(RecognizerOptions& options, const fs::path& dir) {
-  if (!fs::exists(dir / "mdef"))
+  const fs::path provenance = dir / kAdaptationFileName;
+  const bool means_only = !fs::exists(dir / "mdef") && fs::exists(dir / "means");
+  if (!fs::exists(dir / "mdef") && !(means_only && fs::exists(provenance)))
     return make_error(ErrorCode::kNotFound, "speech: no acoustic model (mdef) in {}", dir.string());
   options.model_dir = dir;
-  const fs::path provenance = dir / kAdaptationFileName;
+  options.means_file.clear();
   if (!fs::exists(provenance)) return ok_status();
   try {
     const YAML::Node y = YAML::LoadFile(provenance.string());
+    if (means_only) {
+      if (!y["base_model"])
+        return make_error(ErrorCode::kCorruptData, "{}: a means-only model needs base_model",
+                          provenance.string());
+      const fs::path base = y["base_model"].as<std::string>();
+      if (!fs::exists(base / "mdef"))
+        return make_error(ErrorCode::kNotFound,
+                          "{}: base model {} is not installed (Debian package "
+                          "pocketsphinx-en-us)",
+                          provenance.string(), base.string());
+      options.model_dir = base;
+      options.means_file = dir / "means";
+    }
     const YAML::Node fe = y["front_end"];
     if (!fe) return ok_status();
     const int rate =

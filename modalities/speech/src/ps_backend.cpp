@@ -218,6 +218,7 @@ Result<std::unique_ptr<PsDecoder>> PsDecoder::create(const PsConfig& c) {
     cmd_ln_set_str_r(config, "-warp_params", warp.c_str());
   }
   if (!c.mfc_log_dir.empty()) cmd_ln_set_str_r(config, "-mfclogdir", c.mfc_log_dir.c_str());
+  if (!c.means_file.empty()) cmd_ln_set_str_r(config, "-mean", c.means_file.c_str());
   std::unique_ptr<PsDecoder> d(new PsDecoder());
   ps_decoder_t* ps = ps_init(config);
   cmd_ln_free_r(config);  // the decoder keeps its own reference

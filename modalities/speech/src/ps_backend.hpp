@@ -21,6 +21,7 @@ struct PsPass {
 
 struct PsConfig {
   std::string model_dir, dictionary;
+  std::string means_file;  // -mean over the model's own means (empty = the model's)
   int rate_hz = 16000;
   double upper_hz = 0;  // 0 = the model's feat.params
   bool remove_silence = true, remove_noise = true;

@@ -125,6 +125,7 @@ Result<std::unique_ptr<Recognizer>> Recognizer::create(const RecognizerOptions& 
                       options.dictionary.string());
   detail::PsConfig c;
   c.model_dir = options.model_dir.string();
+  c.means_file = options.means_file.string();
   c.dictionary = options.dictionary.string();
   c.rate_hz = options.front_end_rate_hz > 0 ? options.front_end_rate_hz : options.model_rate_hz;
   c.upper_hz = options.front_end_upper_hz;

@@ -38,6 +38,13 @@ struct SpeechEvalOptions {
   // which a live recogniser cannot do, so the headline accuracy is clip by clip.
   bool fsdd_speaker_adapt = false;
   NeighbourVoteOptions fsdd_vote;
+  // speech-commands: when recognizer.model_dir is left at Debian's en-us, decode with the
+  // shipped model adapted on the development clips (commands_model_dir()); false = as given.
+  bool commands_shipped_model = true;
+  // speech-commands: decoy words decoded beside the ten commands; a decoy heard means
+  // _unknown_ (an explicit out-of-vocabulary model next to the phone loop). nullopt = the
+  // model folder's decoys.txt when it has one; an empty list = none.
+  std::optional<std::vector<std::string>> decoy_words;
   audio::SpeechPresenceOptions presence;  // speech-commands: the silence check
   double trim_margin_s = -1;      // speech-commands: decode the active span +- this (<0: all)
   bool list_items = true;         // per-item records in the JSON ("items")
@@ -81,6 +88,13 @@ Result<std::vector<AdaptationUtterance>> fsdd_enrolment(const std::vector<AudioI
 // The utterances of a list file (load_utterance_list; every line needs words) as enrolment
 // utterances, ids "line<N>"; unreadable audio is "FILE:LINE: problem".
 Result<std::vector<AdaptationUtterance>> list_enrolment(const std::filesystem::path& list);
+
+// The acoustic model `train speech` adapted on the Speech Commands development clips, with its
+// decoys.txt (data/models/speech_commands/MODEL_CARD.md).
+std::filesystem::path commands_model_dir();
+// Words of a decoy list: one per line, '#' starts a comment; a file that cannot be read or holds
+// no word is an error naming it.
+Result<std::vector<std::string>> read_decoy_words(const std::filesystem::path& path);
 
 // Speech Commands decision constants, chosen on the synthetic espeak-ng *tuning* voices plus
 // FSDD speaker george's digits (real speech, all out of the 10-word grammar); see README.md.

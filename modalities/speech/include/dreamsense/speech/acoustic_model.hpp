@@ -16,6 +16,8 @@ inline constexpr const char* kAdaptationFileName = "adaptation.yaml";
 // adapt_acoustic_model, the front end it was adapted with (frequency warp, noise and silence
 // removal), so decoding sees the same features as training. Errors: no model there, an
 // unreadable adaptation.yaml, or a front-end rate other than the recogniser's.
+// A means-only folder (means + adaptation.yaml, no mdef: what we ship, see
+// modalities/speech/models) decodes with adaptation.yaml's base_model and these means.
 Status use_acoustic_model(RecognizerOptions& options, const std::filesystem::path& dir);
 
 }  // namespace dreamsense::speech

@@ -38,6 +38,9 @@ struct RecognizerOptions {
   // Debian package pocketsphinx-en-us.
   std::filesystem::path model_dir = "/usr/share/pocketsphinx/model/en-us/en-us";
   std::filesystem::path dictionary = "/usr/share/pocketsphinx/model/en-us/cmudict-en-us.dict";
+  // Gaussian means read instead of model_dir's own (a means-only adapted model: small enough to
+  // ship, the rest from the Debian package; acoustic_model.hpp). Empty = model_dir/means.
+  std::filesystem::path means_file;
   int model_rate_hz = 16000;  // the acoustic model's rate; other input rates are resampled
   // Rate of the MFCC front end; 0 = model_rate_hz. Setting 8000 runs the front end natively on
   // narrow-band audio (no upsampling); the mel filters then end at front_end_upper_hz. Inputs
