@@ -29,6 +29,14 @@ void register_analyzers(AnalyzerRegistry& registry) {
     o.audio_sensor = s->id;
     o.method = method;
     PlannedAnalyzers p;
+    // The robot's own voice (role robot_audio): gated out (audio/reference_gate.hpp).
+    bool robot_gate = true;
+    DS_RETURN_IF_ERROR(options.get("robot_gate", robot_gate));
+    DS_RETURN_IF_ERROR(options.get("robot_offset_s", o.robot_gate.offset_s));
+    if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
+      o.reference_sensor = r->id;
+      p.notes.push_back(fmt::format("robot voice gated with the reference stream '{}'", r->id));
+    }
     if (method == VoiceIdMethod::kGmmUbm) {
       if (!model_file.empty()) {
         o.model_file = model_file;

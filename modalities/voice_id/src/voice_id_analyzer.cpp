@@ -1,6 +1,7 @@
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
 
 #include "dreamsense/audio/stamped_audio.hpp"
+#include "dreamsense/core/log.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
 #include "dreamsense/perception/voice_id.hpp"
 
@@ -38,6 +39,7 @@ Status VoiceIdAnalyzerOptions::check() const {
                       "VoiceIdAnalyzerOptions: method gmm_ubm needs a voice model (model or "
                       "model_file)");
   if (auto s = direction.check(); !s) return s;
+  if (auto s = robot_gate.check(); !s) return s;
   return segmenter.check();  // the stream's rate replaces vad.sample_rate when it starts
 }
 
@@ -56,6 +58,7 @@ class VoiceIdAnalyzer : public Analyzer {
   std::string_view name() const override { return "voice_id"; }
   AnalyzerContract contract() const override {
     AnalyzerContract c{{options_.audio_sensor}, {}, {}, {keys::kSpeakerIdentity.name}};
+    if (!options_.reference_sensor.empty()) c.optional_inputs.push_back(options_.reference_sensor);
     if (options_.method == VoiceIdMethod::kDirectionRule)
       c.reads.push_back(keys::kSoundDirection.name);
     return c;
@@ -64,6 +67,17 @@ class VoiceIdAnalyzer : public Analyzer {
   Status process(const MultiFrame& in, const BlackboardView& prior,
                  BlackboardWriter& out) override {
     if (options_.method == VoiceIdMethod::kDirectionRule) remember_direction(prior);
+    if (gate_)  // the robot's reference first: the gate must know this tick before deciding
+      for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
+        const AudioChunk* c = f->as<AudioChunk>();
+        if (c == nullptr)
+          return make_error(ErrorCode::kInvalidArgument,
+                            "voice_id: robot reference '{}' is not an audio stream",
+                            options_.reference_sensor);
+        if (auto s = gate_->push_reference(c->samples, c->channels, c->sample_rate, f->stamp); !s)
+          return s;
+        note_alignment();
+      }
     for (const FramePtr& f : in.chunks_of(options_.audio_sensor)) {
       const AudioChunk* c = f->as<AudioChunk>();
       if (c == nullptr || c->channels <= 0)
@@ -95,6 +109,10 @@ class VoiceIdAnalyzer : public Analyzer {
       for (size_t i = 0; i < mono.size(); ++i)
         mono[i] = c->samples[i * static_cast<size_t>(c->channels)];
       utterances_.clear();
+      if (gate_) {
+        gate_->push_microphone(mono, 1, rate_, f->stamp);
+        note_alignment();
+      }
       if (auto s = segmenter_->push(mono, f->stamp, utterances_); !s)
         return make_error(s.error().code, "voice_id: {}", s.error().message);
       for (const audio::Utterance& u : utterances_)
@@ -105,7 +123,13 @@ class VoiceIdAnalyzer : public Analyzer {
 
   void reset() override {
     if (segmenter_) segmenter_->reset();
+    if (gate_) gate_->reset();
     heard_.clear();
+  }
+
+  void enable_gate() {
+    if (!options_.reference_sensor.empty())
+      gate_ = std::make_unique<audio::ReferenceGate>(options_.robot_gate);
   }
 
  private:
@@ -118,7 +142,44 @@ class VoiceIdAnalyzer : public Analyzer {
     while (!heard_.empty() && e->stamp - heard_.front().stamp > keep) heard_.pop_front();
   }
 
-  Status decide(const audio::Utterance& u, Timestamp tick, BlackboardWriter& out) {
+  void note_alignment() {
+    if (alignment_noted_ || !gate_->measured_offset()) return;
+    alignment_noted_ = true;
+    const double m = *gate_->measured_offset();
+    if (std::abs(m - options_.robot_gate.offset_s) > options_.robot_gate.align_tolerance_s)
+      log::warn(
+          "voice_id: robot reference '{}' is offset by {:+.2f} s against '{}' (measured from "
+          "the robot's speech; configured {:+.2f} s): using the measured offset",
+          options_.reference_sensor, m, options_.audio_sensor, options_.robot_gate.offset_s);
+  }
+
+  Status decide(const audio::Utterance& u_in, Timestamp tick, BlackboardWriter& out) {
+    const audio::Utterance* up = &u_in;
+    audio::Utterance trimmed;
+    if (gate_) {  // the robot's voice: keep the longest robot-free part, if enough speech is left
+      const auto [qa, qb] = gate_->longest_quiet_span(u_in.start, u_in.end);
+      const Timestamp sa = std::max(u_in.speech_start, qa), sb = std::min(u_in.speech_end, qb);
+      if (!(sb > sa) || (sb - sa).seconds() < options_.min_free_speech_s) {
+        log::debug("voice_id: utterance {:.2f}-{:.2f} s dropped: the robot is speaking",
+                   u_in.speech_start.seconds(), u_in.speech_end.seconds());
+        return ok_status();
+      }
+      if (qa > u_in.start || qb < u_in.end) {
+        const int64_t n = static_cast<int64_t>(u_in.samples.size());
+        const int64_t b =
+            std::clamp(audio::duration_to_frames(qa - u_in.start, rate_), int64_t{0}, n);
+        const int64_t e = std::clamp(audio::duration_to_frames(qb - u_in.start, rate_), b, n);
+        trimmed.start = u_in.start + audio::frames_to_duration(b, rate_);
+        trimmed.end = u_in.start + audio::frames_to_duration(e, rate_);
+        trimmed.speech_start = sa;
+        trimmed.speech_end = sb;
+        trimmed.channels = u_in.channels;
+        trimmed.sample_rate = u_in.sample_rate;
+        trimmed.samples.assign(u_in.samples.begin() + b, u_in.samples.begin() + e);
+        up = &trimmed;
+      }
+    }
+    const audio::Utterance& u = *up;
     SpeakerIdentity id;
     id.start = u.speech_start;
     id.end = u.speech_end;
@@ -138,6 +199,12 @@ class VoiceIdAnalyzer : public Analyzer {
                         rate_);
       if (!r) return tl::unexpected(r.error());
       if (r->frames == 0) return ok_status();  // nothing speech-like in it
+      {
+        std::string scores;
+        for (const auto& sc : r->scores) scores += fmt::format(" {}={:.3f}", sc.id, sc.llr);
+        log::debug("voice_id: utterance {:.2f}-{:.2f} s, {} frames, llr{}",
+                   u.speech_start.seconds(), u.speech_end.seconds(), r->frames, scores);
+      }
       id.speaker_id = r->speaker_id;
       id.name = r->name;
       id.score = r->score;
@@ -176,6 +243,8 @@ class VoiceIdAnalyzer : public Analyzer {
   VoiceIdAnalyzerOptions options_;
   std::shared_ptr<const VoiceModel> model_;
   std::unique_ptr<audio::UtteranceSegmenter> segmenter_;
+  std::unique_ptr<audio::ReferenceGate> gate_;
+  bool alignment_noted_ = false;
   int rate_ = 0;
   std::vector<audio::Utterance> utterances_;  // scratch
   std::deque<Heard> heard_;                   // directions of the last seconds (direction rule)
@@ -194,7 +263,9 @@ Result<std::unique_ptr<Analyzer>> make_voice_id_analyzer(const VoiceIdAnalyzerOp
   if (model)
     if (auto s = model->check(); !s) return tl::unexpected(s.error());
   if (options.method == VoiceIdMethod::kDirectionRule) model.reset();
-  return std::unique_ptr<Analyzer>(new VoiceIdAnalyzer(options, std::move(model)));
+  auto a = std::make_unique<VoiceIdAnalyzer>(options, std::move(model));
+  a->enable_gate();
+  return std::unique_ptr<Analyzer>(std::move(a));
 }
 
 }  // namespace dreamsense::voice_id

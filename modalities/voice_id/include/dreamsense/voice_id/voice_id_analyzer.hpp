@@ -14,6 +14,7 @@
 // The entry is written at the tick the utterance ends (hangover_s after its last loud frame);
 // start/end are the loud part's stamps.
 
+#include "dreamsense/audio/reference_gate.hpp"
 #include "dreamsense/audio/utterance_segmenter.hpp"
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/voice_id/voice_model.hpp"
@@ -53,6 +54,12 @@ struct VoiceIdAnalyzerOptions {
   // Utterances (audio::UtteranceSegmenter, as the speech analyser) on channel 0; the stream's
   // rate is filled in from the first chunk.
   audio::UtteranceSegmenterOptions segmenter = default_voice_segmenter();
+  // The robot's own voice (issue 16): the reference stream the robot's loudspeaker plays (role
+  // robot_audio; empty: none). Utterances are trimmed to their longest robot-free part and
+  // dropped when less than min_free_speech_s of their speech is left (audio/reference_gate.hpp).
+  SensorId reference_sensor;
+  audio::ReferenceGateOptions robot_gate;
+  double min_free_speech_s = 0.3;
   Status check() const;
 };
 
