@@ -35,6 +35,7 @@ void ReferenceGate::reset() {
   ref_acc_frame_ = mic_acc_frame_ = INT64_MIN;
   active_frames_ = 0;
   measured_offset_.reset();
+  align_frame_.reset();
   aligned_ = false;
 }
 
@@ -123,10 +124,13 @@ void ReferenceGate::push_microphone(std::span<const float> x, int channels, int 
 // frames: the robot is by far the loudest thing the array hears while it speaks.
 void ReferenceGate::try_align() {
   if (!options_.align || aligned_ || ref_levels_.empty() || mic_levels_.empty()) return;
-  if (static_cast<double>(active_frames_) * options_.frame_s < options_.align_after_s) return;
+  if (!align_frame_) {
+    if (static_cast<double>(active_frames_) * options_.frame_s < options_.align_after_s) return;
+    align_frame_ = ref_levels_.back().frame;  // enough robot speech up to here
+  }
   const int64_t max_lag = static_cast<int64_t>(std::ceil(options_.max_offset_s / options_.frame_s));
-  // Wait until the microphones have passed the last reference frame by the largest lag.
-  if (mic_levels_.back().frame < ref_levels_.back().frame + max_lag) return;
+  // Wait until the microphones have passed that frame by the largest lag.
+  if (mic_levels_.back().frame < *align_frame_ + max_lag) return;
   const int64_t mic0 = mic_levels_.front().frame;
   auto mic_db = [&](int64_t f) -> std::optional<double> {
     const int64_t k = f - mic0;
@@ -141,6 +145,7 @@ void ReferenceGate::try_align() {
     double sum = 0;
     int count = 0;
     for (const Level& r : ref_levels_) {
+      if (r.frame > *align_frame_) break;
       if (!(r.db > options_.threshold_dbfs)) continue;
       if (auto m = mic_db(r.frame + lag)) sum += *m, ++count;
     }

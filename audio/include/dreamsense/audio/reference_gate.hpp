@@ -83,6 +83,7 @@ class ReferenceGate {
   int64_t ref_acc_frame_ = INT64_MIN, mic_acc_frame_ = INT64_MIN;
   int64_t active_frames_ = 0;
   std::optional<double> measured_offset_;
+  std::optional<int64_t> align_frame_;  // last reference frame the measurement uses
   bool aligned_ = false;
   void rebuild();
 };
