@@ -1,5 +1,6 @@
 #include "dreamsense/speech/speech_analyzer.hpp"
 
+#include "dreamsense/audio/noise_suppressor.hpp"
 #include "dreamsense/audio/stamped_audio.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
@@ -187,6 +188,11 @@ class SpeechAnalyzer : public Analyzer {
       mono = std::move(*y);
     } else {
       mono = u.channel(0);  // no array or no direction: channel 0 (see the header)
+    }
+    if (options_.noise_suppression) {
+      auto clean = audio::suppress_noise(mono, rate_);
+      if (!clean) return tl::unexpected(clean.error());
+      mono = std::move(*clean);
     }
     auto r = recognizer_->recognize(std::span<const float>(mono), rate_, u.start);
     if (!r) return tl::unexpected(r.error());

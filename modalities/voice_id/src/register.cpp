@@ -22,6 +22,10 @@ void register_analyzers(AnalyzerRegistry& registry) {
     std::filesystem::path model_file;
     DS_RETURN_IF_ERROR(options.get("method", method_name));
     DS_RETURN_IF_ERROR(options.get("model", model_file));
+    // Noise suppression in the speaker models trained here from the enrolment (a model file
+    // says itself whether it was trained with it).
+    bool noise_suppression = VoiceTrainOptions{}.features.noise_suppression;
+    DS_RETURN_IF_ERROR(options.get("noise_suppression", noise_suppression));
     DS_ASSIGN_OR_RETURN(const VoiceIdMethod method, parse_voice_id_method(method_name));
     const StreamDescription* s = ctx.first_with_role(roles::kMicArray);
     if (s == nullptr) return PlannedAnalyzers::skip("no stream with role mic_array");
@@ -48,7 +52,9 @@ void register_analyzers(AnalyzerRegistry& registry) {
               "audio (metadata voice_enroll)");
         auto audio_files = read_speaker_folders(*enroll);
         if (!audio_files) return tl::unexpected(audio_files.error());
-        auto m = train_voice_model(*audio_files, {}, VoiceTrainOptions{});
+        VoiceTrainOptions train;
+        train.features.noise_suppression = noise_suppression;
+        auto m = train_voice_model(*audio_files, {}, train);
         if (!m) return make_error(m.error().code, "{}: {}", enroll->string(), m.error().message);
         std::string who;
         for (const auto& sp : m->speakers)

@@ -1,5 +1,6 @@
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
 
+#include "dreamsense/audio/noise_suppressor.hpp"
 #include "dreamsense/audio/stamped_audio.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
@@ -108,12 +109,38 @@ class VoiceIdAnalyzer : public Analyzer {
       std::vector<float> mono(static_cast<size_t>(c->frames()));
       for (size_t i = 0; i < mono.size(); ++i)
         mono[i] = c->samples[i * static_cast<size_t>(c->channels)];
+      Timestamp stamp = f->stamp;
+      if (model_ && model_->features.noise_suppression) {  // as the enrolment was
+        if (!denoiser_) {
+          audio::NoiseSuppressorOptions no;
+          no.sample_rate = rate_;
+          auto d = audio::NoiseSuppressor::create(no);
+          if (!d) return make_error(d.error().code, "voice_id: {}", d.error().message);
+          denoiser_ = std::move(*d);
+        }
+        // Output sample k is input sample k - latency: stamps follow the output count, and a
+        // gap in the input restarts the suppressor.
+        const Timestamp expected = ns_origin_ + audio::frames_to_duration(ns_pushed_, rate_);
+        if (!ns_origin_.is_set() || std::abs((f->stamp - expected).seconds()) > 1e-3) {
+          denoiser_->reset();
+          ns_origin_ = f->stamp;
+          ns_pushed_ = ns_emitted_ = 0;
+        }
+        denoised_.clear();
+        denoiser_->process(mono, denoised_);
+        ns_pushed_ += static_cast<int64_t>(mono.size());
+        stamp = ns_origin_ + audio::frames_to_duration(ns_emitted_, rate_) -
+                audio::frames_to_duration(denoiser_->latency(), rate_);
+        ns_emitted_ += static_cast<int64_t>(denoised_.size());
+        mono.swap(denoised_);
+        if (mono.empty()) continue;
+      }
       utterances_.clear();
       if (gate_) {
-        gate_->push_microphone(mono, 1, rate_, f->stamp);
+        gate_->push_microphone(mono, 1, rate_, stamp);
         note_alignment();
       }
-      if (auto s = segmenter_->push(mono, f->stamp, utterances_); !s)
+      if (auto s = segmenter_->push(mono, stamp, utterances_); !s)
         return make_error(s.error().code, "voice_id: {}", s.error().message);
       for (const audio::Utterance& u : utterances_)
         if (auto s = decide(u, in.stamp, out); !s) return s;
@@ -124,6 +151,8 @@ class VoiceIdAnalyzer : public Analyzer {
   void reset() override {
     if (segmenter_) segmenter_->reset();
     if (gate_) gate_->reset();
+    if (denoiser_) denoiser_->reset();
+    ns_origin_ = Timestamp::unset();
     heard_.clear();
   }
 
@@ -196,7 +225,7 @@ class VoiceIdAnalyzer : public Analyzer {
       auto r = identify(*model_,
                         std::span<const float>(u.samples).subspan(static_cast<size_t>(b),
                                                                   static_cast<size_t>(e - b)),
-                        rate_);
+                        rate_, /*denoised=*/true);
       if (!r) return tl::unexpected(r.error());
       if (r->frames == 0) return ok_status();  // nothing speech-like in it
       {
@@ -244,6 +273,10 @@ class VoiceIdAnalyzer : public Analyzer {
   std::shared_ptr<const VoiceModel> model_;
   std::unique_ptr<audio::UtteranceSegmenter> segmenter_;
   std::unique_ptr<audio::ReferenceGate> gate_;
+  std::unique_ptr<audio::NoiseSuppressor> denoiser_;
+  std::vector<float> denoised_;  // scratch
+  Timestamp ns_origin_ = Timestamp::unset();
+  int64_t ns_pushed_ = 0, ns_emitted_ = 0;
   bool alignment_noted_ = false;
   int rate_ = 0;
   std::vector<audio::Utterance> utterances_;  // scratch

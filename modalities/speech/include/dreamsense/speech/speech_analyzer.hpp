@@ -56,6 +56,10 @@ struct SpeechAnalyzerOptions {
   SensorId reference_sensor;
   audio::ReferenceGateOptions robot_gate;
   double min_free_speech_s = 0.3;
+  // Issue 16: the decoded (beamformed) utterance passes the noise suppressor first
+  // (audio/noise_suppressor.hpp; its noise estimate starts on the 0.25 s pre-roll). Off by
+  // default: measured no better than PocketSphinx's own noise removal (README.md).
+  bool noise_suppression = false;
   bool beamforming() const { return steer_to_sound_direction && mic_positions_m.size() > 1; }
   Status check() const;
 };
