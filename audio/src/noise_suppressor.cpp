@@ -19,7 +19,8 @@ Status NoiseSuppressorOptions::check() const {
   if (!(speech_ratio_db >= 0 && noise_tau_s > 0 && noise_rise_db_per_s >= 0))
     bad += " speech_ratio_db and noise_rise_db_per_s must be >= 0, noise_tau_s > 0;";
   if (!(low_hz >= 0 && high_hz > low_hz)) bad += " need 0 <= low_hz < high_hz;";
-  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "NoiseSuppressorOptions:{}", bad);
+  if (!bad.empty())
+    return make_error(ErrorCode::kInvalidArgument, "NoiseSuppressorOptions:{}", bad);
   return ok_status();
 }
 
@@ -27,9 +28,9 @@ struct NoiseSuppressor::Impl {
   NoiseSuppressorOptions o;
   int n = 512, hop = 256, bins = 257, ch = 1;
   RealFft fft;
-  std::vector<double> window;                 // sqrt-Hann
-  std::vector<std::vector<double>> in_buf;    // per channel, n samples (sliding)
-  std::vector<std::vector<double>> out_buf;   // per channel, n samples (overlap-add)
+  std::vector<double> window;                              // sqrt-Hann
+  std::vector<std::vector<double>> in_buf;                 // per channel, n samples (sliding)
+  std::vector<std::vector<double>> out_buf;                // per channel, n samples (overlap-add)
   std::vector<std::vector<std::complex<double>>> spectra;  // per channel, this frame
   std::vector<double> noise, smoothed, gain_prev, gamma_prev, power;
   std::vector<float> pending;  // interleaved input not yet a full hop
@@ -50,8 +51,8 @@ struct NoiseSuppressor::Impl {
     speech_ratio = std::pow(10.0, o.speech_ratio_db / 10);
     init_frames = std::max(1, static_cast<int>(std::lround(o.init_s / hop_s)));
     band_lo = std::clamp(static_cast<int>(std::ceil(o.low_hz * n / o.sample_rate)), 0, bins - 1);
-    band_hi = std::clamp(static_cast<int>(std::floor(o.high_hz * n / o.sample_rate)), band_lo,
-                         bins - 1);
+    band_hi =
+        std::clamp(static_cast<int>(std::floor(o.high_hz * n / o.sample_rate)), band_lo, bins - 1);
     reset();
   }
 
@@ -74,6 +75,16 @@ struct NoiseSuppressor::Impl {
     power.assign(static_cast<size_t>(bins), 0.0);
     pending.clear();
     frames_seen = 0;
+  }
+
+  // Back to the start of the signal, keeping the learnt noise (the one-shot second pass).
+  void rewind() {
+    const auto n_keep = noise;
+    const auto s_keep = smoothed;
+    reset();
+    noise = n_keep;
+    smoothed = s_keep;
+    frames_seen = init_frames + 1;
   }
 
   // One hop of new samples per channel is at the end of in_buf: analyse, filter, overlap-add.
@@ -149,7 +160,8 @@ struct NoiseSuppressor::Impl {
     for (int c = 0; c < ch; ++c) {
       auto& ob = out_buf[static_cast<size_t>(c)];
       for (int i = 0; i < hop; ++i)
-        out[start + static_cast<size_t>(i * ch + c)] = static_cast<float>(ob[static_cast<size_t>(i)]);
+        out[start + static_cast<size_t>(i * ch + c)] =
+            static_cast<float>(ob[static_cast<size_t>(i)]);
       std::copy(ob.begin() + hop, ob.end(), ob.begin());
       std::fill(ob.end() - hop, ob.end(), 0.0);
     }
@@ -199,14 +211,22 @@ void NoiseSuppressor::flush(std::vector<float>& out) {
 }
 
 Result<std::vector<float>> suppress_noise(std::span<const float> mono, int sample_rate,
-                                          NoiseSuppressorOptions options) {
+                                          NoiseSuppressorOptions options, int passes) {
   options.sample_rate = sample_rate;
   options.channels = 1;
   DS_ASSIGN_OR_RETURN(auto ns, NoiseSuppressor::create(options));
   std::vector<float> out;
   out.reserve(mono.size() + static_cast<size_t>(2 * ns->frame()));
+  // Two passes: the first learns the noise over the whole recording (its pauses pull the
+  // estimate down even when it starts with speech), the second filters with it.
   ns->process(mono, out);
   ns->flush(out);
+  for (int p = 1; p < passes; ++p) {
+    ns->impl_->rewind();
+    out.clear();
+    ns->process(mono, out);
+    ns->flush(out);
+  }
   const size_t lat = static_cast<size_t>(ns->latency());
   std::vector<float> y(mono.size(), 0.0f);
   for (size_t i = 0; i < y.size() && i + lat < out.size(); ++i) y[i] = out[i + lat];

@@ -179,8 +179,7 @@ bool ReferenceGate::active(Timestamp t) const {
   return false;
 }
 
-std::pair<Timestamp, Timestamp> ReferenceGate::longest_quiet_span(Timestamp a,
-                                                                  Timestamp b) const {
+std::pair<Timestamp, Timestamp> ReferenceGate::longest_quiet_span(Timestamp a, Timestamp b) const {
   std::pair<Timestamp, Timestamp> best{a, a};
   Timestamp cursor = a;
   auto consider = [&](Timestamp s, Timestamp e) {

@@ -25,7 +25,8 @@ Scene scene(int rate, double noise_rms, uint64_t seed) {
   s.clean.assign(n, 0.0f);
   for (size_t i = static_cast<size_t>(rate); i < n; ++i)
     for (int h = 1; h <= 10; ++h)
-      s.clean[i] += static_cast<float>(0.03 / h * std::sin(2 * M_PI * 200 * h * static_cast<double>(i) / rate));
+      s.clean[i] += static_cast<float>(
+          0.03 / h * std::sin(2 * M_PI * 200 * h * static_cast<double>(i) / rate));
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0, noise_rms);
   s.noisy = s.clean;
@@ -71,7 +72,8 @@ TEST(NoiseSuppressor, PassesCleanSpeechAndKeepsChannelsInPhase) {
   ASSERT_TRUE(ns);
   std::vector<float> out;
   for (size_t i = 0; i < st.size(); i += 2 * 333)  // odd chunk sizes
-    (*ns)->process(std::span<const float>(st).subspan(i, std::min<size_t>(2 * 333, st.size() - i)), out);
+    (*ns)->process(std::span<const float>(st).subspan(i, std::min<size_t>(2 * 333, st.size() - i)),
+                   out);
   (*ns)->flush(out);
   ASSERT_EQ(out.size(), st.size() + 2 * static_cast<size_t>((*ns)->latency()));
   const size_t lat = static_cast<size_t>((*ns)->latency());

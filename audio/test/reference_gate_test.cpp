@@ -33,7 +33,8 @@ TEST(ReferenceGate, MarksTheReferenceWithLeadAndTailAtAnyRate) {
     EXPECT_FALSE(g.active(Timestamp::from_seconds(13.5))) << rate;
     EXPECT_NEAR(g.active_fraction(Timestamp::from_seconds(12), Timestamp::from_seconds(13)), 1.0,
                 1e-9);
-    const auto [a, b] = g.longest_quiet_span(Timestamp::from_seconds(11), Timestamp::from_seconds(15));
+    const auto [a, b] =
+        g.longest_quiet_span(Timestamp::from_seconds(11), Timestamp::from_seconds(15));
     EXPECT_NEAR(a.seconds(), 13.42, 0.03) << rate;
     EXPECT_NEAR(b.seconds(), 15.0, 1e-9) << rate;
   }

@@ -22,8 +22,8 @@
 #include <fstream>
 #include <mutex>
 #include <optional>
-#include <sstream>
 #include <random>
+#include <sstream>
 #include <thread>
 
 namespace dreamsense::sim {
@@ -322,13 +322,12 @@ Result<std::vector<RobotPrompt>> read_robot_prompts(const fs::path& dir) {
     const auto b = p.text.find_first_not_of(' ');
     p.text = b == std::string::npos ? "" : p.text.substr(b);
     if (p.file.empty() || (in_grammar != 0 && in_grammar != 1) || p.text.empty())
-      return make_error(ErrorCode::kCorruptData,
-                        "{}:{}: expected \"file in_grammar(0|1) text...\"", list.string(), n);
+      return make_error(ErrorCode::kCorruptData, "{}:{}: expected \"file in_grammar(0|1) text...\"",
+                        list.string(), n);
     p.in_grammar = in_grammar == 1;
     out.push_back(std::move(p));
   }
-  if (out.empty())
-    return make_error(ErrorCode::kCorruptData, "{}: no prompts", list.string());
+  if (out.empty()) return make_error(ErrorCode::kCorruptData, "{}: no prompts", list.string());
   return out;
 }
 
@@ -1209,8 +1208,7 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
     std::vector<std::pair<double, double>> busy;
     for (const auto& u : utterances)
       busy.emplace_back(u.clip_start_s, u.clip_start_s + clips[u.clip].duration_s);
-    const auto robot_plan =
-        plan_robot_utterances(options.seed, dur, busy, prompt_durations);
+    const auto robot_plan = plan_robot_utterances(options.seed, dur, busy, prompt_durations);
     const cv::Vec3d speaker_m = g.robot_head_m;
     const double delay = cv::norm(speaker_m - g.mic_array_m) / room.speed_of_sound_m_s;
     double az = 0, el = 0;

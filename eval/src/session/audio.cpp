@@ -114,11 +114,13 @@ MetricGroup robot_voice_metrics() {
     int reports = 0;
     for (const auto* r : d.of(PrimitiveId::kRecognizeSpeech))
       if (const auto* s = r->value_as<primitives::SpeechValue>())
-        if (seen_speech.insert({s->start_ns, s->end_ns}).second && mostly_robot(s->start_ns, s->end_ns))
+        if (seen_speech.insert({s->start_ns, s->end_ns}).second &&
+            mostly_robot(s->start_ns, s->end_ns))
           ++reports;
     for (const auto* r : d.of(PrimitiveId::kIdentifyVoice))
       if (const auto* v = r->value_as<primitives::VoiceValue>())
-        if (seen_voice.insert({v->start_ns, v->end_ns}).second && mostly_robot(v->start_ns, v->end_ns))
+        if (seen_voice.insert({v->start_ns, v->end_ns}).second &&
+            mostly_robot(v->start_ns, v->end_ns))
           ++reports;
     metrics["robot_speech_false_reports"] = reports;
     int directions = 0;

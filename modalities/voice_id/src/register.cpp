@@ -37,6 +37,8 @@ void register_analyzers(AnalyzerRegistry& registry) {
     bool robot_gate = true;
     DS_RETURN_IF_ERROR(options.get("robot_gate", robot_gate));
     DS_RETURN_IF_ERROR(options.get("robot_offset_s", o.robot_gate.offset_s));
+    DS_RETURN_IF_ERROR(options.get("track_by_direction", o.track_by_direction));
+    DS_RETURN_IF_ERROR(options.get("track_angle_deg", o.track_angle_deg));
     if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
       o.reference_sensor = r->id;
       p.notes.push_back(fmt::format("robot voice gated with the reference stream '{}'", r->id));

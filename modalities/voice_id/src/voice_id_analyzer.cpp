@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <map>
 #include <optional>
 
 namespace dreamsense::voice_id {
@@ -62,12 +63,15 @@ class VoiceIdAnalyzer : public Analyzer {
     if (!options_.reference_sensor.empty()) c.optional_inputs.push_back(options_.reference_sensor);
     if (options_.method == VoiceIdMethod::kDirectionRule)
       c.reads.push_back(keys::kSoundDirection.name);
+    else if (options_.track_by_direction)
+      c.reads_previous.push_back(keys::kSoundDirection.name);
     return c;
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
                  BlackboardWriter& out) override {
-    if (options_.method == VoiceIdMethod::kDirectionRule) remember_direction(prior);
+    if (options_.method == VoiceIdMethod::kDirectionRule || options_.track_by_direction)
+      remember_direction(prior);
     if (gate_)  // the robot's reference first: the gate must know this tick before deciding
       for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
         const AudioChunk* c = f->as<AudioChunk>();
@@ -154,6 +158,7 @@ class VoiceIdAnalyzer : public Analyzer {
     if (denoiser_) denoiser_->reset();
     ns_origin_ = Timestamp::unset();
     heard_.clear();
+    tracks_.clear();
   }
 
   void enable_gate() {
@@ -234,6 +239,7 @@ class VoiceIdAnalyzer : public Analyzer {
         log::debug("voice_id: utterance {:.2f}-{:.2f} s, {} frames, llr{}",
                    u.speech_start.seconds(), u.speech_end.seconds(), r->frames, scores);
       }
+      if (options_.track_by_direction) accumulate_over_track(u, *r);
       id.speaker_id = r->speaker_id;
       id.name = r->name;
       id.score = r->score;
@@ -243,6 +249,76 @@ class VoiceIdAnalyzer : public Analyzer {
     const float confidence = static_cast<float>(id.score);
     out.set(keys::kSpeakerIdentity, std::move(id), tick, confidence);
     return ok_status();
+  }
+
+  // Confidence-weighted mean azimuth heard during the utterance's speech (nullopt: fewer than
+  // three directions).
+  std::optional<double> azimuth_of(const audio::Utterance& u) const {
+    double sx = 0, sy = 0;
+    int n = 0;
+    for (const auto& h : heard_) {
+      if (h.stamp < u.speech_start || h.stamp > u.speech_end) continue;
+      const double a = h.azimuth_deg * M_PI / 180, w = std::max(1e-3, h.confidence);
+      sx += w * std::cos(a), sy += w * std::sin(a), ++n;
+    }
+    if (n < 3) return std::nullopt;
+    return std::atan2(sy, sx) * 180 / M_PI;
+  }
+
+  // Joins the utterance to the track from its direction and replaces the decision by the one on
+  // the track's accumulated evidence (frame-weighted mean LLR per speaker).
+  void accumulate_over_track(const audio::Utterance& u, Identification& r) {
+    const auto az = azimuth_of(u);
+    if (!az || r.frames == 0) return;
+    Track* track = nullptr;
+    for (auto& t : tracks_) {
+      if ((u.speech_start - t.last).seconds() > options_.track_memory_s) continue;
+      if (std::abs(t.azimuth_deg - *az) > options_.track_angle_deg) continue;
+      if (track == nullptr || std::abs(t.azimuth_deg - *az) < std::abs(track->azimuth_deg - *az))
+        track = &t;
+    }
+    if (track == nullptr) track = &tracks_.emplace_back();
+    const double frames = r.frames;
+    const double total = track->frames + frames;
+    std::vector<SpeakerScore> combined;
+    for (const auto& s : r.scores) {
+      const double past = track->llr_sum.count(s.id) ? track->llr_sum[s.id] : 0.0;
+      combined.push_back({s.id, (past + s.llr * frames) / total});
+    }
+    // Remember (older evidence scaled down beyond track_max_frames).
+    const double keep = total > options_.track_max_frames ? options_.track_max_frames / total : 1.0;
+    for (const auto& s : r.scores) {
+      const double past = track->llr_sum.count(s.id) ? track->llr_sum[s.id] : 0.0;
+      track->llr_sum[s.id] = (past + s.llr * frames) * keep;
+    }
+    track->frames = total * keep;
+    track->azimuth_deg = track->utterances == 0 ? *az
+                                                : (track->azimuth_deg * track->utterances + *az) /
+                                                      (track->utterances + 1);
+    ++track->utterances;
+    track->last = u.speech_end;
+    if (track->utterances == 1) return;  // nothing to add to the utterance's own evidence
+    std::stable_sort(combined.begin(), combined.end(),
+                     [](const SpeakerScore& a, const SpeakerScore& b) { return a.llr > b.llr; });
+    log::debug(
+        "voice_id: utterance {:.2f}-{:.2f} s on the track at {:.0f} deg ({} utterances): "
+        "{} {:.3f}",
+        u.speech_start.seconds(), u.speech_end.seconds(), track->azimuth_deg, track->utterances,
+        combined.front().id, combined.front().llr);
+    r.best_id = combined.front().id;
+    r.llr = combined.front().llr;
+    r.scores = combined;
+    const double p = 1.0 / (1.0 + std::exp(-(r.llr - model_->threshold) / model_->score_scale));
+    if (r.llr >= model_->threshold) {
+      r.speaker_id = r.best_id;
+      r.name = r.best_id;
+      for (const auto& s : model_->speakers)
+        if (s.id == r.best_id) r.name = s.name;
+      r.score = p;
+    } else {
+      r.speaker_id = r.name = kUnknownSpeaker;
+      r.score = 1.0 - p;
+    }
   }
 
   // DREAM's rule on every direction heard during the utterance (none heard: unknown).
@@ -280,7 +356,15 @@ class VoiceIdAnalyzer : public Analyzer {
   bool alignment_noted_ = false;
   int rate_ = 0;
   std::vector<audio::Utterance> utterances_;  // scratch
-  std::deque<Heard> heard_;                   // directions of the last seconds (direction rule)
+  std::deque<Heard> heard_;  // directions of the last seconds (direction rule, tracks)
+  struct Track {
+    double azimuth_deg = 0;
+    Timestamp last;
+    int utterances = 0;
+    double frames = 0;
+    std::map<std::string, double> llr_sum;  // per speaker: sum over frames of the LLR
+  };
+  std::vector<Track> tracks_;
 };
 
 }  // namespace

@@ -225,7 +225,8 @@ namespace {
 // Un-normalised features of one recording, through the noise suppressor when the options say so.
 Result<MfccFeatures> features_of(const LabelledAudio& a, const MfccOptions& o) {
   if (!o.noise_suppression) return unnormalised_mfcc(a.samples, a.sample_rate, o);
-  DS_ASSIGN_OR_RETURN(auto clean, audio::suppress_noise(a.samples, a.sample_rate));
+  // One pass, as the analyser's streaming filter: enrolment and scoring see the same processing.
+  DS_ASSIGN_OR_RETURN(auto clean, audio::suppress_noise(a.samples, a.sample_rate, {}, 1));
   return unnormalised_mfcc(clean, a.sample_rate, o);
 }
 }  // namespace
@@ -374,7 +375,7 @@ Identification identify_features(const VoiceModel& model, const cv::Mat& feature
 Result<Identification> identify(const VoiceModel& model, std::span<const float> samples,
                                 int sample_rate, bool denoised) {
   if (model.features.noise_suppression && !denoised) {
-    DS_ASSIGN_OR_RETURN(auto clean, audio::suppress_noise(samples, sample_rate));
+    DS_ASSIGN_OR_RETURN(auto clean, audio::suppress_noise(samples, sample_rate, {}, 1));
     return identify(model, clean, sample_rate, true);
   }
   auto f = compute_mfcc(samples, sample_rate, model.features, model.cmn_prior);

@@ -27,12 +27,12 @@ namespace dreamsense::audio {
 struct NoiseSuppressorOptions {
   int sample_rate = 16000;
   int channels = 1;
-  double frame_s = 0.032;       // rounded to a power of two of samples
-  double gain_floor_db = -15;   // strongest attenuation (deeper makes "musical noise")
-  double dd_alpha = 0.98;       // decision-directed smoothing
-  double init_s = 0.25;         // the first frames are noise
-  double speech_ratio_db = 3;   // frames this far above the noise are speech (no update)
-  double noise_tau_s = 0.5;     // noise update time constant in non-speech frames
+  double frame_s = 0.032;      // rounded to a power of two of samples
+  double gain_floor_db = -15;  // strongest attenuation (deeper makes "musical noise")
+  double dd_alpha = 0.98;      // decision-directed smoothing
+  double init_s = 0.1;         // the first frames are noise
+  double speech_ratio_db = 3;  // frames this far above the noise are speech (no update)
+  double noise_tau_s = 0.5;    // noise update time constant in non-speech frames
   double noise_rise_db_per_s = 1.0;
   double low_hz = 80;  // below: attenuated by gain_floor (hum, rumble); above high_hz untouched
   double high_hz = 7800;
@@ -55,11 +55,15 @@ class NoiseSuppressor {
  private:
   struct Impl;
   explicit NoiseSuppressor(std::unique_ptr<Impl> impl);
+  friend Result<std::vector<float>> suppress_noise(std::span<const float>, int,
+                                                   NoiseSuppressorOptions, int);
   std::unique_ptr<Impl> impl_;
 };
 
 // One-shot: the whole signal (mono) through a fresh suppressor, latency removed (same length).
+// passes = 2: the first pass learns the noise over the whole recording, the second filters with
+// it (a recording that starts with speech); 1 = exactly what the streaming filter does.
 Result<std::vector<float>> suppress_noise(std::span<const float> mono, int sample_rate,
-                                          NoiseSuppressorOptions options = {});
+                                          NoiseSuppressorOptions options = {}, int passes = 2);
 
 }  // namespace dreamsense::audio

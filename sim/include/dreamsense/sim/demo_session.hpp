@@ -139,8 +139,8 @@ struct RobotPrompt {
   bool in_grammar = false;
 };
 struct PlannedRobotUtterance {
-  size_t prompt = 0;          // index into the prompt list
-  double clip_start_s = 0;    // session time of the prompt's first sample
+  size_t prompt = 0;        // index into the prompt list
+  double clip_start_s = 0;  // session time of the prompt's first sample
 };
 // The robot speaks in the gaps of the human utterances: in each gap (also before the first and
 // after the last) that leaves >= margin_s (1.0 s) of silence on both sides, with probability

@@ -60,6 +60,16 @@ struct VoiceIdAnalyzerOptions {
   SensorId reference_sensor;
   audio::ReferenceGateOptions robot_gate;
   double min_free_speech_s = 0.3;
+  // kGmmUbm, issue 16: evidence accumulated over a track of utterances from the same direction
+  // (keys::kSoundDirection of the previous ticks, read as feedback; without a sound direction
+  // analyser every utterance stands alone). An utterance whose confidence-weighted mean azimuth
+  // is within track_angle_deg of a track heard in the last track_memory_s joins it; the
+  // decision uses the frame-weighted mean LLR of the track's utterances and this one (the track
+  // keeps at most track_max_frames frames of evidence, older evidence scaled down).
+  bool track_by_direction = false;  // measured no gain on the demo (README.md): opt-in
+  double track_angle_deg = 10;
+  double track_memory_s = 60;
+  int track_max_frames = 600;
   Status check() const;
 };
 
