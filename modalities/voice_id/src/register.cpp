@@ -38,6 +38,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
     DS_RETURN_IF_ERROR(options.get("robot_gate", robot_gate));
     DS_RETURN_IF_ERROR(options.get("robot_offset_s", o.robot_gate.offset_s));
     DS_RETURN_IF_ERROR(options.get("track_by_direction", o.track_by_direction));
+    DS_RETURN_IF_ERROR(options.get("vad_on_channel_mean", o.vad_on_channel_mean));
     DS_RETURN_IF_ERROR(options.get("track_angle_deg", o.track_angle_deg));
     if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
       o.reference_sensor = r->id;

@@ -96,8 +96,11 @@ class VoiceIdAnalyzer : public Analyzer {
                             static_cast<int>(std::ceil(2 * model_->features.high_hz)));
         audio::UtteranceSegmenterOptions so = options_.segmenter;
         so.vad.sample_rate = c->sample_rate;
-        so.channels = 1;  // channel 0 is pushed
-        so.vad_channel = 0;
+        // Channel 0 is pushed (and scored); with vad_on_channel_mean also the channels' mean,
+        // on which the segmenter then decides.
+        seg_channels_ = options_.vad_on_channel_mean && c->channels > 1 ? 2 : 1;
+        so.channels = seg_channels_;
+        so.vad_channel = seg_channels_ - 1;
         auto seg = audio::UtteranceSegmenter::create(so);
         if (!seg)
           return make_error(seg.error().code, "voice_id: stream '{}': {}", options_.audio_sensor,
@@ -110,14 +113,22 @@ class VoiceIdAnalyzer : public Analyzer {
                           options_.audio_sensor, rate_, c->sample_rate);
       }
       // Mono = channel 0 (averaging the array's microphones would comb-filter the speech).
-      std::vector<float> mono(static_cast<size_t>(c->frames()));
-      for (size_t i = 0; i < mono.size(); ++i)
-        mono[i] = c->samples[i * static_cast<size_t>(c->channels)];
+      const size_t sc = static_cast<size_t>(seg_channels_), cc = static_cast<size_t>(c->channels);
+      std::vector<float> mono(static_cast<size_t>(c->frames()) * sc);
+      for (size_t i = 0; i < mono.size() / sc; ++i) {
+        mono[i * sc] = c->samples[i * cc];
+        if (sc == 2) {
+          float m = 0;
+          for (size_t k = 0; k < cc; ++k) m += c->samples[i * cc + k];
+          mono[i * sc + 1] = m / static_cast<float>(cc);
+        }
+      }
       Timestamp stamp = f->stamp;
       if (model_ && model_->features.noise_suppression) {  // as the enrolment was
         if (!denoiser_) {
           audio::NoiseSuppressorOptions no;
           no.sample_rate = rate_;
+          no.channels = seg_channels_;
           auto d = audio::NoiseSuppressor::create(no);
           if (!d) return make_error(d.error().code, "voice_id: {}", d.error().message);
           denoiser_ = std::move(*d);
@@ -132,16 +143,16 @@ class VoiceIdAnalyzer : public Analyzer {
         }
         denoised_.clear();
         denoiser_->process(mono, denoised_);
-        ns_pushed_ += static_cast<int64_t>(mono.size());
+        ns_pushed_ += static_cast<int64_t>(mono.size() / sc);
         stamp = ns_origin_ + audio::frames_to_duration(ns_emitted_, rate_) -
                 audio::frames_to_duration(denoiser_->latency(), rate_);
-        ns_emitted_ += static_cast<int64_t>(denoised_.size());
+        ns_emitted_ += static_cast<int64_t>(denoised_.size() / sc);
         mono.swap(denoised_);
         if (mono.empty()) continue;
       }
       utterances_.clear();
       if (gate_) {
-        gate_->push_microphone(mono, 1, rate_, stamp);
+        gate_->push_microphone(mono, seg_channels_, rate_, stamp);
         note_alignment();
       }
       if (auto s = segmenter_->push(mono, stamp, utterances_); !s)
@@ -199,7 +210,8 @@ class VoiceIdAnalyzer : public Analyzer {
         return ok_status();
       }
       if (qa > u_in.start || qb < u_in.end) {
-        const int64_t n = static_cast<int64_t>(u_in.samples.size());
+        const int64_t n = u_in.frames();
+        const auto ch = static_cast<std::ptrdiff_t>(u_in.channels);
         const int64_t b =
             std::clamp(audio::duration_to_frames(qa - u_in.start, rate_), int64_t{0}, n);
         const int64_t e = std::clamp(audio::duration_to_frames(qb - u_in.start, rate_), b, n);
@@ -209,7 +221,7 @@ class VoiceIdAnalyzer : public Analyzer {
         trimmed.speech_end = sb;
         trimmed.channels = u_in.channels;
         trimmed.sample_rate = u_in.sample_rate;
-        trimmed.samples.assign(u_in.samples.begin() + b, u_in.samples.begin() + e);
+        trimmed.samples.assign(u_in.samples.begin() + b * ch, u_in.samples.begin() + e * ch);
         up = &trimmed;
       }
     }
@@ -222,15 +234,17 @@ class VoiceIdAnalyzer : public Analyzer {
     if (options_.method == VoiceIdMethod::kGmmUbm) {
       // The speech part only (+-50 ms): the pre-roll and the hangover are the room's noise.
       const int64_t margin = static_cast<int64_t>(0.05 * rate_);
-      const int64_t n = static_cast<int64_t>(u.samples.size());
+      const std::vector<float> scored = u.channels > 1 ? u.channel(0) : std::vector<float>{};
+      const std::vector<float>& ch0 = u.channels > 1 ? scored : u.samples;
+      const int64_t n = static_cast<int64_t>(ch0.size());
       const int64_t b = std::clamp(
           audio::duration_to_frames(u.speech_start - u.start, rate_) - margin, int64_t{0}, n);
       const int64_t e =
           std::clamp(audio::duration_to_frames(u.speech_end - u.start, rate_) + margin, b, n);
-      auto r = identify(*model_,
-                        std::span<const float>(u.samples).subspan(static_cast<size_t>(b),
-                                                                  static_cast<size_t>(e - b)),
-                        rate_, /*denoised=*/true);
+      auto r = identify(
+          *model_,
+          std::span<const float>(ch0).subspan(static_cast<size_t>(b), static_cast<size_t>(e - b)),
+          rate_, /*denoised=*/true);
       if (!r) return tl::unexpected(r.error());
       if (r->frames == 0) return ok_status();  // nothing speech-like in it
       {
@@ -355,6 +369,7 @@ class VoiceIdAnalyzer : public Analyzer {
   int64_t ns_pushed_ = 0, ns_emitted_ = 0;
   bool alignment_noted_ = false;
   int rate_ = 0;
+  int seg_channels_ = 1;  // pushed to the segmenter: channel 0 (+ the channels' mean)
   std::vector<audio::Utterance> utterances_;  // scratch
   std::deque<Heard> heard_;  // directions of the last seconds (direction rule, tracks)
   struct Track {
