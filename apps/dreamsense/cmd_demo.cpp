@@ -1,5 +1,5 @@
 // `dreamsense demo [--out DIR] [--seed N] [--duration S] [--gestures dream|dream6|classic]
-// [--no-analyze]`
+// [--no-analyze] [--snr DB] [--no-robot-voice] [--audio-only]`
 
 #include "dreamsense/runner/analysis.hpp"
 #include "dreamsense/sim/demo_children.hpp"
@@ -20,6 +20,8 @@ struct DemoFlags {
   int child = -1;  // -1: chosen by the seed
   bool no_analyze = false;
   std::string gestures = "dream";  // dream (face in view), dream6, classic
+  double snr_db = 20;
+  bool no_robot_voice = false, audio_only = false;
 };
 }  // namespace
 
@@ -42,6 +44,15 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
          "default: 0 on odd seeds, 1 and 2 alternately on even seeds")
       ->check(CLI::Range(0, static_cast<int>(sim::demo_children().size()) - 1));
   cmd->add_flag("--no-analyze", flags->no_analyze, "Only build the session");
+  cmd->add_option("--snr", flags->snr_db,
+                  "Speech to pink-noise ratio of the microphone audio, dB (while speech is on)")
+      ->capture_default_str()
+      ->check(CLI::Range(-19.0, 99.0));
+  cmd->add_flag("--no-robot-voice", flags->no_robot_voice,
+                "No robot voice (no robot prompts in the audio, no robot_audio reference stream): "
+                "the demo before issue 16");
+  cmd->add_flag("--audio-only", flags->audio_only,
+                "Write only the audio streams (and the full truth): the same audio, fast");
   cmd->add_option("--gestures", flags->gestures,
                   "The child's gestures (F20): dream (wave, fly, hands_on_head, drive_car: "
                   "DREAM's gestures that leave the face in view), dream6 (also cover_eyes and "
@@ -59,6 +70,9 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     o.duration_s = flags->duration_s;
     o.child = flags->child >= 0 ? flags->child : sim::demo_child_for_seed(flags->seed);
     o.overwrite = true;
+    o.snr_db = flags->snr_db;
+    o.robot_voice = !flags->no_robot_voice;
+    o.audio_only = flags->audio_only;
     if (flags->gestures == "classic")
       o.script.gestures = sim::DemoScriptOptions::GestureSet::kClassic;
     else if (flags->gestures == "dream6")

@@ -4,6 +4,8 @@
 // 25 Hz ticks). items/s = audio seconds per wall second (the real-time factor's inverse).
 
 #include "dreamsense/audio/beamformer.hpp"
+#include "dreamsense/audio/noise_suppressor.hpp"
+#include "dreamsense/audio/reference_gate.hpp"
 #include "dreamsense/audio/resampler.hpp"
 #include "dreamsense/audio/utterance_segmenter.hpp"
 
@@ -108,6 +110,52 @@ void BM_Segment4ch16k(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_Segment4ch16k)->Unit(benchmark::kMillisecond);
+
+// Issue 16: the robot-voice gate and the noise suppressor, per second of 4-channel 16 kHz audio
+// with a mono 16 kHz reference, in 40 ms chunks. The gate runs in each of the three audio
+// analysers (sound_direction, speech, voice_id): 3 gates; the suppressor on all 4 channels
+// (the worst case: voice_id filters one channel, speech one beamformed utterance).
+// Budget: 5 % of one core = 50 ms per audio second.
+void BM_RobotGateAndNoiseSuppressor4ch16k(benchmark::State& state) {
+  const int rate = 16000, ch = 4;
+  const bool gate = state.range(0) != 0, suppress = state.range(1) != 0;
+  const auto mic = noise(static_cast<size_t>(rate * ch));
+  auto ref = noise(static_cast<size_t>(rate), 2);
+  for (size_t i = ref.size() / 2; i < ref.size(); ++i) ref[i] = 0;  // robot speaks half the time
+  std::vector<ReferenceGate> gates(3);
+  NoiseSuppressorOptions no;
+  no.channels = ch;
+  auto ns = NoiseSuppressor::create(no);
+  const size_t chunk = static_cast<size_t>(rate / 25);
+  std::vector<float> out;
+  int64_t k = 0;
+  for (auto _ : state) {
+    for (size_t i = 0; i < static_cast<size_t>(rate); i += chunk) {
+      const Timestamp t = Timestamp::from_ns(0) + frames_to_duration(k, rate);
+      if (gate)
+        for (auto& g : gates) {
+          (void)g.push_reference(std::span<const float>(ref).subspan(i, chunk), 1, rate, t);
+          g.push_microphone(std::span<const float>(mic).subspan(i * ch, chunk * ch), ch, rate, t);
+          benchmark::DoNotOptimize(g.active(t));
+          g.forget_before(t - Duration::from_seconds(30));
+        }
+      if (suppress) {
+        out.clear();
+        (*ns)->process(std::span<const float>(mic).subspan(i * ch, chunk * ch), out);
+        benchmark::DoNotOptimize(out.data());
+      }
+      k += static_cast<int64_t>(chunk);
+    }
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(fmt::format("per audio second: gate x3 {}, noise suppressor 4 ch {}",
+                             gate ? "on" : "off", suppress ? "on" : "off"));
+}
+BENCHMARK(BM_RobotGateAndNoiseSuppressor4ch16k)
+    ->Args({1, 1})
+    ->Args({1, 0})
+    ->Args({0, 1})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

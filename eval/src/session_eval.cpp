@@ -24,7 +24,8 @@ namespace {
 std::vector<MetricGroup> metric_groups() {
   return {body_metrics(),          sound_direction_metrics(), face_detection_metrics(),
           head_and_gaze_metrics(), speech_metrics(),          speaker_metrics(),
-          action_metrics(),        object_metrics(),          face_recognition_metrics()};
+          action_metrics(),        object_metrics(),          face_recognition_metrics(),
+          robot_voice_metrics()};
 }
 
 }  // namespace

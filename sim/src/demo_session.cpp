@@ -23,6 +23,7 @@
 #include <mutex>
 #include <optional>
 #include <random>
+#include <sstream>
 #include <thread>
 
 namespace dreamsense::sim {
@@ -297,6 +298,37 @@ Result<Media> load_media(const DemoOptions& o) {
     m.clip_samples.push_back(std::move(*samples));
   }
   return m;
+}
+
+// The robot's prompts (data/demo/robot/prompts.txt: "file in_grammar text..." lines).
+Result<std::vector<RobotPrompt>> read_robot_prompts(const fs::path& dir) {
+  const fs::path list = dir / "prompts.txt";
+  std::ifstream in(list);
+  if (!in)
+    return make_error(ErrorCode::kNotFound,
+                      "{}: missing demo robot prompts (tools/make_robot_prompts.sh makes them)",
+                      list.string());
+  std::vector<RobotPrompt> out;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ls(line);
+    RobotPrompt p;
+    int in_grammar = -1;
+    ls >> p.file >> in_grammar;
+    std::getline(ls, p.text);
+    const auto b = p.text.find_first_not_of(' ');
+    p.text = b == std::string::npos ? "" : p.text.substr(b);
+    if (p.file.empty() || (in_grammar != 0 && in_grammar != 1) || p.text.empty())
+      return make_error(ErrorCode::kCorruptData, "{}:{}: expected \"file in_grammar(0|1) text...\"",
+                        list.string(), n);
+    p.in_grammar = in_grammar == 1;
+    out.push_back(std::move(p));
+  }
+  if (out.empty()) return make_error(ErrorCode::kCorruptData, "{}: no prompts", list.string());
+  return out;
 }
 
 // ---------------------------------------------------------------- scene
@@ -730,6 +762,44 @@ Status write_mic_calibration(const fs::path& path, const DemoGeometry& g, int sa
 
 // ================================================================= public
 
+std::filesystem::path default_robot_prompts_dir() {
+  return std::filesystem::path(DREAMSENSE_DEMO_DATA_DIR) / "robot";
+}
+
+std::vector<PlannedRobotUtterance> plan_robot_utterances(
+    uint64_t seed, double duration_s, const std::vector<std::pair<double, double>>& busy_s,
+    const std::vector<double>& prompt_durations_s, double margin_s) {
+  std::vector<PlannedRobotUtterance> out;
+  if (prompt_durations_s.empty()) return out;
+  std::mt19937_64 rng(sub_seed(seed, "robot_voice"));
+  std::vector<size_t> order(prompt_durations_s.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  for (size_t i = order.size(); i > 1; --i)
+    std::swap(order[i - 1], order[static_cast<size_t>(rng() % i)]);
+  std::vector<std::pair<double, double>> busy = busy_s;
+  std::sort(busy.begin(), busy.end());
+  std::vector<std::pair<double, double>> gaps;
+  double t = 0;
+  for (const auto& [a, b] : busy) {
+    gaps.emplace_back(t, a);
+    t = std::max(t, b);
+  }
+  gaps.emplace_back(t, duration_s - 0.5);
+  size_t next = 0;
+  for (const auto& [a, b] : gaps) {
+    const double draw = uniform(rng, 0, 1);
+    const size_t p = order[next % order.size()];
+    const double need = prompt_durations_s[p] + 2 * margin_s;
+    if (b - a < need || draw > 0.7) continue;
+    PlannedRobotUtterance u;
+    u.prompt = p;
+    u.clip_start_s = 0.5 * (a + b) - 0.5 * prompt_durations_s[p];
+    out.push_back(u);
+    ++next;
+  }
+  return out;
+}
+
 Status DemoOptions::check() const {
   std::string bad;
   if (out_dir.empty()) bad += " out_dir is required;";
@@ -747,6 +817,7 @@ Status DemoOptions::check() const {
     bad += fmt::format(" child must be in [0, {}];", demo_children().size() - 1);
   if (jpeg_quality < 1 || jpeg_quality > 100) bad += " jpeg_quality must be in [1, 100];";
   if (threads < 1 || threads > 64) bad += " threads must be in [1, 64];";
+  if (robot_voice && robot_prompts_dir.empty()) bad += " robot_prompts_dir is empty;";
   if (auto s = script.check(); !s) bad += " script: " + s.error().message + ";";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "DemoOptions:{}", bad);
   return ok_status();
@@ -939,7 +1010,15 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       {"front.skeleton", SensorKind::kSkeleton, options.kinect_rate_hz, 0, -1},
       {"top.color", SensorKind::kColor, options.kinect_rate_hz, 0, 5},
       {"mic_array", SensorKind::kAudio, 1.0 / options.audio_chunk_s, 0, -1}};
+  // The robot's voice as played (the reference for echo removal), after every other stream.
+  if (options.robot_voice)
+    plans.push_back({"robot_audio", SensorKind::kAudio, 1.0 / options.audio_chunk_s, 0, -1});
   for (auto& p : plans) p.count = frame_count(dur, p.rate_hz);
+  // Streams written (audio_only: the audio streams; the truth always covers the whole scene).
+  std::vector<int> written_streams;
+  for (int i = 0; i < static_cast<int>(plans.size()); ++i)
+    if (!options.audio_only || plans[static_cast<size_t>(i)].kind == SensorKind::kAudio)
+      written_streams.push_back(i);
 
   sources::SessionManifest manifest;
   manifest.name = fmt::format("demo-seed-{}", options.seed);
@@ -965,7 +1044,8 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
     manifest.metadata["subject"] = options.child == 0 ? std::string(kDemoSubject) : child.subject;
   }
   const int channels = static_cast<int>(g.mic_x_m.size());
-  for (const auto& p : plans) {
+  for (const int index : written_streams) {
+    const StreamPlan& p = plans[static_cast<size_t>(index)];
     sources::StreamEntry e;
     e.id = p.id;
     e.kind = p.kind;
@@ -983,6 +1063,13 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       e.file = p.id + ".jsonl";
       e.calibration = "calib/front.depth.yaml";  // joints are in the front sensor's frame
       e.frame = "front.depth";
+    } else if (p.id == "robot_audio") {  // mono, what the robot's loudspeaker plays
+      e.encoding = "wav";
+      e.file = p.id + ".wav";
+      e.sample_rate = options.audio_sample_rate;
+      e.channels = 1;
+      e.start_ns = 0;
+      e.roles = {"robot_audio"};
     } else {
       e.encoding = "wav";
       e.file = p.id + ".wav";
@@ -990,6 +1077,7 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       e.channels = channels;
       e.start_ns = 0;
       e.calibration = "calib/mic_array.yaml";
+      if (options.robot_voice) e.roles = {"mic_array"};
     }
     manifest.streams.push_back(e);
   }
@@ -1073,12 +1161,99 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
     speech_samples += b - a;
   }
   speech_power = speech_samples ? speech_power / static_cast<double>(speech_samples) : 1e-4;
+
+  // ---- the robot's voice: prompts from the robot's loudspeaker in the gaps (after the speech
+  // power is measured, so the noise level and the human audio are those of the demo without it)
+  std::vector<double> robot_played(options.robot_voice ? n_samples : 0, 0.0);
+  std::vector<json> robot_truth;
+  if (options.robot_voice) {
+    auto prompts = read_robot_prompts(options.robot_prompts_dir);
+    if (!prompts) return tl::unexpected(prompts.error());
+    // The loudspeaker plays at a talker's level: each prompt scaled to the child clips' mean
+    // RMS (the array, 18 cm from the robot's head, then hears it ~15 dB above the child).
+    double child_power = 0;
+    int child_clips = 0;
+    for (size_t i = 0; i < clips.size(); ++i)
+      if (clips[i].speaker == "child") {
+        const auto& x = gen.media().clip_samples[i];
+        const size_t a = static_cast<size_t>(clips[i].speech_start_s * fs_hz);
+        const size_t b = std::min(x.size(), static_cast<size_t>(clips[i].speech_end_s * fs_hz));
+        double p = 0;
+        for (size_t k = a; k < b; ++k) p += x[k] * x[k];
+        child_power += b > a ? p / static_cast<double>(b - a) : 0;
+        ++child_clips;
+      }
+    child_power = child_clips ? child_power / child_clips : 1e-3;
+    std::vector<std::vector<double>> prompt_samples;
+    std::vector<double> prompt_durations;
+    std::vector<std::pair<double, double>> prompt_extent;
+    for (const auto& pr : *prompts) {
+      const fs::path file = options.robot_prompts_dir / pr.file;
+      if (!fs::exists(file))
+        return make_error(ErrorCode::kNotFound,
+                          "{}: missing demo robot prompt (tools/make_robot_prompts.sh makes it)",
+                          file.string());
+      audio::ReadAudioOptions ro;
+      ro.require_mono = true;
+      ro.resample_to_hz = options.audio_sample_rate;
+      DS_ASSIGN_OR_RETURN(audio::AudioClip clip, audio::read_audio(file, ro));
+      std::vector<double> x(clip.samples.begin(), clip.samples.end());
+      const auto [a, b] = speech_extent(x, fs_hz);
+      double p = 0;
+      const size_t ia = static_cast<size_t>(a * fs_hz),
+                   ib = std::min(x.size(), static_cast<size_t>(b * fs_hz));
+      for (size_t k = ia; k < ib; ++k) p += x[k] * x[k];
+      p = ib > ia ? p / static_cast<double>(ib - ia) : 1e-6;
+      const double scale = std::sqrt(child_power / std::max(p, 1e-12));
+      for (double& v : x) v *= scale;
+      prompt_durations.push_back(static_cast<double>(x.size()) / fs_hz);
+      prompt_extent.emplace_back(a, b);
+      prompt_samples.push_back(std::move(x));
+    }
+    std::vector<std::pair<double, double>> busy;
+    for (const auto& u : utterances)
+      busy.emplace_back(u.clip_start_s, u.clip_start_s + clips[u.clip].duration_s);
+    const auto robot_plan = plan_robot_utterances(options.seed, dur, busy, prompt_durations);
+    const cv::Vec3d speaker_m = g.robot_head_m;
+    const double delay = cv::norm(speaker_m - g.mic_array_m) / room.speed_of_sound_m_s;
+    double az = 0, el = 0;
+    array_direction(g, speaker_m, az, el);
+    for (const auto& ru : robot_plan) {
+      const auto& x = prompt_samples[ru.prompt];
+      auto wet = simulate(x, room, AcousticPlacement{g.room_from_world(speaker_m), mics_room});
+      if (!wet) return tl::unexpected(wet.error());
+      const size_t off = static_cast<size_t>(std::llround(ru.clip_start_s * fs_hz));
+      for (size_t c = 0; c < mix.size(); ++c)
+        for (size_t i = 0; i < (*wet)[c].size() && off + i < n_samples; ++i)
+          mix[c][off + i] += (*wet)[c][i];
+      for (size_t i = 0; i < x.size() && off + i < n_samples; ++i) robot_played[off + i] += x[i];
+      const RobotPrompt& pr = (*prompts)[ru.prompt];
+      json r;
+      r["type"] = "robot_speech";
+      r["start_ns"] = static_cast<int64_t>(
+          std::llround((ru.clip_start_s + prompt_extent[ru.prompt].first + delay) * 1e9));
+      r["end_ns"] = static_cast<int64_t>(
+          std::llround((ru.clip_start_s + prompt_extent[ru.prompt].second + delay) * 1e9));
+      r["played_start_ns"] = static_cast<int64_t>(std::llround(ru.clip_start_s * 1e9));
+      r["text"] = pr.text;
+      r["source_file"] = "robot/" + pr.file;
+      r["in_grammar"] = pr.in_grammar;
+      r["azimuth_deg"] = q(az, 1e4);
+      r["elevation_deg"] = q(el, 1e4);
+      r["source_position_m"] = vec_json(speaker_m);
+      r["distance_m"] = q(cv::norm(speaker_m - g.mic_array_m));
+      robot_truth.push_back(r);
+    }
+  }
   add_noise(mix, options.snr_db, NoiseColor::kPink, sub_seed(options.seed, "audio_noise"),
             speech_power);
   double peak = 1e-12;
   for (const auto& ch : mix)
     for (double v : ch) peak = std::max(peak, std::abs(v));
   const double gain = 0.5 / peak;
+  double robot_peak = 1e-12;
+  for (double v : robot_played) robot_peak = std::max(robot_peak, std::abs(v));
+  const double robot_gain = 0.5 / std::max(robot_peak, 1e-3);
 
   // ---- truth
   std::vector<std::pair<std::pair<int64_t, int>, json>> truth;  // ((stamp, order), record)
@@ -1135,6 +1310,7 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});
     }
     for (auto& r : speech_truth) truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});
+    for (auto& r : robot_truth) truth.push_back({{r["start_ns"].get<int64_t>(), 0}, r});
     std::stable_sort(truth.begin(), truth.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     json meta;
@@ -1164,7 +1340,7 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
 
   // ---- frames: rendered ahead by worker threads, written in stamp order by this thread
   std::vector<Job> jobs;
-  for (int s = 0; s < static_cast<int>(plans.size()); ++s)
+  for (const int s : written_streams)
     for (int64_t k = 0; k < plans[static_cast<size_t>(s)].count; ++k)
       jobs.push_back({stamp_ns(k, plans[static_cast<size_t>(s)].rate_hz), s, k});
   std::stable_sort(jobs.begin(), jobs.end(), [](const Job& a, const Job& b) {
@@ -1195,13 +1371,19 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
       case SensorKind::kAudio: {
         AudioChunk a;
         a.sample_rate = options.audio_sample_rate;
-        a.channels = channels;
+        const bool robot = p.id == "robot_audio";
+        a.channels = robot ? 1 : channels;
         const size_t chunk = static_cast<size_t>(std::llround(options.audio_chunk_s * fs_hz));
         const size_t b = static_cast<size_t>(job.index) * chunk, e = std::min(n_samples, b + chunk);
-        a.samples.reserve((e - b) * static_cast<size_t>(channels));
-        for (size_t i = b; i < e; ++i)
+        a.samples.reserve((e - b) * static_cast<size_t>(a.channels));
+        for (size_t i = b; i < e; ++i) {
+          if (robot) {
+            a.samples.push_back(static_cast<float>(robot_played[i] * robot_gain));
+            continue;
+          }
           for (int c = 0; c < channels; ++c)
             a.samples.push_back(static_cast<float>(mix[static_cast<size_t>(c)][i] * gain));
+        }
         return make_frame(p.id,
                           Timestamp::from_ns(static_cast<int64_t>(std::llround(b * 1e9 / fs_hz))),
                           seq, std::move(a));
@@ -1275,6 +1457,7 @@ Result<DemoSummary> generate_demo_session(const DemoOptions& options,
 
   summary.out_dir = dir;
   summary.utterances = static_cast<int>(utterances.size());
+  summary.robot_utterances = static_cast<int>(robot_truth.size());
   summary.action_segments = static_cast<int>(script.actions().size());
   summary.truth_records = static_cast<int64_t>(truth.size()) + 1;
   summary.generation_s =

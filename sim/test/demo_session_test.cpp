@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sndfile.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -82,6 +84,80 @@ TEST_F(DemoSessionTest, SameSeedGivesByteIdenticalFiles) {
   EXPECT_NE(slurp(root_ / "a" / "camera_middle.mjpg"), slurp(root_ / "c" / "camera_middle.mjpg"));
 }
 
+// Issue 16: the robot speaks in the gaps of the human utterances, with truth and a reference
+// stream; --audio-only writes only the audio; without the robot voice the demo is the old one.
+TEST_F(DemoSessionTest, RobotVoiceInTheGapsWithTruthAndReference) {
+  for (const bool robot : {true, false}) {
+    DemoOptions o;
+    o.out_dir = root_ / (robot ? "robot" : "no_robot");
+    o.seed = 105;
+    o.duration_s = 40;
+    o.audio_only = true;
+    o.robot_voice = robot;
+    auto s = generate_demo_session(o);
+    ASSERT_TRUE(s) << s.error().to_string();
+    auto m = sources::read_manifest(o.out_dir);
+    ASSERT_TRUE(m) << m.error().to_string();
+    std::vector<std::string> ids;
+    for (const auto& e : m->streams) ids.push_back(e.id);
+    const std::vector<std::string> want = robot
+                                              ? std::vector<std::string>{"mic_array", "robot_audio"}
+                                              : std::vector<std::string>{"mic_array"};
+    EXPECT_EQ(ids, want);
+    std::vector<std::pair<int64_t, int64_t>> human, robot_spans;
+    for (const auto& r : read_jsonl(o.out_dir / "truth.jsonl")) {
+      if (r["type"] == "speech") human.emplace_back(r["start_ns"], r["end_ns"]);
+      if (r["type"] == "robot_speech") {
+        robot_spans.emplace_back(r["start_ns"], r["end_ns"]);
+        EXPECT_TRUE(r.contains("text") && r.contains("in_grammar") && r.contains("azimuth_deg"));
+      }
+    }
+    EXPECT_EQ(s->robot_utterances, static_cast<int>(robot_spans.size()));
+    EXPECT_FALSE(human.empty());
+    if (!robot) {
+      EXPECT_TRUE(robot_spans.empty());
+      continue;
+    }
+    EXPECT_GE(robot_spans.size(), 1u);
+    for (const auto& [a, b] : robot_spans)
+      for (const auto& [c, d] : human)  // >= 0.5 s of silence between robot and human speech
+        EXPECT_TRUE(b + 500'000'000 <= c || d + 500'000'000 <= a) << a << " vs " << c;
+    // The reference is silent outside the robot's prompts and loud inside them.
+    SF_INFO info{};
+    SNDFILE* f = sf_open((o.out_dir / "robot_audio.wav").string().c_str(), SFM_READ, &info);
+    ASSERT_NE(f, nullptr);
+    std::vector<float> x(static_cast<size_t>(info.frames));
+    sf_readf_float(f, x.data(), info.frames);
+    sf_close(f);
+    EXPECT_EQ(info.channels, 1);
+    EXPECT_EQ(info.samplerate, 16000);
+    const size_t mid = static_cast<size_t>((robot_spans[0].first + robot_spans[0].second) / 2 *
+                                           16000 / 1'000'000'000);
+    float peak_in = 0;
+    for (size_t i = mid - 4000; i < mid + 4000; ++i) peak_in = std::max(peak_in, std::abs(x[i]));
+    EXPECT_GT(peak_in, 0.05f);
+    const size_t hmid =
+        static_cast<size_t>((human[0].first + human[0].second) / 2 * 16000 / 1'000'000'000);
+    for (size_t i = hmid - 4000; i < hmid + 4000; ++i) ASSERT_EQ(x[i], 0.0f);
+  }
+}
+
+TEST(RobotVoicePlan, UsesOnlyGapsWithMargins) {
+  const std::vector<std::pair<double, double>> busy = {{2, 5}, {9, 10}, {20, 24}};
+  const std::vector<double> durations = {1.0, 1.5, 2.5};
+  int placed = 0;
+  for (uint64_t seed = 1; seed <= 50; ++seed)
+    for (const auto& u : plan_robot_utterances(seed, 30, busy, durations)) {
+      ++placed;
+      const double a = u.clip_start_s, b = a + durations[u.prompt];
+      EXPECT_GE(a, 1.0 - 1e-9);
+      EXPECT_LE(b, 29.5 - 1.0 + 1e-9);
+      for (const auto& [c, d] : busy) EXPECT_TRUE(b + 1.0 <= c + 1e-9 || d + 1.0 <= a + 1e-9);
+    }
+  EXPECT_GT(placed, 50);  // most gaps are used (probability 0.7)
+  EXPECT_TRUE(plan_robot_utterances(1, 30, busy, {}).empty());
+}
+
 TEST_F(DemoSessionTest, ManifestAndTruthAreSane) {
   auto s = generate("s", 3, 2.0);
   ASSERT_TRUE(s) << s.error().to_string();
@@ -95,12 +171,17 @@ TEST_F(DemoSessionTest, ManifestAndTruthAreSane) {
   std::vector<std::string> ids;
   for (const auto& e : m->streams) {
     ids.push_back(e.id);
+    if (e.id == "robot_audio") {  // a signal, not a sensor with a geometry
+      EXPECT_EQ(e.roles, std::vector<std::string>{"robot_audio"});
+      EXPECT_EQ(e.channels, 1);
+      continue;
+    }
     EXPECT_FALSE(e.calibration.empty()) << e.id;
     EXPECT_TRUE(fs::exists(root_ / "s" / e.calibration)) << e.calibration;
   }
-  EXPECT_EQ(ids,
-            (std::vector<std::string>{"camera_left", "camera_middle", "camera_right", "front.color",
-                                      "front.depth", "front.skeleton", "top.color", "mic_array"}));
+  EXPECT_EQ(ids, (std::vector<std::string>{"camera_left", "camera_middle", "camera_right",
+                                           "front.color", "front.depth", "front.skeleton",
+                                           "top.color", "mic_array", "robot_audio"}));
   auto cam = read_camera_model(root_ / "s" / "calib" / "camera_right.yaml");
   ASSERT_TRUE(cam) << cam.error().to_string();
   EXPECT_EQ(cam->image_size, cv::Size(1280, 960));

@@ -3,6 +3,7 @@
 #include "dreamsense/eval/session_metrics.hpp"
 
 #include <algorithm>
+#include <set>
 
 namespace dreamsense::eval {
 using primitives::PrimitiveId;
@@ -81,6 +82,64 @@ MetricGroup speaker_metrics() {
       return;
     }
     metrics["speaker_accuracy"] = static_cast<double>(right) / total;
+  };
+  return g;
+}
+
+// The robot's own voice (truth records robot_speech, issue 16): robot_speech_false_reports = the
+// recognizeSpeech and identifyVoice results (one per utterance) lying mostly (more than half of
+// their [start_ns, end_ns]) inside a robot utterance; robot_direction_reports = ok
+// getSoundDirection records stamped inside a robot utterance (and inside no human one).
+MetricGroup robot_voice_metrics() {
+  MetricGroup g;
+  g.name = "robot_voice";
+  g.metrics = {{"robot_speech_false_reports", PrimitiveId::kRecognizeSpeech},
+               {"robot_direction_reports", PrimitiveId::kGetSoundDirection}};
+  g.compute = [](const SessionData& d, nlohmann::json& metrics, nlohmann::json& not_evaluated) {
+    std::vector<std::pair<int64_t, int64_t>> robot, human;
+    for (const auto* t : d.truth_of("robot_speech"))
+      robot.emplace_back(t->value("start_ns", int64_t{0}), t->value("end_ns", int64_t{0}));
+    for (const auto* t : d.truth_of("speech"))
+      human.emplace_back(t->value("start_ns", int64_t{0}), t->value("end_ns", int64_t{0}));
+    if (robot.empty()) {
+      not_evaluated["robot_speech_false_reports"] = "the truth has no robot_speech records";
+      not_evaluated["robot_direction_reports"] = "the truth has no robot_speech records";
+      return;
+    }
+    auto mostly_robot = [&](int64_t s, int64_t e) {
+      int64_t inside = 0;
+      for (const auto& [a, b] : robot)
+        if (e > s)
+          inside += std::max<int64_t>(0, std::min(e, b) - std::max(s, a));
+        else if (s >= a && s <= b)
+          return true;
+      return 2 * inside > e - s && e > s;
+    };
+    std::set<std::pair<int64_t, int64_t>> seen_speech, seen_voice;
+    int reports = 0;
+    for (const auto* r : d.of(PrimitiveId::kRecognizeSpeech))
+      if (const auto* s = r->value_as<primitives::SpeechValue>())
+        if (seen_speech.insert({s->start_ns, s->end_ns}).second &&
+            mostly_robot(s->start_ns, s->end_ns))
+          ++reports;
+    for (const auto* r : d.of(PrimitiveId::kIdentifyVoice))
+      if (const auto* v = r->value_as<primitives::VoiceValue>())
+        if (seen_voice.insert({v->start_ns, v->end_ns}).second &&
+            mostly_robot(v->start_ns, v->end_ns))
+          ++reports;
+    metrics["robot_speech_false_reports"] = reports;
+    int directions = 0;
+    for (const auto* r : d.of(PrimitiveId::kGetSoundDirection)) {
+      if (r->value_as<primitives::SoundDirectionValue>() == nullptr) continue;
+      const int64_t t = r->stamp.ns();
+      auto in = [t](const auto& spans) {
+        for (const auto& [a, b] : spans)
+          if (t >= a && t <= b) return true;
+        return false;
+      };
+      if (in(robot) && !in(human)) ++directions;
+    }
+    metrics["robot_direction_reports"] = directions;
   };
   return g;
 }

@@ -20,6 +20,14 @@ void register_analyzers(AnalyzerRegistry& registry) {
     if (s == nullptr) return PlannedAnalyzers::skip("no stream with role mic_array");
     PlannedAnalyzers p;
     o.audio_sensor = s->id;
+    // The robot's own voice (role robot_audio): no direction while it speaks.
+    bool robot_gate = true;
+    DS_RETURN_IF_ERROR(options.get("robot_gate", robot_gate));
+    DS_RETURN_IF_ERROR(options.get("robot_offset_s", o.robot_gate.offset_s));
+    if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
+      o.reference_sensor = r->id;
+      p.notes.push_back(fmt::format("robot voice gated with the reference stream '{}'", r->id));
+    }
     // Array geometry from the stream's calibration (calib/<id>.yaml: mic positions, rate,
     // extrinsics); Kinect v1 when it has none.
     if (!s->calibration_file.empty()) {

@@ -15,10 +15,22 @@ class SoundDirectionAnalyzer : public Analyzer {
       : options_(std::move(o)), finder_(std::move(f)) {}
   std::string_view name() const override { return "sound_direction"; }
   AnalyzerContract contract() const override {
-    return {{options_.audio_sensor}, {}, {}, {keys::kSoundDirection.name}};
+    AnalyzerContract c{{options_.audio_sensor}, {}, {}, {keys::kSoundDirection.name}};
+    if (!options_.reference_sensor.empty()) c.optional_inputs.push_back(options_.reference_sensor);
+    return c;
   }
 
   Status process(const MultiFrame& in, const BlackboardView&, BlackboardWriter& out) override {
+    if (gate_)  // the robot's reference first: the gate must know this tick
+      for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
+        const AudioChunk* c = f->as<AudioChunk>();
+        if (c == nullptr)
+          return make_error(ErrorCode::kInvalidArgument,
+                            "sound_direction: robot reference '{}' is not an audio stream",
+                            options_.reference_sensor);
+        if (auto s = gate_->push_reference(c->samples, c->channels, c->sample_rate, f->stamp); !s)
+          return s;
+      }
     const auto& chunks = in.chunks_of(options_.audio_sensor);
     if (chunks.empty()) return ok_status();
     const int fs = options_.geometry.sample_rate;
@@ -48,6 +60,7 @@ class SoundDirectionAnalyzer : public Analyzer {
         origin_ = f->stamp;
         pushed_ = 0;
       }
+      if (gate_) gate_->push_microphone(a->samples, a->channels, a->sample_rate, f->stamp);
       if (auto s = finder_->push(a->samples, estimates_); !s)
         return make_error(s.error().code, "{} (stream '{}' at {})", s.error().message,
                           options_.audio_sensor, f->stamp.to_string());
@@ -58,7 +71,7 @@ class SoundDirectionAnalyzer : public Analyzer {
 
     const FrameEstimate& e = estimates_.back();
     const Timestamp stamp = std::min(origin_ + samples_to_duration(e.centre_sample), in.stamp);
-    if (!e.voiced || !e.smoothed_peak) {
+    if (!e.voiced || !e.smoothed_peak || (gate_ && gate_->active(stamp))) {
       out.set_absent(keys::kSoundDirection, stamp);
       return ok_status();
     }
@@ -79,6 +92,12 @@ class SoundDirectionAnalyzer : public Analyzer {
     origin_ = Timestamp::unset();
     pushed_ = 0;
     silent_frames_ = 0;
+    if (gate_) gate_->reset();
+  }
+
+  void enable_gate() {
+    if (!options_.reference_sensor.empty())
+      gate_ = std::make_unique<audio::ReferenceGate>(options_.robot_gate);
   }
 
  private:
@@ -108,6 +127,7 @@ class SoundDirectionAnalyzer : public Analyzer {
   SoundDirectionAnalyzerOptions options_;
   std::unique_ptr<DirectionFinder> finder_;
   std::vector<FrameEstimate> estimates_;
+  std::unique_ptr<audio::ReferenceGate> gate_;
   Timestamp origin_ = Timestamp::unset();  // stamp of the finder's sample 0
   int64_t pushed_ = 0;
   int64_t silent_frames_ = 0;
@@ -121,6 +141,7 @@ Status SoundDirectionAnalyzerOptions::check() const {
     return make_error(ErrorCode::kInvalidArgument,
                       "SoundDirectionAnalyzerOptions: audio_sensor is empty");
   if (auto s = geometry.check(); !s) return s;
+  if (auto s = robot_gate.check(); !s) return s;
   return finder.check(geometry.sample_rate);
 }
 
@@ -129,7 +150,9 @@ Result<std::unique_ptr<Analyzer>> make_sound_direction_analyzer(
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
   auto f = DirectionFinder::create(options.geometry, options.finder);
   if (!f) return tl::unexpected(f.error());
-  return std::unique_ptr<Analyzer>(new SoundDirectionAnalyzer(options, std::move(*f)));
+  auto a = std::make_unique<SoundDirectionAnalyzer>(options, std::move(*f));
+  a->enable_gate();
+  return std::unique_ptr<Analyzer>(std::move(a));
 }
 
 }  // namespace dreamsense::sound_direction

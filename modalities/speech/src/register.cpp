@@ -32,6 +32,15 @@ void register_analyzers(AnalyzerRegistry& registry) {
     }
     PlannedAnalyzers p;
     o.audio_sensor = s->id;
+    // The robot's own voice (role robot_audio): gated out (audio/reference_gate.hpp).
+    bool robot_gate = true;
+    DS_RETURN_IF_ERROR(options.get("robot_gate", robot_gate));
+    DS_RETURN_IF_ERROR(options.get("robot_offset_s", o.robot_gate.offset_s));
+    DS_RETURN_IF_ERROR(options.get("noise_suppression", o.noise_suppression));
+    if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
+      o.reference_sensor = r->id;
+      p.notes.push_back(fmt::format("robot voice gated with the reference stream '{}'", r->id));
+    }
     o.grammar = grammar;
     if (!ctx.subject.speech_model.empty()) {
       DS_RETURN_IF_ERROR(use_acoustic_model(o.recognizer, ctx.subject.speech_model));

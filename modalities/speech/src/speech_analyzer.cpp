@@ -1,5 +1,6 @@
 #include "dreamsense/speech/speech_analyzer.hpp"
 
+#include "dreamsense/audio/noise_suppressor.hpp"
 #include "dreamsense/audio/stamped_audio.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
@@ -17,6 +18,7 @@ Status SpeechAnalyzerOptions::check() const {
   if (grammar.empty())
     return make_error(ErrorCode::kInvalidArgument, "SpeechAnalyzerOptions: no grammar file");
   if (auto s = recognizer.check(); !s) return s;
+  if (auto s = robot_gate.check(); !s) return s;
   if (direction_margin < Duration())
     return make_error(ErrorCode::kInvalidArgument,
                       "SpeechAnalyzerOptions: direction_margin must be >= 0");
@@ -36,6 +38,7 @@ class SpeechAnalyzer : public Analyzer {
   AnalyzerContract contract() const override {
     AnalyzerContract c{{options_.audio_sensor}, {}, {}, {keys::kRecognizedSpeech.name}};
     if (options_.beamforming()) c.reads.push_back(keys::kSoundDirection.name);
+    if (!options_.reference_sensor.empty()) c.optional_inputs.push_back(options_.reference_sensor);
     return c;
   }
 
@@ -43,6 +46,16 @@ class SpeechAnalyzer : public Analyzer {
                  BlackboardWriter& out) override {
     if (options_.beamforming()) note_direction(prior);
     utterances_.clear();
+    if (gate_)  // the robot's reference first: the gate must know this tick before deciding
+      for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
+        const AudioChunk* c = f->as<AudioChunk>();
+        if (c == nullptr)
+          return make_error(ErrorCode::kInvalidArgument,
+                            "speech: robot reference '{}' is not an audio stream",
+                            options_.reference_sensor);
+        if (auto s = gate_->push_reference(c->samples, c->channels, c->sample_rate, f->stamp); !s)
+          return s;
+      }
     for (const FramePtr& f : in.chunks_of(options_.audio_sensor)) {
       const AudioChunk* c = f->as<AudioChunk>();
       if (c == nullptr || c->channels <= 0 || c->sample_rate <= 0)
@@ -55,13 +68,16 @@ class SpeechAnalyzer : public Analyzer {
                           "speech: stream '{}' changed from {} ch at {} Hz to {} ch at {} Hz",
                           options_.audio_sensor, channels_, rate_, c->channels, c->sample_rate);
       }
+      if (gate_) gate_->push_microphone(c->samples, c->channels, c->sample_rate, f->stamp);
       if (auto s = segmenter_->push(c->samples, f->stamp, utterances_); !s) {
         return make_error(s.error().code, "speech: {} (stream '{}' at {})", s.error().message,
                           options_.audio_sensor, f->stamp.to_string());
       }
     }
-    for (const auto& u : utterances_)
+    for (auto& u : utterances_) {
+      if (gate_ && !cut_robot_voice(u)) continue;
       if (auto s = decode(u, out, in.stamp); !s) return s;
+    }
     return ok_status();
   }
 
@@ -70,6 +86,12 @@ class SpeechAnalyzer : public Analyzer {
     segmenter_.reset();
     beamformer_.reset();
     directions_.clear();
+    if (gate_) gate_->reset();
+  }
+
+  void enable_gate() {
+    if (!options_.reference_sensor.empty())
+      gate_ = std::make_unique<audio::ReferenceGate>(options_.robot_gate);
   }
 
  private:
@@ -108,6 +130,30 @@ class SpeechAnalyzer : public Analyzer {
     return ok_status();
   }
 
+  // Cuts the utterance to its longest part without the robot's voice; false when too little of
+  // its speech is left (the robot spoke it).
+  bool cut_robot_voice(audio::Utterance& u) const {
+    const auto [qa, qb] = gate_->longest_quiet_span(u.start, u.end);
+    const Timestamp sa = std::max(u.speech_start, qa), sb = std::min(u.speech_end, qb);
+    if (!(sb > sa) || (sb - sa).seconds() < options_.min_free_speech_s) {
+      log::debug("speech: utterance {:.2f}-{:.2f} s not decoded: the robot is speaking",
+                 u.speech_start.seconds(), u.speech_end.seconds());
+      return false;
+    }
+    if (qa <= u.start && qb >= u.end) return true;
+    const int64_t n = u.frames();
+    const int64_t b = std::clamp(audio::duration_to_frames(qa - u.start, rate_), int64_t{0}, n);
+    const int64_t e = std::clamp(audio::duration_to_frames(qb - u.start, rate_), b, n);
+    const size_t ch = static_cast<size_t>(u.channels);
+    u.samples = std::vector<float>(u.samples.begin() + static_cast<std::ptrdiff_t>(b * ch),
+                                   u.samples.begin() + static_cast<std::ptrdiff_t>(e * ch));
+    u.end = u.start + audio::frames_to_duration(e, rate_);
+    u.start = u.start + audio::frames_to_duration(b, rate_);
+    u.speech_start = sa;
+    u.speech_end = sb;
+    return true;
+  }
+
   // Keeps the sound directions of the last seconds (one per new blackboard entry).
   void note_direction(const BlackboardView& prior) {
     auto e = prior.get(keys::kSoundDirection);
@@ -143,6 +189,11 @@ class SpeechAnalyzer : public Analyzer {
     } else {
       mono = u.channel(0);  // no array or no direction: channel 0 (see the header)
     }
+    if (options_.noise_suppression) {
+      auto clean = audio::suppress_noise(mono, rate_);
+      if (!clean) return tl::unexpected(clean.error());
+      mono = std::move(*clean);
+    }
     auto r = recognizer_->recognize(std::span<const float>(mono), rate_, u.start);
     if (!r) return tl::unexpected(r.error());
     if (!*r) return ok_status();  // out of grammar or noise: nothing to report
@@ -158,6 +209,7 @@ class SpeechAnalyzer : public Analyzer {
   int rate_ = 0, channels_ = 0;
   std::unique_ptr<audio::UtteranceSegmenter> segmenter_;
   std::unique_ptr<audio::Beamformer> beamformer_;
+  std::unique_ptr<audio::ReferenceGate> gate_;
   std::deque<HeardDirection> directions_;
   std::vector<audio::Utterance> utterances_;  // scratch
 };
@@ -170,7 +222,9 @@ Result<std::unique_ptr<Analyzer>> make_speech_analyzer(const SpeechAnalyzerOptio
   if (!grammar) return tl::unexpected(grammar.error());
   auto recognizer = Recognizer::create(options.recognizer, *grammar);
   if (!recognizer) return tl::unexpected(recognizer.error());
-  return std::unique_ptr<Analyzer>(new SpeechAnalyzer(options, std::move(*recognizer)));
+  auto a = std::make_unique<SpeechAnalyzer>(options, std::move(*recognizer));
+  a->enable_gate();
+  return std::unique_ptr<Analyzer>(std::move(a));
 }
 
 }  // namespace dreamsense::speech

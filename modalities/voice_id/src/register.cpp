@@ -22,6 +22,10 @@ void register_analyzers(AnalyzerRegistry& registry) {
     std::filesystem::path model_file;
     DS_RETURN_IF_ERROR(options.get("method", method_name));
     DS_RETURN_IF_ERROR(options.get("model", model_file));
+    // Noise suppression in the speaker models trained here from the enrolment (a model file
+    // says itself whether it was trained with it).
+    bool noise_suppression = VoiceTrainOptions{}.features.noise_suppression;
+    DS_RETURN_IF_ERROR(options.get("noise_suppression", noise_suppression));
     DS_ASSIGN_OR_RETURN(const VoiceIdMethod method, parse_voice_id_method(method_name));
     const StreamDescription* s = ctx.first_with_role(roles::kMicArray);
     if (s == nullptr) return PlannedAnalyzers::skip("no stream with role mic_array");
@@ -30,6 +34,17 @@ void register_analyzers(AnalyzerRegistry& registry) {
     o.method = method;
     o.include_names = ctx.include_names;
     PlannedAnalyzers p;
+    // The robot's own voice (role robot_audio): gated out (audio/reference_gate.hpp).
+    bool robot_gate = true;
+    DS_RETURN_IF_ERROR(options.get("robot_gate", robot_gate));
+    DS_RETURN_IF_ERROR(options.get("robot_offset_s", o.robot_gate.offset_s));
+    DS_RETURN_IF_ERROR(options.get("track_by_direction", o.track_by_direction));
+    DS_RETURN_IF_ERROR(options.get("vad_on_channel_mean", o.vad_on_channel_mean));
+    DS_RETURN_IF_ERROR(options.get("track_angle_deg", o.track_angle_deg));
+    if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
+      o.reference_sensor = r->id;
+      p.notes.push_back(fmt::format("robot voice gated with the reference stream '{}'", r->id));
+    }
     if (method == VoiceIdMethod::kGmmUbm) {
       if (!model_file.empty()) {
         o.model_file = model_file;
@@ -41,7 +56,9 @@ void register_analyzers(AnalyzerRegistry& registry) {
               "audio (metadata voice_enroll)");
         auto audio_files = read_speaker_folders(*enroll);
         if (!audio_files) return tl::unexpected(audio_files.error());
-        auto m = train_voice_model(*audio_files, {}, VoiceTrainOptions{});
+        VoiceTrainOptions train;
+        train.features.noise_suppression = noise_suppression;
+        auto m = train_voice_model(*audio_files, {}, train);
         if (!m) return make_error(m.error().code, "{}: {}", enroll->string(), m.error().message);
         std::string who;
         for (const auto& sp : m->speakers)

@@ -1,12 +1,15 @@
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
 
+#include "dreamsense/audio/noise_suppressor.hpp"
 #include "dreamsense/audio/stamped_audio.hpp"
+#include "dreamsense/core/log.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
 #include "dreamsense/perception/voice_id.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <map>
 #include <optional>
 
 namespace dreamsense::voice_id {
@@ -38,6 +41,7 @@ Status VoiceIdAnalyzerOptions::check() const {
                       "VoiceIdAnalyzerOptions: method gmm_ubm needs a voice model (model or "
                       "model_file)");
   if (auto s = direction.check(); !s) return s;
+  if (auto s = robot_gate.check(); !s) return s;
   return segmenter.check();  // the stream's rate replaces vad.sample_rate when it starts
 }
 
@@ -56,14 +60,29 @@ class VoiceIdAnalyzer : public Analyzer {
   std::string_view name() const override { return "voice_id"; }
   AnalyzerContract contract() const override {
     AnalyzerContract c{{options_.audio_sensor}, {}, {}, {keys::kSpeakerIdentity.name}};
+    if (!options_.reference_sensor.empty()) c.optional_inputs.push_back(options_.reference_sensor);
     if (options_.method == VoiceIdMethod::kDirectionRule)
       c.reads.push_back(keys::kSoundDirection.name);
+    else if (options_.track_by_direction)
+      c.reads_previous.push_back(keys::kSoundDirection.name);
     return c;
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
                  BlackboardWriter& out) override {
-    if (options_.method == VoiceIdMethod::kDirectionRule) remember_direction(prior);
+    if (options_.method == VoiceIdMethod::kDirectionRule || options_.track_by_direction)
+      remember_direction(prior);
+    if (gate_)  // the robot's reference first: the gate must know this tick before deciding
+      for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
+        const AudioChunk* c = f->as<AudioChunk>();
+        if (c == nullptr)
+          return make_error(ErrorCode::kInvalidArgument,
+                            "voice_id: robot reference '{}' is not an audio stream",
+                            options_.reference_sensor);
+        if (auto s = gate_->push_reference(c->samples, c->channels, c->sample_rate, f->stamp); !s)
+          return s;
+        note_alignment();
+      }
     for (const FramePtr& f : in.chunks_of(options_.audio_sensor)) {
       const AudioChunk* c = f->as<AudioChunk>();
       if (c == nullptr || c->channels <= 0)
@@ -77,8 +96,11 @@ class VoiceIdAnalyzer : public Analyzer {
                             static_cast<int>(std::ceil(2 * model_->features.high_hz)));
         audio::UtteranceSegmenterOptions so = options_.segmenter;
         so.vad.sample_rate = c->sample_rate;
-        so.channels = 1;  // channel 0 is pushed
-        so.vad_channel = 0;
+        // Channel 0 is pushed (and scored); with vad_on_channel_mean also the channels' mean,
+        // on which the segmenter then decides.
+        seg_channels_ = options_.vad_on_channel_mean && c->channels > 1 ? 2 : 1;
+        so.channels = seg_channels_;
+        so.vad_channel = seg_channels_ - 1;
         auto seg = audio::UtteranceSegmenter::create(so);
         if (!seg)
           return make_error(seg.error().code, "voice_id: stream '{}': {}", options_.audio_sensor,
@@ -91,11 +113,49 @@ class VoiceIdAnalyzer : public Analyzer {
                           options_.audio_sensor, rate_, c->sample_rate);
       }
       // Mono = channel 0 (averaging the array's microphones would comb-filter the speech).
-      std::vector<float> mono(static_cast<size_t>(c->frames()));
-      for (size_t i = 0; i < mono.size(); ++i)
-        mono[i] = c->samples[i * static_cast<size_t>(c->channels)];
+      const size_t sc = static_cast<size_t>(seg_channels_), cc = static_cast<size_t>(c->channels);
+      std::vector<float> mono(static_cast<size_t>(c->frames()) * sc);
+      for (size_t i = 0; i < mono.size() / sc; ++i) {
+        mono[i * sc] = c->samples[i * cc];
+        if (sc == 2) {
+          float m = 0;
+          for (size_t k = 0; k < cc; ++k) m += c->samples[i * cc + k];
+          mono[i * sc + 1] = m / static_cast<float>(cc);
+        }
+      }
+      Timestamp stamp = f->stamp;
+      if (model_ && model_->features.noise_suppression) {  // as the enrolment was
+        if (!denoiser_) {
+          audio::NoiseSuppressorOptions no;
+          no.sample_rate = rate_;
+          no.channels = seg_channels_;
+          auto d = audio::NoiseSuppressor::create(no);
+          if (!d) return make_error(d.error().code, "voice_id: {}", d.error().message);
+          denoiser_ = std::move(*d);
+        }
+        // Output sample k is input sample k - latency: stamps follow the output count, and a
+        // gap in the input restarts the suppressor.
+        const Timestamp expected = ns_origin_ + audio::frames_to_duration(ns_pushed_, rate_);
+        if (!ns_origin_.is_set() || std::abs((f->stamp - expected).seconds()) > 1e-3) {
+          denoiser_->reset();
+          ns_origin_ = f->stamp;
+          ns_pushed_ = ns_emitted_ = 0;
+        }
+        denoised_.clear();
+        denoiser_->process(mono, denoised_);
+        ns_pushed_ += static_cast<int64_t>(mono.size() / sc);
+        stamp = ns_origin_ + audio::frames_to_duration(ns_emitted_, rate_) -
+                audio::frames_to_duration(denoiser_->latency(), rate_);
+        ns_emitted_ += static_cast<int64_t>(denoised_.size() / sc);
+        mono.swap(denoised_);
+        if (mono.empty()) continue;
+      }
       utterances_.clear();
-      if (auto s = segmenter_->push(mono, f->stamp, utterances_); !s)
+      if (gate_) {
+        gate_->push_microphone(mono, seg_channels_, rate_, stamp);
+        note_alignment();
+      }
+      if (auto s = segmenter_->push(mono, stamp, utterances_); !s)
         return make_error(s.error().code, "voice_id: {}", s.error().message);
       for (const audio::Utterance& u : utterances_)
         if (auto s = decide(u, in.stamp, out); !s) return s;
@@ -105,7 +165,16 @@ class VoiceIdAnalyzer : public Analyzer {
 
   void reset() override {
     if (segmenter_) segmenter_->reset();
+    if (gate_) gate_->reset();
+    if (denoiser_) denoiser_->reset();
+    ns_origin_ = Timestamp::unset();
     heard_.clear();
+    tracks_.clear();
+  }
+
+  void enable_gate() {
+    if (!options_.reference_sensor.empty())
+      gate_ = std::make_unique<audio::ReferenceGate>(options_.robot_gate);
   }
 
  private:
@@ -118,7 +187,45 @@ class VoiceIdAnalyzer : public Analyzer {
     while (!heard_.empty() && e->stamp - heard_.front().stamp > keep) heard_.pop_front();
   }
 
-  Status decide(const audio::Utterance& u, Timestamp tick, BlackboardWriter& out) {
+  void note_alignment() {
+    if (alignment_noted_ || !gate_->measured_offset()) return;
+    alignment_noted_ = true;
+    const double m = *gate_->measured_offset();
+    if (std::abs(m - options_.robot_gate.offset_s) > options_.robot_gate.align_tolerance_s)
+      log::warn(
+          "voice_id: robot reference '{}' is offset by {:+.2f} s against '{}' (measured from "
+          "the robot's speech; configured {:+.2f} s): using the measured offset",
+          options_.reference_sensor, m, options_.audio_sensor, options_.robot_gate.offset_s);
+  }
+
+  Status decide(const audio::Utterance& u_in, Timestamp tick, BlackboardWriter& out) {
+    const audio::Utterance* up = &u_in;
+    audio::Utterance trimmed;
+    if (gate_) {  // the robot's voice: keep the longest robot-free part, if enough speech is left
+      const auto [qa, qb] = gate_->longest_quiet_span(u_in.start, u_in.end);
+      const Timestamp sa = std::max(u_in.speech_start, qa), sb = std::min(u_in.speech_end, qb);
+      if (!(sb > sa) || (sb - sa).seconds() < options_.min_free_speech_s) {
+        log::debug("voice_id: utterance {:.2f}-{:.2f} s dropped: the robot is speaking",
+                   u_in.speech_start.seconds(), u_in.speech_end.seconds());
+        return ok_status();
+      }
+      if (qa > u_in.start || qb < u_in.end) {
+        const int64_t n = u_in.frames();
+        const auto ch = static_cast<std::ptrdiff_t>(u_in.channels);
+        const int64_t b =
+            std::clamp(audio::duration_to_frames(qa - u_in.start, rate_), int64_t{0}, n);
+        const int64_t e = std::clamp(audio::duration_to_frames(qb - u_in.start, rate_), b, n);
+        trimmed.start = u_in.start + audio::frames_to_duration(b, rate_);
+        trimmed.end = u_in.start + audio::frames_to_duration(e, rate_);
+        trimmed.speech_start = sa;
+        trimmed.speech_end = sb;
+        trimmed.channels = u_in.channels;
+        trimmed.sample_rate = u_in.sample_rate;
+        trimmed.samples.assign(u_in.samples.begin() + b * ch, u_in.samples.begin() + e * ch);
+        up = &trimmed;
+      }
+    }
+    const audio::Utterance& u = *up;
     SpeakerIdentity id;
     id.start = u.speech_start;
     id.end = u.speech_end;
@@ -127,17 +234,29 @@ class VoiceIdAnalyzer : public Analyzer {
     if (options_.method == VoiceIdMethod::kGmmUbm) {
       // The speech part only (+-50 ms): the pre-roll and the hangover are the room's noise.
       const int64_t margin = static_cast<int64_t>(0.05 * rate_);
-      const int64_t n = static_cast<int64_t>(u.samples.size());
+      const std::vector<float> scored = u.channels > 1 ? u.channel(0) : std::vector<float>{};
+      const std::vector<float>& ch0 = u.channels > 1 ? scored : u.samples;
+      const int64_t n = static_cast<int64_t>(ch0.size());
       const int64_t b = std::clamp(
           audio::duration_to_frames(u.speech_start - u.start, rate_) - margin, int64_t{0}, n);
       const int64_t e =
           std::clamp(audio::duration_to_frames(u.speech_end - u.start, rate_) + margin, b, n);
-      auto r = identify(*model_,
-                        std::span<const float>(u.samples).subspan(static_cast<size_t>(b),
-                                                                  static_cast<size_t>(e - b)),
-                        rate_);
+      auto r = identify(
+          *model_,
+          std::span<const float>(ch0).subspan(static_cast<size_t>(b), static_cast<size_t>(e - b)),
+          rate_, /*denoised=*/true);
       if (!r) return tl::unexpected(r.error());
       if (r->frames == 0) return ok_status();  // nothing speech-like in it
+      {
+        std::string scores;
+        for (const auto& sc : r->scores)
+          scores += fmt::format(
+              " {}={:.3f}", options_.include_names ? sc.id : public_speaker_id(*model_, sc.id),
+              sc.llr);
+        log::debug("voice_id: utterance {:.2f}-{:.2f} s, {} frames, llr{}",
+                   u.speech_start.seconds(), u.speech_end.seconds(), r->frames, scores);
+      }
+      if (options_.track_by_direction) accumulate_over_track(u, *r);
       // Enrolment folder names may be people's names: the public id unless names are asked for.
       id.speaker_id = public_speaker_id(*model_, r->speaker_id);
       id.name = options_.include_names ? r->name : id.speaker_id;
@@ -148,6 +267,76 @@ class VoiceIdAnalyzer : public Analyzer {
     const float confidence = static_cast<float>(id.score);
     out.set(keys::kSpeakerIdentity, std::move(id), tick, confidence);
     return ok_status();
+  }
+
+  // Confidence-weighted mean azimuth heard during the utterance's speech (nullopt: fewer than
+  // three directions).
+  std::optional<double> azimuth_of(const audio::Utterance& u) const {
+    double sx = 0, sy = 0;
+    int n = 0;
+    for (const auto& h : heard_) {
+      if (h.stamp < u.speech_start || h.stamp > u.speech_end) continue;
+      const double a = h.azimuth_deg * M_PI / 180, w = std::max(1e-3, h.confidence);
+      sx += w * std::cos(a), sy += w * std::sin(a), ++n;
+    }
+    if (n < 3) return std::nullopt;
+    return std::atan2(sy, sx) * 180 / M_PI;
+  }
+
+  // Joins the utterance to the track from its direction and replaces the decision by the one on
+  // the track's accumulated evidence (frame-weighted mean LLR per speaker).
+  void accumulate_over_track(const audio::Utterance& u, Identification& r) {
+    const auto az = azimuth_of(u);
+    if (!az || r.frames == 0) return;
+    Track* track = nullptr;
+    for (auto& t : tracks_) {
+      if ((u.speech_start - t.last).seconds() > options_.track_memory_s) continue;
+      if (std::abs(t.azimuth_deg - *az) > options_.track_angle_deg) continue;
+      if (track == nullptr || std::abs(t.azimuth_deg - *az) < std::abs(track->azimuth_deg - *az))
+        track = &t;
+    }
+    if (track == nullptr) track = &tracks_.emplace_back();
+    const double frames = r.frames;
+    const double total = track->frames + frames;
+    std::vector<SpeakerScore> combined;
+    for (const auto& s : r.scores) {
+      const double past = track->llr_sum.count(s.id) ? track->llr_sum[s.id] : 0.0;
+      combined.push_back({s.id, (past + s.llr * frames) / total});
+    }
+    // Remember (older evidence scaled down beyond track_max_frames).
+    const double keep = total > options_.track_max_frames ? options_.track_max_frames / total : 1.0;
+    for (const auto& s : r.scores) {
+      const double past = track->llr_sum.count(s.id) ? track->llr_sum[s.id] : 0.0;
+      track->llr_sum[s.id] = (past + s.llr * frames) * keep;
+    }
+    track->frames = total * keep;
+    track->azimuth_deg = track->utterances == 0 ? *az
+                                                : (track->azimuth_deg * track->utterances + *az) /
+                                                      (track->utterances + 1);
+    ++track->utterances;
+    track->last = u.speech_end;
+    if (track->utterances == 1) return;  // nothing to add to the utterance's own evidence
+    std::stable_sort(combined.begin(), combined.end(),
+                     [](const SpeakerScore& a, const SpeakerScore& b) { return a.llr > b.llr; });
+    log::debug(
+        "voice_id: utterance {:.2f}-{:.2f} s on the track at {:.0f} deg ({} utterances): "
+        "{} {:.3f}",
+        u.speech_start.seconds(), u.speech_end.seconds(), track->azimuth_deg, track->utterances,
+        combined.front().id, combined.front().llr);
+    r.best_id = combined.front().id;
+    r.llr = combined.front().llr;
+    r.scores = combined;
+    const double p = 1.0 / (1.0 + std::exp(-(r.llr - model_->threshold) / model_->score_scale));
+    if (r.llr >= model_->threshold) {
+      r.speaker_id = r.best_id;
+      r.name = r.best_id;
+      for (const auto& s : model_->speakers)
+        if (s.id == r.best_id) r.name = s.name;
+      r.score = p;
+    } else {
+      r.speaker_id = r.name = kUnknownSpeaker;
+      r.score = 1.0 - p;
+    }
   }
 
   // DREAM's rule on every direction heard during the utterance (none heard: unknown).
@@ -177,9 +366,24 @@ class VoiceIdAnalyzer : public Analyzer {
   VoiceIdAnalyzerOptions options_;
   std::shared_ptr<const VoiceModel> model_;
   std::unique_ptr<audio::UtteranceSegmenter> segmenter_;
+  std::unique_ptr<audio::ReferenceGate> gate_;
+  std::unique_ptr<audio::NoiseSuppressor> denoiser_;
+  std::vector<float> denoised_;  // scratch
+  Timestamp ns_origin_ = Timestamp::unset();
+  int64_t ns_pushed_ = 0, ns_emitted_ = 0;
+  bool alignment_noted_ = false;
   int rate_ = 0;
+  int seg_channels_ = 1;  // pushed to the segmenter: channel 0 (+ the channels' mean)
   std::vector<audio::Utterance> utterances_;  // scratch
-  std::deque<Heard> heard_;                   // directions of the last seconds (direction rule)
+  std::deque<Heard> heard_;  // directions of the last seconds (direction rule, tracks)
+  struct Track {
+    double azimuth_deg = 0;
+    Timestamp last;
+    int utterances = 0;
+    double frames = 0;
+    std::map<std::string, double> llr_sum;  // per speaker: sum over frames of the LLR
+  };
+  std::vector<Track> tracks_;
 };
 
 }  // namespace
@@ -195,7 +399,9 @@ Result<std::unique_ptr<Analyzer>> make_voice_id_analyzer(const VoiceIdAnalyzerOp
   if (model)
     if (auto s = model->check(); !s) return tl::unexpected(s.error());
   if (options.method == VoiceIdMethod::kDirectionRule) model.reset();
-  return std::unique_ptr<Analyzer>(new VoiceIdAnalyzer(options, std::move(model)));
+  auto a = std::make_unique<VoiceIdAnalyzer>(options, std::move(model));
+  a->enable_gate();
+  return std::unique_ptr<Analyzer>(std::move(a));
 }
 
 }  // namespace dreamsense::voice_id

@@ -1,5 +1,6 @@
 #include "dreamsense/voice_id/voice_model.hpp"
 
+#include "dreamsense/audio/noise_suppressor.hpp"
 #include "dreamsense/core/opencv_error.hpp"
 
 #include <opencv2/core/persistence.hpp>
@@ -74,7 +75,8 @@ Status VoiceModel::save(const fs::path& path) const {
       << features.drop_below_peak_db << "above_floor_db" << features.above_floor_db
       << "min_level_db" << features.min_level_db << "mean_normalise"
       << static_cast<int>(features.mean_normalise) << "variance_normalise"
-      << static_cast<int>(features.variance_normalise) << "cmn_prior_frames"
+      << static_cast<int>(features.variance_normalise) << "noise_suppression"
+      << static_cast<int>(features.noise_suppression) << "cmn_prior_frames"
       << features.cmn_prior_frames;
     f << "}";
     if (!cmn_prior.empty()) f << "cmn_prior" << cmn_prior;
@@ -162,6 +164,7 @@ Result<VoiceModel> VoiceModel::load(const fs::path& path) {
     flag("static_energy", m.features.static_energy);
     flag("mean_normalise", m.features.mean_normalise);
     flag("variance_normalise", m.features.variance_normalise);
+    flag("noise_suppression", m.features.noise_suppression);  // absent (older files): off
     num("cmn_prior_frames", m.features.cmn_prior_frames);
     if (!f["cmn_prior"].empty()) {
       cv::Mat prior;
@@ -218,6 +221,16 @@ Result<VoiceModel> VoiceModel::load(const fs::path& path) {
   return m;
 }
 
+namespace {
+// Un-normalised features of one recording, through the noise suppressor when the options say so.
+Result<MfccFeatures> features_of(const LabelledAudio& a, const MfccOptions& o) {
+  if (!o.noise_suppression) return unnormalised_mfcc(a.samples, a.sample_rate, o);
+  // One pass, as the analyser's streaming filter: enrolment and scoring see the same processing.
+  DS_ASSIGN_OR_RETURN(auto clean, audio::suppress_noise(a.samples, a.sample_rate, {}, 1));
+  return unnormalised_mfcc(clean, a.sample_rate, o);
+}
+}  // namespace
+
 Result<VoiceModel> train_voice_model(const std::vector<LabelledAudio>& enrolment,
                                      const std::vector<LabelledAudio>& background,
                                      const VoiceTrainOptions& o, const std::string& background_note,
@@ -239,7 +252,7 @@ Result<VoiceModel> train_voice_model(const std::vector<LabelledAudio>& enrolment
     if (a.speaker.empty() || a.speaker == kUnknownSpeaker)
       return make_error(ErrorCode::kInvalidArgument, "train voices: {}: invalid speaker '{}'",
                         a.source, a.speaker);
-    auto f = unnormalised_mfcc(a.samples, a.sample_rate, o.features);
+    auto f = features_of(a, o.features);
     if (!f) return make_error(f.error().code, "train voices: {}: {}", a.source, f.error().message);
     if (!per_speaker.count(a.speaker)) order.push_back(a.speaker);
     per_speaker[a.speaker].push_back(f->frames);
@@ -253,7 +266,7 @@ Result<VoiceModel> train_voice_model(const std::vector<LabelledAudio>& enrolment
         if (m.rows > 0) bg_list.push_back(m);
   } else {
     for (const auto& a : background) {
-      auto f = unnormalised_mfcc(a.samples, a.sample_rate, o.features);
+      auto f = features_of(a, o.features);
       if (!f)
         return make_error(f.error().code, "train voices: background {}: {}", a.source,
                           f.error().message);
@@ -372,7 +385,11 @@ std::string public_speaker_id(const VoiceModel& model, const std::string& speake
 }
 
 Result<Identification> identify(const VoiceModel& model, std::span<const float> samples,
-                                int sample_rate) {
+                                int sample_rate, bool denoised) {
+  if (model.features.noise_suppression && !denoised) {
+    DS_ASSIGN_OR_RETURN(auto clean, audio::suppress_noise(samples, sample_rate, {}, 1));
+    return identify(model, clean, sample_rate, true);
+  }
   auto f = compute_mfcc(samples, sample_rate, model.features, model.cmn_prior);
   if (!f) return tl::unexpected(f.error());
   return identify_features(model, f->frames);

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -49,7 +50,8 @@ using DirectionAt = std::function<std::optional<std::pair<double, double>>(doubl
 // Feeds `mono` as 2-channel 40 ms chunks, one per 25 Hz tick, with faint noise; a fake sound
 // direction analyser runs first when `direction` is given. Returns every identity written.
 std::vector<SpeakerIdentity> run(Analyzer& a, const std::vector<float>& mono,
-                                 const DirectionAt& direction = {}) {
+                                 const DirectionAt& direction = {},
+                                 const std::vector<float>* reference = nullptr) {
   std::mt19937 rng(1);
   std::normal_distribution<float> noise(0.f, 3e-4f);
   Blackboard bb;
@@ -66,6 +68,14 @@ std::vector<SpeakerIdentity> run(Analyzer& a, const std::vector<float>& mono,
     MultiFrame mf;
     mf.stamp = Timestamp::from_ns(k * 40'000'000LL);
     mf.chunks["mic"].push_back(make_frame("mic", mf.stamp, static_cast<uint64_t>(k), c));
+    if (reference != nullptr) {  // what the robot's loudspeaker played (mono)
+      AudioChunk r;
+      r.sample_rate = kRate;
+      r.channels = 1;
+      for (int64_t i = k * chunk; i < std::min<int64_t>((k + 1) * chunk, reference->size()); ++i)
+        r.samples.push_back((*reference)[static_cast<size_t>(i)]);
+      mf.chunks["robot"].push_back(make_frame("robot", mf.stamp, static_cast<uint64_t>(k), r));
+    }
     if (direction) {
       BlackboardWriter w("sound_direction");
       if (auto d = direction(mf.stamp.seconds())) {
@@ -148,6 +158,96 @@ TEST(VoiceIdAnalyzer, GmmUbmNamesEachUtterance) {
   EXPECT_GT(ids[0].score, 0.5);
   EXPECT_NEAR(ids[1].start.seconds(), 2.7, 0.1);
   EXPECT_NEAR(ids[1].end.seconds(), 3.9, 0.1);
+}
+
+// Issue 16: the robot speaks (here with the therapist's synthetic voice) between two child
+// utterances. With its reference stream it gets no speaker; without it (negative case) it is
+// named, as before.
+TEST(VoiceIdAnalyzer, RobotVoiceIsGatedByItsReference) {
+  std::vector<float> s = quiet(0.5), ref = quiet(0.5);
+  append(s, synth_utterance(kChild, 1.2, kRate, 601, 0, 0));  // 0.5 - 1.7 s
+  append(ref, quiet(1.2));
+  append(s, quiet(1.0));
+  append(ref, quiet(1.0));
+  const auto robot = synth_utterance(kTherapist, 1.2, kRate, 602, 0, 0);  // 2.7 - 3.9 s
+  append(s, robot);
+  append(ref, robot);
+  append(s, quiet(1.0));
+  append(ref, quiet(1.0));
+  append(s, synth_utterance(kChild, 0.9, kRate, 603, 0, 0));  // 4.9 - 5.8 s
+  append(s, quiet(1.0));
+  append(ref, quiet(1.9));
+  for (const bool gated : {true, false}) {
+    VoiceIdAnalyzerOptions o;
+    o.audio_sensor = "mic";
+    o.model = model();
+    if (gated) o.reference_sensor = "robot";
+    auto a = make_voice_id_analyzer(o);
+    ASSERT_TRUE(a) << a.error().message;
+    if (gated) {
+      const auto& in = (*a)->contract().optional_inputs;
+      EXPECT_NE(std::find(in.begin(), in.end(), "robot"), in.end());
+    }
+    const auto ids = run(**a, s, {}, &ref);
+    if (gated) {
+      ASSERT_EQ(ids.size(), 2u);
+      EXPECT_EQ(ids[0].speaker_id, "child");
+      EXPECT_EQ(ids[1].speaker_id, "child");
+    } else {
+      ASSERT_EQ(ids.size(), 3u);
+      EXPECT_EQ(ids[1].speaker_id, "therapist");
+    }
+  }
+}
+
+// A model trained with the noise suppressor says so in its file; the analyser then filters the
+// stream the same way (16 ms late, compensated: the utterances keep their times), and the
+// one-shot path (identify) names a noisy therapist clip. Known issue (README.md): on these
+// synthetic voices the streamed path names the therapist's utterance "child" although the
+// one-shot path on the same voice gets it right; not resolved, so the option stays off.
+TEST(VoiceIdAnalyzer, NoiseSuppressedModelRoundTripsAndKeepsTimes) {
+  std::vector<LabelledAudio> enrol;
+  for (uint32_t i = 0; i < 4; ++i) {
+    enrol.push_back({"child", synth_utterance(kChild, 1.5, kRate, 10 + i), kRate, "c"});
+    enrol.push_back({"therapist", synth_utterance(kTherapist, 1.5, kRate, 20 + i), kRate, "t"});
+  }
+  VoiceTrainOptions to;
+  to.ubm.components = 16;
+  to.ubm.min_frames_per_component = 20;
+  to.threshold = -100;
+  to.features.noise_suppression = true;
+  auto m = train_voice_model(enrol, {}, to);
+  ASSERT_TRUE(m) << m.error().message;
+  const auto file = std::filesystem::temp_directory_path() / "ds_voice_ns_model.yaml";
+  ASSERT_TRUE(m->save(file));
+  auto back = VoiceModel::load(file);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_TRUE(back->features.noise_suppression);
+  std::filesystem::remove(file);
+  auto t = synth_utterance(kTherapist, 1.2, kRate, 702, 0.3, 0.3);
+  std::mt19937 rng(1);
+  std::normal_distribution<float> noise(0.f, 3e-4f);
+  for (auto& v : t) v += noise(rng);
+  auto one = identify(*back, t, kRate);
+  ASSERT_TRUE(one);
+  EXPECT_EQ(one->best_id, "therapist");
+  VoiceIdAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.model = std::make_shared<const VoiceModel>(*back);
+  auto a = make_voice_id_analyzer(o);
+  ASSERT_TRUE(a) << a.error().message;
+  std::vector<float> s = quiet(0.5);
+  append(s, synth_utterance(kChild, 1.2, kRate, 701, 0, 0));  // 0.5 - 1.7 s
+  append(s, quiet(1.0));
+  append(s, synth_utterance(kTherapist, 1.2, kRate, 702, 0, 0));  // 2.7 - 3.9 s
+  append(s, quiet(1.0));
+  const auto ids = run(**a, s);
+  ASSERT_EQ(ids.size(), 2u);
+  EXPECT_EQ(ids[0].speaker_id, "child");
+  EXPECT_NEAR(ids[0].start.seconds(), 0.5, 0.05);
+  EXPECT_NEAR(ids[0].end.seconds(), 1.7, 0.05);
+  EXPECT_NEAR(ids[1].start.seconds(), 2.7, 0.05);
+  EXPECT_NEAR(ids[1].end.seconds(), 3.9, 0.05);
 }
 
 // Real speech (pocketsphinx-testdata): the cards talker enrolled as the child, the LibriVox

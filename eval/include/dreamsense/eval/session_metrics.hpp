@@ -42,6 +42,7 @@ MetricGroup face_detection_metrics();
 MetricGroup head_and_gaze_metrics();
 MetricGroup speech_metrics();
 MetricGroup speaker_metrics();
+MetricGroup robot_voice_metrics();
 MetricGroup face_recognition_metrics();  // faces (issue 12): F17, F18 (session/faces.cpp)
 // Declared for the analysers being added (issues 13, 14); they fill in their computations.
 MetricGroup action_metrics();

@@ -24,6 +24,9 @@ namespace dreamsense::sim {
 // data/subjects/demo_child (tools/train_demo_subject.sh).
 inline constexpr const char* kDemoSubject = "demo_child";
 
+// data/demo/robot in the source tree (compiled in, as the portrait landmarks).
+std::filesystem::path default_robot_prompts_dir();
+
 struct DemoOptions {
   std::filesystem::path out_dir;  // required; must not exist, be empty, or hold an old session
   uint64_t seed = 1;
@@ -62,6 +65,17 @@ struct DemoOptions {
       "/usr/share/doc/opencv-doc/examples/data";  // opencv-doc
   std::filesystem::path pocketsphinx_data_dir =
       "/usr/share/pocketsphinx/test/data";  // pocketsphinx-testdata
+  // The robot's own voice (issue 16): prompts played through the robot's loudspeaker (at
+  // geometry.robot_head_m) in the gaps between the child's and the therapist's utterances,
+  // rendered into the array by the room, with truth records `robot_speech`, and the played
+  // signal as the session's reference stream `robot_audio` (role robot_audio). Off: the demo
+  // before issue 16 (byte-identical microphone audio).
+  bool robot_voice = true;
+  // prompts.txt + the prompt files (espeak-ng, tools/make_robot_prompts.sh); in the source tree.
+  std::filesystem::path robot_prompts_dir = default_robot_prompts_dir();
+  // Only the audio streams (mic_array, robot_audio), the enrolment audio, the grammar and the
+  // full truth: the same audio as the full session in a fraction of the time (audio work).
+  bool audio_only = false;
   Status check() const;
 };
 
@@ -69,6 +83,7 @@ struct DemoSummary {
   std::filesystem::path out_dir;
   std::map<std::string, int64_t> frames;  // per stream id (audio: chunks)
   int utterances = 0;
+  int robot_utterances = 0;
   int action_segments = 0;
   int64_t truth_records = 0;
   double generation_s = 0;  // wall-clock time of generate_demo_session
@@ -117,6 +132,22 @@ struct PlannedUtterance {
   double clip_start_s = 0;      // session time of the clip's first sample
   cv::Vec3d source_m{0, 0, 0};  // world
 };
+
+struct RobotPrompt {
+  std::string file;  // relative to robot_prompts_dir
+  std::string text;
+  bool in_grammar = false;
+};
+struct PlannedRobotUtterance {
+  size_t prompt = 0;        // index into the prompt list
+  double clip_start_s = 0;  // session time of the prompt's first sample
+};
+// The robot speaks in the gaps of the human utterances: in each gap (also before the first and
+// after the last) that leaves >= margin_s (1.0 s) of silence on both sides, with probability
+// 0.7, one prompt, centred; prompts cycle in a seeded order. Depends only on the seed.
+std::vector<PlannedRobotUtterance> plan_robot_utterances(
+    uint64_t seed, double duration_s, const std::vector<std::pair<double, double>>& busy_s,
+    const std::vector<double>& prompt_durations_s, double margin_s = 1.0);
 
 // Non-overlapping placement of 3-5 utterances (fewer if the session is too short), alternating
 // speakers; child utterances come from the child's mouth, therapist ones from one side of the

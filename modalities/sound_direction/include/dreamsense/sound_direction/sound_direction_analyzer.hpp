@@ -9,6 +9,7 @@
 // with a one-time warning; silence is absence, never an error.
 
 #include "dreamsense/audio/mic_array.hpp"
+#include "dreamsense/audio/reference_gate.hpp"
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/sound_direction/direction_finder.hpp"
 
@@ -20,6 +21,10 @@ struct SoundDirectionAnalyzerOptions {
   SensorId audio_sensor = "mic_array";
   MicArrayGeometry geometry = MicArrayGeometry::kinect_v1();
   DirectionFinderOptions finder;
+  // The robot's own voice (issue 16): no direction while the reference stream its loudspeaker
+  // plays (role robot_audio; empty: none) says the robot is audible (audio/reference_gate.hpp).
+  SensorId reference_sensor;
+  audio::ReferenceGateOptions robot_gate;
   Status check() const;
 };
 

@@ -17,6 +17,7 @@
 // speech of an off-axis talker). Measured on the demo sessions: audio/README.md.
 
 #include "dreamsense/audio/beamformer.hpp"
+#include "dreamsense/audio/reference_gate.hpp"
 #include "dreamsense/audio/utterance_segmenter.hpp"
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/speech/recognizer.hpp"
@@ -49,6 +50,16 @@ struct SpeechAnalyzerOptions {
   audio::BeamformerMethod beamformer = audio::BeamformerMethod::kDelayAndSum;
   // Directions from this long before the utterance's speech to this long after it are used.
   Duration direction_margin = Duration::from_ms(200);
+  // The robot's own voice (issue 16): the reference stream its loudspeaker plays (role
+  // robot_audio; empty: none). Utterances are cut to their longest robot-free part and not
+  // decoded when less than min_free_speech_s of their speech is left (audio/reference_gate.hpp).
+  SensorId reference_sensor;
+  audio::ReferenceGateOptions robot_gate;
+  double min_free_speech_s = 0.3;
+  // Issue 16: the decoded (beamformed) utterance passes the noise suppressor first
+  // (audio/noise_suppressor.hpp; its noise estimate starts on the 0.25 s pre-roll). Off by
+  // default: measured no better than PocketSphinx's own noise removal (README.md).
+  bool noise_suppression = false;
   bool beamforming() const { return steer_to_sound_direction && mic_positions_m.size() > 1; }
   Status check() const;
 };

@@ -46,6 +46,10 @@ struct MfccOptions {
   bool mean_normalise = true;
   double cmn_prior_frames = 200;
   bool variance_normalise = false;  // also divide by the recording's standard deviation
+  // Issue 16: every recording (enrolment, background) and the analysed stream pass the noise
+  // suppressor (audio/noise_suppressor.hpp) before the features (train_voice_model, identify,
+  // the analyser). Stored in the model, so scoring always matches enrolment.
+  bool noise_suppression = false;
   Status check() const;
   // Feature dimension: cepstra * (1 + deltas + delta-deltas), minus 1 without static energy.
   int dimension() const;

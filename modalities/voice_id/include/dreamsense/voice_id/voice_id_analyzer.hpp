@@ -14,6 +14,7 @@
 // The entry is written at the tick the utterance ends (hangover_s after its last loud frame);
 // start/end are the loud part's stamps.
 
+#include "dreamsense/audio/reference_gate.hpp"
 #include "dreamsense/audio/utterance_segmenter.hpp"
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/voice_id/voice_model.hpp"
@@ -56,6 +57,25 @@ struct VoiceIdAnalyzerOptions {
   // Privacy: speaker_id is always the public id (public_speaker_id: role word or speaker_<k>);
   // name is the enrolled name only when this is set (`--include-names`), else the public id.
   bool include_names = false;
+  // The robot's own voice (issue 16): the reference stream the robot's loudspeaker plays (role
+  // robot_audio; empty: none). Utterances are trimmed to their longest robot-free part and
+  // dropped when less than min_free_speech_s of their speech is left (audio/reference_gate.hpp).
+  SensorId reference_sensor;
+  audio::ReferenceGateOptions robot_gate;
+  double min_free_speech_s = 0.3;
+  // kGmmUbm, issue 16: evidence accumulated over a track of utterances from the same direction
+  // (keys::kSoundDirection of the previous ticks, read as feedback; without a sound direction
+  // analyser every utterance stands alone). An utterance whose confidence-weighted mean azimuth
+  // is within track_angle_deg of a track heard in the last track_memory_s joins it; the
+  // decision uses the frame-weighted mean LLR of the track's utterances and this one (the track
+  // keeps at most track_max_frames frames of evidence, older evidence scaled down).
+  // Issue 16: the utterance decision on the mean of the array's channels (about 6 dB less noise:
+  // a quiet child is cut whole, as in the speech analyser); channel 0 is still what is scored.
+  bool vad_on_channel_mean = true;
+  bool track_by_direction = false;  // measured no gain on the demo (README.md): opt-in
+  double track_angle_deg = 10;
+  double track_memory_s = 60;
+  int track_max_frames = 600;
   Status check() const;
 };
 

@@ -104,8 +104,10 @@ struct Identification {
 };
 
 // Scores one utterance against every enrolled speaker. Error: bad sample rate for the features.
+// With features.noise_suppression the samples pass the noise suppressor first, unless
+// `denoised` says they already have (the analyser suppresses the whole stream).
 Result<Identification> identify(const VoiceModel& model, std::span<const float> samples,
-                                int sample_rate);
+                                int sample_rate, bool denoised = false);
 // Same from features already computed with model.features.
 Identification identify_features(const VoiceModel& model, const cv::Mat& features);
 
