@@ -92,8 +92,7 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                   "(pocketsphinx, speech-commands, list, and fsdd with --fsdd-model en-us); "
                   "speech-commands without --model: the shipped model adapted on the "
                   "development clips (modalities/speech/models/speech_commands)")
-      ->default_val(r.model_dir.string())
-      ->each([flags](const std::string&) { flags->options.commands_shipped_model = false; });
+      ->default_val(r.model_dir.string());
   cmd->add_option("--decoys", flags->decoys,
                   "speech-commands: decoy words decoded beside the commands (a decoy heard = "
                   "_unknown_): FILE (one word per line) or none (default: the model folder's "
@@ -158,7 +157,7 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   cmd->add_flag("!--no-items", flags->options.list_items,
                 "Leave the per-item list out of the JSON");
   cmd->add_option("--json", flags->json, "Write the evaluation JSON to FILE (- for stdout)");
-  cmd->callback([flags, &g, &exit_code] {
+  cmd->callback([cmd, flags, &g, &exit_code] {
     auto& o = flags->options;
     o.dataset = flags->dataset[0];
     o.dir = flags->dataset[1];
@@ -176,6 +175,8 @@ void add_eval_speech(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
     o.recognizer.resampler = *resampler;
     if (flags->garbage_weight != 0) o.garbage_phone_weight = flags->garbage_weight;
     if (flags->min_confidence >= 0) o.min_confidence = flags->min_confidence;
+    // speech-commands decodes with the shipped adapted model unless --model names one.
+    o.commands_shipped_model = cmd->count("--model") == 0;
     if (flags->decoys == "none") {
       o.decoy_words = std::vector<std::string>{};
     } else if (!flags->decoys.empty()) {

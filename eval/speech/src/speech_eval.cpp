@@ -639,6 +639,13 @@ Result<eval::EvalReport> run_speech_commands(const SpeechEvalOptions& o,
   std::vector<double> ms;
   size_t correct = 0, negatives = 0, false_accepts = 0;
   std::map<std::string, std::pair<size_t, size_t>> fa_by;  // negatives class -> (fa, total)
+  // Per clip what a stricter confidence threshold would have decided (the operating curve).
+  struct CurvePoint {
+    std::string label, word;  // word: the accepted command (empty: silence/unknown/decoy)
+    double confidence = 0;
+    bool silent = false;  // the silence check's decision
+  };
+  std::vector<CurvePoint> curve_items;
   for (size_t i = 0; i < items->size(); ++i) {
     const AudioItem& it = (*items)[i];
     auto a = read_mono_wav(it.path, 16000, "speech-commands");
@@ -665,6 +672,8 @@ Result<eval::EvalReport> run_speech_commands(const SpeechEvalOptions& o,
       hyp = d.accepted && !d.grammar_hypothesis.empty() ? d.grammar_hypothesis : kUnknownLabel;
       if (std::find(decoys.begin(), decoys.end(), hyp) != decoys.end()) hyp = kUnknownLabel;
     }
+    curve_items.push_back({it.label, hyp == kUnknownLabel || hyp == kSilenceLabel ? "" : hyp,
+                           d.confidence, hyp == kSilenceLabel});
     const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const bool ok = hyp == it.label;
     correct += ok;
@@ -716,6 +725,25 @@ Result<eval::EvalReport> run_speech_commands(const SpeechEvalOptions& o,
       {"unknown_false_accept_rate", ratio(fa_by[kUnknownLabel].first, fa_by[kUnknownLabel].second)},
       {"silence_false_accept_rate", ratio(fa_by[kSilenceLabel].first, fa_by[kSilenceLabel].second)},
       {"confusion", confusion_json(labels, conf)}};
+  // Accuracy against false accepts for confidence thresholds from the one used upwards (a lower
+  // threshold would need a new decode: the joint search already rejected those clips).
+  json curve = json::array();
+  for (int step = 0; step <= 20; ++step) {
+    const double threshold = step * 0.05;
+    if (threshold + 1e-9 < ro.min_confidence) continue;
+    size_t ok = 0, fa = 0;
+    for (const auto& c : curve_items) {
+      const bool accept = !c.word.empty() && c.confidence >= threshold;
+      const std::string h =
+          accept ? c.word : std::string(c.silent ? kSilenceLabel : kUnknownLabel);
+      ok += h == c.label;
+      fa += accept && (c.label == kUnknownLabel || c.label == kSilenceLabel);
+    }
+    curve.push_back({{"min_confidence", threshold},
+                     {"accuracy", ratio(ok, curve_items.size())},
+                     {"false_accept_rate", ratio(fa, negatives)}});
+  }
+  j.metrics["operating_curve"] = curve;
   j.timing = timing_json(decode_s, audio_s, ms);
   j.per_class = per_class_json(labels, per_label);
   if (o.list_items) j.extra["items"] = records;

@@ -5,7 +5,8 @@
 namespace dreamsense::speech {
 namespace fs = std::filesystem;
 
-Status use_acoustic_model(RecognizerOptions& options, const fs::path& dir) {
+Status use_acoustic_model(RecognizerOptions& options, const fs::path& model_dir) {
+  const fs::path dir = model_dir;  // a copy: callers pass options.model_dir, changed below
   const fs::path provenance = dir / kAdaptationFileName;
   const bool means_only = !fs::exists(dir / "mdef") && fs::exists(dir / "means");
   if (!fs::exists(dir / "mdef") && !(means_only && fs::exists(provenance)))
