@@ -104,10 +104,15 @@ void loop_session(const fs::path& in, const fs::path& out, int loops) {
       std::vector<short> samples(static_cast<size_t>(info.frames * info.channels));
       ASSERT_EQ(sf_readf_short(r, samples.data(), info.frames), info.frames);
       sf_close(r);
+      const sf_count_t frames = info.frames;  // sf_open(SFM_WRITE) resets info.frames
+      ASSERT_GT(frames, 0) << src;
       SNDFILE* w = sf_open(dst.c_str(), SFM_WRITE, &info);
       ASSERT_NE(w, nullptr) << dst;
-      for (int k = 0; k < loops; ++k)
-        ASSERT_EQ(sf_writef_short(w, samples.data(), info.frames), info.frames);
+      for (int k = 0; k < loops; ++k) {
+        const sf_count_t written = sf_writef_short(w, samples.data(), frames);
+        if (written != frames) sf_close(w);
+        ASSERT_EQ(written, frames) << dst;
+      }
       sf_close(w);
     } else {
       FAIL() << "cannot loop a stream of encoding " << s.encoding;
