@@ -24,6 +24,11 @@ function(ds_add_test name)
     set(ARG_LABELS unit)
   endif()
   add_executable(${name} ${ARG_SOURCES})
+  # tools/sanitizers.sh builds only the tests that the sanitizer labels run (target
+  # sanitizer_tests, defined at the end of the top-level CMakeLists.txt).
+  if(ARG_LABELS MATCHES "unit|analyzer")
+    set_property(GLOBAL APPEND PROPERTY DREAMSENSE_SANITIZER_TESTS ${name})
+  endif()
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main GTest::gmock)
   target_compile_options(${name} PRIVATE ${DREAMSENSE_WARNINGS})
   target_compile_definitions(${name} PRIVATE

@@ -35,6 +35,7 @@ packages=(
   libtinyxml2-dev clang-tidy
   # faces (issue 12): GIF images (Yale faces)
   libgif-dev
+  clang libclang-rt-14-dev  # tools/sanitizers.sh: asan preset (clang), libFuzzer (issue 18)
 )
 # npm installs the face-api.js weights (below). Debian's npm package only where no npm is on the
 # machine: next to a vendor Node.js (nodesource ships its own npm) apt refuses it as broken.

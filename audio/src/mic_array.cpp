@@ -1,6 +1,7 @@
 #include "dreamsense/audio/mic_array.hpp"
 
 #include <cmath>
+#include <exception>
 
 namespace dreamsense::audio {
 
@@ -100,7 +101,7 @@ Result<MicArrayGeometry> read_mic_array(const std::filesystem::path& path) {
       t.convertTo(t, CV_64F);
       g.array_from_world_t = cv::Vec3d(t.ptr<double>()[0], t.ptr<double>()[1], t.ptr<double>()[2]);
     }
-  } catch (const cv::Exception&) {
+  } catch (const std::exception&) {
     return make_error(ErrorCode::kCorruptData,
                       "{}: not a valid OpenCV YAML/XML file, or a key holds a value of the wrong "
                       "type (mic_positions_m, sample_rate, array_from_world_R, array_from_world_t)",

@@ -3,9 +3,13 @@
 
 #include "dreamsense/audio/beamformer.hpp"
 
+#include "dreamsense/audio/mic_array.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -193,6 +197,16 @@ TEST(Beamformer, DelaysAndOptions) {
   EXPECT_NE(bad.error().message.find("frame_length"), std::string::npos);
   o.mic_positions_m.clear();
   EXPECT_FALSE(Beamformer::create(o));
+}
+
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, MicArrayOpenCvCannotParseIsAnError) {
+  const std::filesystem::path p =
+      std::filesystem::path(::testing::TempDir()) / "ds_fuzz_mic_array.yaml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(read_mic_array(p));
+  std::filesystem::remove(p);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include <cmath>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -77,7 +78,7 @@ Status read_key(const cv::FileStorage& fs, const char* key, T& out,
     const cv::FileNode n = fs[key];
     if (!n.empty()) n >> out;
     return ok_status();
-  } catch (const cv::Exception&) {
+  } catch (const std::exception&) {
     return make_error(ErrorCode::kCorruptData, "{}: key '{}' does not hold a valid value",
                       path.string(), key);
   }
@@ -91,7 +92,7 @@ Result<CameraModel> read_camera_model(const std::filesystem::path& path) {
   try {
     if (!fs.open(path.string(), cv::FileStorage::READ))
       return make_error(ErrorCode::kCorruptData, "{}: unreadable calibration file", path.string());
-  } catch (const cv::Exception&) {
+  } catch (const std::exception&) {
     return make_error(ErrorCode::kCorruptData,
                       "{}: not a valid OpenCV YAML/XML calibration file (syntax error)",
                       path.string());
@@ -146,7 +147,7 @@ Status write_camera_model(const std::filesystem::path& path, const CameraModel& 
       return make_error(ErrorCode::kIoError, "{}: cannot write calibration file", path.string());
     write_camera_model_keys(fs, m);
     return ok_status();
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
   }
 }

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 namespace dreamsense {
 namespace {
 
@@ -61,6 +64,16 @@ TEST(CameraModel, CheckRejectsANonRotation) {
   m.K = cv::Matx33d(10, 0, 5, 0, 10, 5, 0, 0, 1);
   m.R = cv::Matx33d(1, 0, 0, 0, 1, 0, 0, 0, 2);
   EXPECT_FALSE(m.check());
+}
+
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, CameraModelOpenCvCannotParseIsAnError) {
+  const std::filesystem::path p =
+      std::filesystem::path(::testing::TempDir()) / "ds_fuzz_camera_model.yaml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(read_camera_model(p));
+  std::filesystem::remove(p);
 }
 
 }  // namespace

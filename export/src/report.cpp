@@ -551,7 +551,9 @@ std::string HtmlReport::build(const sources::SessionManifest& m, const ReportCon
     for (const auto& [name, s] : it->second.series) {
       // A quantity that never changes (e.g. held_s while there is no mutual gaze) says nothing
       // a chart would show better than the summary.
-      if (std::all_of(s.v.begin(), s.v.end(), [&](float v) { return v == s.v.front(); })) continue;
+      if (std::all_of(s.v.begin(), s.v.end(),
+                      [&values = s.v](float v) { return v == values.front(); }))
+        continue;  // (init-capture: clang 14 cannot capture a structured binding)
       auto& list = by_unit[unit_of(name)];
       if (list.size() < 6) list.push_back({name, &s.t_s, &s.v});
     }

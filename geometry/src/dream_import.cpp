@@ -4,6 +4,7 @@
 #include "dreamsense/core/opencv_error.hpp"
 
 #include <cmath>
+#include <exception>
 #include <sstream>
 
 namespace dreamsense::geometry {
@@ -54,7 +55,7 @@ Result<cv::FileStorage> open(const std::filesystem::path& path) {
       return make_error(ErrorCode::kCorruptData, "{}: not an OpenCV FileStorage file",
                         path.string());
     return fs;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: unreadable ({})", path.string(),
                       opencv_reason(e));
   }
@@ -112,7 +113,7 @@ Result<DreamIntrinsics> read_dream_intrinsics(const std::filesystem::path& path,
                          out.K(0, 2), out.K(1, 2), image_size->width, image_size->height));
     }
     return out;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
 }
@@ -148,7 +149,7 @@ Result<DreamExtrinsics> read_dream_extrinsics(const std::filesystem::path& path)
            "the top Kinect's extrinsics do not fit the USB cameras' convention (camera_from_world, "
            "world = Kinect0 colour); imported as-is, recalibrate before use");
     return out;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
 }
@@ -206,7 +207,7 @@ Result<DreamObjectFile> read_dream_object_file(const std::filesystem::path& path
                         "{}: neither DeskWorld_R_mat nor Point_C: not a DREAM ObjectFile",
                         path.string());
     return out;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
 }

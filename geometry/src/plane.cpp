@@ -4,6 +4,7 @@
 #include "dreamsense/geometry/calibration_io.hpp"
 
 #include <cmath>
+#include <exception>
 
 namespace dreamsense::geometry {
 
@@ -117,7 +118,7 @@ Status write_table_frame(const std::filesystem::path& path, const TableFrame& ta
         for (int j = 0; j < 3; ++j) pts.at<double>(i, j) = table.points[static_cast<size_t>(i)][j];
       fs << "points" << pts;
       return ok_status();
-    } catch (const cv::Exception& e) {
+    } catch (const std::exception& e) {
       return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
     }
   });
@@ -153,7 +154,7 @@ Result<TableFrame> read_table_frame(const std::filesystem::path& path) {
                         "{}: plane_normal is not unit or world_from_table_R is not a rotation",
                         path.string());
     return tf;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
 }

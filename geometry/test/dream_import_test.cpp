@@ -128,5 +128,16 @@ TEST_F(DreamImport, ObjectFileDeskRotationIsRepairedAndValuesConverted) {
   EXPECT_FALSE(read_dream_object_file(write("empty.xml", xml_file("<Foo>1</Foo>\n"))));
 }
 
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, DreamFilesOpenCvCannotParseAreErrors) {
+  const std::filesystem::path p = std::filesystem::path(::testing::TempDir()) / "ds_fuzz_dream.xml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(read_dream_intrinsics(p));
+  EXPECT_FALSE(read_dream_extrinsics(p));
+  EXPECT_FALSE(read_dream_object_file(p));
+  std::filesystem::remove(p);
+}
+
 }  // namespace
 }  // namespace dreamsense::geometry

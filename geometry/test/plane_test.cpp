@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <unistd.h>
 
 namespace dreamsense::geometry {
@@ -72,6 +73,16 @@ TEST(TableFrame, AxesOriginHeightAndFileRoundTrip) {
   EXPECT_EQ(back->points.size(), 3u);
   std::filesystem::remove(path);
   EXPECT_FALSE(read_table_frame(path));
+}
+
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, TableFrameOpenCvCannotParseIsAnError) {
+  const std::filesystem::path p =
+      std::filesystem::path(::testing::TempDir()) / "ds_fuzz_table.yaml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(read_table_frame(p));
+  std::filesystem::remove(p);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "dreamsense/sources/video_file.hpp"
 
 #include <algorithm>
+#include <sys/resource.h>
 
 namespace dreamsense::runner {
 namespace fs = std::filesystem;
@@ -46,6 +47,27 @@ nlohmann::json damage_json(const std::vector<sources::StreamDamage>& damage) {
 }  // namespace
 
 nlohmann::json AnalysisSummary::to_json() const {
+  nlohmann::json minutes = nlohmann::json::array();
+  for (size_t i = 0; i < per_minute.size(); ++i) {
+    const Minute& m = per_minute[i];
+    const auto& all = pipeline.tick_latency_ms;
+    const size_t begin = std::min<size_t>(m.first_tick, all.size());
+    std::vector<double> v(
+        all.begin() + static_cast<std::ptrdiff_t>(begin),
+        all.begin() + static_cast<std::ptrdiff_t>(std::min<size_t>(begin + m.ticks, all.size())));
+    std::sort(v.begin(), v.end());
+    minutes.push_back({{"minute", i},
+                       {"ticks", m.ticks},
+                       {"tick_latency_ms_median", v.empty() ? 0.0 : v[v.size() / 2]},
+                       {"peak_rss_mb", m.peak_rss_mb}});
+  }
+  nlohmann::json sensor_json = nlohmann::json::object();
+  for (const auto& [id, st] : sensors)
+    sensor_json[id] = {
+        {"status", st.offline ? "sensor_offline" : "ok"},
+        {"ticks_with_data", st.ticks_with_data},
+        {"last_stamp_ns", st.last_stamp_ns ? nlohmann::json(*st.last_stamp_ns) : nlohmann::json()},
+        {"offline_ticks", st.offline_ticks}};
   nlohmann::json stages = nlohmann::json::array();
   for (const auto& a : pipeline.analyzers) {
     std::vector<double> v = a.latency_ms;
@@ -69,6 +91,8 @@ nlohmann::json AnalysisSummary::to_json() const {
           {"status_counts", status_counts},
           {"damage", damage_json(damage)},
           {"non_finite_values", non_finite},
+          {"per_minute", minutes},
+          {"sensors", sensor_json},
           {"outputs", outs},
           {"input", input}};
 }
@@ -81,6 +105,13 @@ bool is_video_input(const fs::path& path) {
 }
 
 namespace {
+
+// The process's peak resident memory so far (getrusage: kB on Linux).
+double peak_rss_mb() {
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) != 0) return 0;
+  return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
 
 // Session errors name files relative to the session folder; show where that folder is.
 Error in_session(Error e, const fs::path& session_dir) {
@@ -180,7 +211,48 @@ Result<AnalysisSummary> run_plan(
     oo.blur_faces = options.blur_faces;
     DS_RETURN_IF_ERROR(overlay.open(out("overlay.mp4"), oo));
   }
+  // Sensors that go silent while the others deliver are marked (and logged) sensor_offline.
+  for (const auto& id : plan.used) summary.sensors[id];
+  const Duration offline_after = options.evaluator.offline_after;
+  Timestamp first_tick = Timestamp::unset();
+  auto track_sensors = [&summary, &first_tick, offline_after](const MultiFrame& tick) {
+    auto seen = [&summary](const SensorId& id, Timestamp stamp) {
+      auto& s = summary.sensors[id];
+      s.ticks_with_data++;
+      s.last_stamp_ns = stamp.ns();
+    };
+    for (const auto& [id, f] : tick.frames)
+      if (f) seen(id, f->stamp);
+    for (const auto& [id, c] : tick.chunks)
+      if (!c.empty()) seen(id, c.back()->stamp);
+    for (auto& [id, s] : summary.sensors) {
+      // A sensor that has not delivered yet counts from the first tick.
+      const Timestamp since = s.last_stamp_ns ? Timestamp::from_ns(*s.last_stamp_ns) : first_tick;
+      const bool offline = tick.stamp - since > offline_after;
+      if (offline && !s.offline)
+        log::warn("{}: no data since {} (more than {} s): sensor_offline", id, since.to_string(),
+                  offline_after.seconds());
+      else if (!offline && s.offline)
+        log::info("{}: delivering again at {}", id, tick.stamp.to_string());
+      s.offline = offline;
+      s.offline_ticks += offline ? 1 : 0;
+    }
+  };
+  // Minute boundaries of the input: the peak memory so far is sampled as each minute ends.
+  uint64_t ticks_seen = 0;
+  auto close_minute = [&summary] {
+    if (!summary.per_minute.empty()) summary.per_minute.back().peak_rss_mb = peak_rss_mb();
+  };
   auto on_tick = [&](const MultiFrame& tick, const BlackboardView& view) -> Status {
+    if (!first_tick.is_set()) first_tick = tick.stamp;
+    const auto minute = static_cast<size_t>((tick.stamp - first_tick).seconds() / 60.0);
+    while (summary.per_minute.size() <= minute) {
+      close_minute();
+      summary.per_minute.push_back({ticks_seen, 0, 0});
+    }
+    ++summary.per_minute.back().ticks;
+    ++ticks_seen;
+    track_sensors(tick);
     if (want_overlay) DS_RETURN_IF_ERROR(overlay.add(tick, view));
     if (options.on_tick_frames) options.on_tick_frames(tick);
     auto records = evaluator.evaluate(tick, view);
@@ -214,6 +286,7 @@ Result<AnalysisSummary> run_plan(
   if (auto s = (*pipeline)->run(source, on_tick, on_progress); !s)
     return tl::unexpected(in_session(s.error(), error_dir));
   summary.pipeline = (*pipeline)->stats();
+  close_minute();
   if (damage_of) summary.damage = damage_of();
 
   if (write) {

@@ -138,8 +138,9 @@ Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
   // Roles from pipeline.yaml replace the session's for the streams it names.
   sources::SessionManifest manifest = manifest_in;
   for (const auto& [id, roles] : config.roles) {
-    auto it = std::find_if(manifest.streams.begin(), manifest.streams.end(),
-                           [&](const sources::StreamEntry& s) { return s.id == id; });
+    auto it =
+        std::find_if(manifest.streams.begin(), manifest.streams.end(),
+                     [&wanted = id](const sources::StreamEntry& s) { return s.id == wanted; });
     if (it == manifest.streams.end())
       return make_error(ErrorCode::kInvalidArgument, "{}: the session has no stream '{}'",
                         config.where("roles." + id), id);

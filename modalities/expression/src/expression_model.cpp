@@ -2,6 +2,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <exception>
 #include <fstream>
 
 namespace dreamsense::expression {
@@ -247,7 +248,7 @@ Result<ExpressionModel> ExpressionModel::load(const std::filesystem::path& path)
     auto c = vision::read_linear(fs["classifier"], where);
     if (!c) return tl::unexpected(c.error());
     m.classifier_ = std::move(*c);
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception&) {
     return make_error(ErrorCode::kCorruptData, "{}: not a readable expression model", where);
   }
   if (m.labels_.size() < 2 || static_cast<int>(m.labels_.size()) != m.classifier_.classes())

@@ -183,5 +183,15 @@ TEST(ExpressionSmoothing, NoFlickerButSustainedChangesGetThrough) {
   EXPECT_EQ(s.tracks(), 2u);
 }
 
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, ExpressionModelOpenCvCannotParseIsAnError) {
+  const std::filesystem::path p =
+      std::filesystem::path(::testing::TempDir()) / "ds_fuzz_expression.yaml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(ExpressionModel::load(p));
+  std::filesystem::remove(p);
+}
+
 }  // namespace
 }  // namespace dreamsense::expression

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 
 namespace dreamsense::face_identity {
@@ -277,7 +278,7 @@ Result<FaceGallery> FaceGallery::load(const std::filesystem::path& path) {
     for (const cv::FileNode& n : fs["names"])
       g.set_name(static_cast<int>(n["id"]), static_cast<std::string>(n["name"]));
     return g;
-  } catch (const cv::Exception&) {
+  } catch (const std::exception&) {
     return make_error(ErrorCode::kCorruptData, "{}: not a readable face gallery", where);
   }
 }

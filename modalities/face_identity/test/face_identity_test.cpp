@@ -147,5 +147,15 @@ TEST(IdentityFeatures, LbpDescriptorIsUnitLengthForLbpTt) {
   EXPECT_NEAR(n, 1.0, 1e-5);
 }
 
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, FaceGalleryOpenCvCannotParseIsAnError) {
+  const std::filesystem::path p =
+      std::filesystem::path(::testing::TempDir()) / "ds_fuzz_gallery.yaml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(FaceGallery::load(p));
+  std::filesystem::remove(p);
+}
+
 }  // namespace
 }  // namespace dreamsense::face_identity

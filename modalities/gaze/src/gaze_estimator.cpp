@@ -8,6 +8,7 @@
 
 #include <opencv2/core/persistence.hpp>
 
+#include <exception>
 #include <fstream>
 #include <optional>
 #include <utility>
@@ -168,7 +169,7 @@ Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& 
     }
     fs << "samples" << model.samples << "provenance" << model.provenance;
     fs.release();
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
   }
   std::error_code ec;
@@ -225,7 +226,7 @@ Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
                         path.string());
     m.samples = fs["samples"].empty() ? 0 : static_cast<int>(fs["samples"]);
     m.provenance = fs["provenance"].empty() ? "" : static_cast<std::string>(fs["provenance"]);
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
   for (const EyeAngleModel* e : {&m.right_eye, &m.left_eye})

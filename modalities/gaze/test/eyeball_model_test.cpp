@@ -143,5 +143,14 @@ TEST(AnatomicalEyeball, BehindTheOpeningAndStraightAhead) {
   EXPECT_FALSE(bad.check());
 }
 
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, GazeModelOpenCvCannotParseIsAnError) {
+  const std::filesystem::path p = std::filesystem::path(::testing::TempDir()) / "ds_fuzz_gaze.yaml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(read_gaze_model(p));
+  std::filesystem::remove(p);
+}
+
 }  // namespace
 }  // namespace dreamsense::gaze

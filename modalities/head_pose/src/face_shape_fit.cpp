@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -150,7 +151,7 @@ Status write_face_model(const std::string& path, const FaceModel3d& model,
     }
     fs << "]";
     fs.release();
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kIoError, "{}: {}", path, opencv_reason(e));
   }
   std::error_code ec;
@@ -182,7 +183,7 @@ Result<FaceModel3d> read_face_model(const std::string& path) {
       m.points_m.emplace_back(static_cast<double>(p["x"]), static_cast<double>(p["y"]),
                               static_cast<double>(p["z"]));
     }
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path, opencv_reason(e));
   }
   if (auto s = m.check(); !s)
@@ -206,7 +207,7 @@ Result<cv::Matx33d> read_model_from_head(const std::filesystem::path& gaze_yaml)
       return make_error(ErrorCode::kCorruptData, "{}: model_from_head is not a rotation",
                         gaze_yaml.string());
     return m;
-  } catch (const cv::Exception&) {
+  } catch (const std::exception&) {
     return make_error(ErrorCode::kCorruptData, "{}: not a readable gaze calibration (YAML)",
                       gaze_yaml.string());
   }

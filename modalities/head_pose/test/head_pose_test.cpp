@@ -391,5 +391,16 @@ TEST(FaceModelFile, RoundTripAndErrors) {
   std::filesystem::remove_all(dir);
 }
 
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, FaceModelOpenCvCannotParseIsAnError) {
+  const std::filesystem::path p =
+      std::filesystem::path(::testing::TempDir()) / "ds_fuzz_face_model.yaml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(read_face_model(p.string()));
+  EXPECT_FALSE(read_model_from_head(p));
+  std::filesystem::remove(p);
+}
+
 }  // namespace
 }  // namespace dreamsense::head_pose

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <map>
 #include <set>
 
@@ -393,7 +394,7 @@ Status ObjectGallery::save(const std::filesystem::path& path) const {
       fs << "}";
     }
     fs.release();
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kIoError, "{}: cannot write: {}", path.string(), e.what());
   }
   std::error_code ec;
@@ -450,7 +451,7 @@ Result<ObjectGallery> ObjectGallery::load(const std::filesystem::path& path) {
       g.svm_->read(fs["baseline_svm"]);
     }
     return g;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: cannot read: {}", p, e.what());
   }
 }

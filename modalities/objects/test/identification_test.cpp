@@ -161,5 +161,15 @@ TEST(ObjectGallery, ShippedDemoGalleryLoads) {
     EXPECT_EQ(g->identify(view_of({k, {0.0, 0.27, 0.6}, 0}, 3)).id, kUnknownObject) << k;
 }
 
+// Found by fuzzing (issue 18, fuzz/README.md): on this 12-byte file OpenCV's YAML parser throws
+// std::length_error, which used to escape the reader and end the program; it must be an error.
+TEST(FuzzRegression, ObjectGalleryOpenCvCannotParseIsAnError) {
+  const std::filesystem::path p =
+      std::filesystem::path(::testing::TempDir()) / "ds_fuzz_objects.yaml";
+  std::ofstream(p) << "%YAML:1.\n{ :";
+  EXPECT_FALSE(ObjectGallery::load(p));
+  std::filesystem::remove(p);
+}
+
 }  // namespace
 }  // namespace dreamsense::objects

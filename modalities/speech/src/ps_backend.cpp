@@ -184,6 +184,26 @@ fsg_model_t* read_fsg(const std::string& text, logmath_t* lmath, float lw) {
 
 }  // namespace
 
+Result<std::string> compile_jsgf(const std::string& jsgf, const std::string& source,
+                                 const std::vector<std::string>& garbage_phones) {
+  // PocketSphinx's defaults (-logbase 1.0001, -lw 6.5): the decoder compiles with its own.
+  logmath_t* lmath = logmath_init(1.0001, 0, 0);
+  if (!lmath) return make_error(ErrorCode::kInternal, "sphinxbase: logmath_init failed");
+  const float lw = 6.5f;
+  auto text = jsgf_to_fsg_text(jsgf, source, lmath, lw);
+  Result<std::string> out = text;
+  if (text) {
+    fsg_model_t* plain = read_fsg(*text, lmath, lw);
+    if (!plain)
+      out = make_error(ErrorCode::kInternal, "{}: cannot re-read compiled grammar", source);
+    else
+      fsg_model_free(plain);
+    if (out && !garbage_phones.empty()) out = add_garbage(*text, garbage_phones, 1.0, true);
+  }
+  logmath_free(lmath);
+  return out;
+}
+
 PsDecoder::~PsDecoder() {
   if (ps_) ps_free(static_cast<ps_decoder_t*>(ps_));
 }

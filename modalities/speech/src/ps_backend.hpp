@@ -9,6 +9,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace dreamsense::speech::detail {
 
@@ -31,6 +32,12 @@ struct PsConfig {
   double frequency_warp = 1.0;  // 1 = off
   std::string mfc_log_dir;      // -mfclogdir (empty = off)
 };
+
+// What PsDecoder::create does to a grammar before it loads a model: JSGF text -> sphinxbase FSG
+// text (sphinxbase's compiler; errors name `source`), re-read, plus the garbage loop over
+// `garbage_phones` when not empty. Without a model (tests, fuzz/fuzz_jsgf.cpp).
+Result<std::string> compile_jsgf(const std::string& jsgf, const std::string& source,
+                                 const std::vector<std::string>& garbage_phones);
 
 class PsDecoder {
  public:

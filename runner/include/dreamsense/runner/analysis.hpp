@@ -76,6 +76,25 @@ struct AnalysisSummary {
   std::vector<sources::StreamDamage> damage;
   // Per primitive: ok answers that held a NaN/infinity and were reported as no_data instead.
   std::map<std::string, int> non_finite;
+  // Resources per minute of the input (from the first tick; the last minute may be partial),
+  // for soak tests and long recordings: summary.json "per_minute" (docs/outputs.md).
+  struct Minute {
+    uint64_t first_tick = 0;  // index into pipeline.tick_latency_ms
+    uint64_t ticks = 0;
+    double peak_rss_mb = 0;  // the process's peak resident memory at the minute's end
+  };
+  std::vector<Minute> per_minute;
+  // Per stream read: ticks that held its data, its newest stamp, and the ticks at which it had
+  // delivered nothing for the evaluator's offline_after (a camera unplugged, a video "device"
+  // that ended, a recording stream that stops early) while the others went on; status
+  // "sensor_offline" when it was still silent at the end. summary.json "sensors".
+  struct Sensor {
+    uint64_t ticks_with_data = 0;
+    std::optional<int64_t> last_stamp_ns;
+    uint64_t offline_ticks = 0;
+    bool offline = false;
+  };
+  std::map<SensorId, Sensor> sensors;
   nlohmann::json to_json() const;
 };
 

@@ -1,0 +1,93 @@
+// A live dry run whose cameras are video files (issue 18): one "device" runs out of frames
+// mid-session; the analysis goes on with the other camera and marks the ended one
+// sensor_offline (summary.json "sensors"), as when a camera is unplugged.
+
+#include "dreamsense/sources/session.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
+
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The demo's camera `id` as an MJPG video of `repeats` x its frames (25 fps).
+void write_video(const fs::path& demo, const std::string& id, int repeats, const fs::path& out) {
+  dreamsense::sources::SessionReaderOptions ro;
+  ro.only = {id};
+  auto reader = dreamsense::sources::SessionReader::open(demo, ro);
+  ASSERT_TRUE(reader) << reader.error().message;
+  std::vector<cv::Mat> frames;
+  for (auto f = (*reader)->next(); f; f = (*reader)->next())
+    frames.push_back(std::get<dreamsense::ColorImage>((*f)->payload).image);
+  ASSERT_FALSE(frames.empty());
+  cv::VideoWriter w(out.string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                    frames.front().size());
+  ASSERT_TRUE(w.isOpened());
+  for (int k = 0; k < repeats; ++k)
+    for (const auto& f : frames) w.write(f);
+}
+
+TEST(Live, CameraThatRunsOutIsMarkedOfflineAndTheOtherIsStillAnalysed) {
+  const fs::path demo = DREAMSENSE_CLI_DEMO_DIR;
+  ASSERT_TRUE(fs::exists(demo / "session.yaml")) << "run the fixture cli_demo_fixture first";
+  const fs::path dir = fs::temp_directory_path() / ("ds_live_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  write_video(demo, "camera_middle", 3, dir / "middle.avi");  // 12 s
+  write_video(demo, "camera_left", 1, dir / "left.avi");      // 4 s: ends mid-session
+  if (HasFatalFailure()) return;
+  std::ofstream(dir / "live.yaml")
+      << "session: {name: live-offline, metadata: {subject: demo_child}}\ncameras:\n"
+      << "  - {id: camera_middle, device: middle.avi, calibration: "
+      << (demo / "calib" / "camera_middle.yaml").string() << "}\n"
+      << "  - {id: camera_left, device: left.avi, calibration: "
+      << (demo / "calib" / "camera_left.yaml").string() << "}\n";
+  // No --duration: the run ends when the last "device" does (--duration caps it if not).
+  const std::string cmd = std::string(DREAMSENSE_EXE) + " live --config " +
+                          (dir / "live.yaml").string() + " --out " + (dir / "out").string() +
+                          " --duration 30 2> " + (dir / "err.txt").string();
+  const int status = std::system(cmd.c_str());
+  const std::string err = slurp(dir / "err.txt");
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << err;
+
+  const json summary = json::parse(slurp(dir / "out" / "summary.json"));
+  const json& left = summary.at("sensors").at("camera_left");
+  const json& middle = summary.at("sensors").at("camera_middle");
+  EXPECT_EQ(left["status"], "sensor_offline") << summary["sensors"].dump();
+  EXPECT_GT(left["offline_ticks"].get<int>(), 0);
+  EXPECT_EQ(middle["status"], "ok") << summary["sensors"].dump();
+  EXPECT_NE(err.find("camera_left: no data since"), std::string::npos) << err;
+  // The analysis went on after the left camera ended: faces from the middle camera more than a
+  // second (offline_after) after the left camera's last frame.
+  const int64_t left_end =
+      left["last_stamp_ns"].is_null() ? int64_t{0} : left["last_stamp_ns"].get<int64_t>();
+  int faces_after = 0;
+  std::ifstream in(dir / "out" / "primitives.jsonl");
+  for (std::string line; std::getline(in, line);) {
+    const json r = json::parse(line);
+    if (r["primitive"] == "getFaces" && r["status"] == "ok" &&
+        r["stamp_ns"].get<int64_t>() > left_end + 1'000'000'000)
+      ++faces_after;
+  }
+  EXPECT_GE(faces_after, 5) << "ticks: " << summary["ticks"];
+  fs::remove_all(dir);
+}
+
+}  // namespace
