@@ -1,17 +1,11 @@
 // `dreamsense analyze SESSION --out DIR`
 
+#include "dreamsense/live/live_analysis.hpp"
 #include "dreamsense/primitives/catalogue.hpp"
-#include "dreamsense/publish/dds_publisher.hpp"
 #include "dreamsense/runner/analysis.hpp"
-#include "dreamsense/sources/recorder.hpp"
-#include "dreamsense/ui/operator_page.hpp"
 
-#include <atomic>
-#include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <optional>
-#include <thread>
 
 #include "commands.hpp"
 #include "progress.hpp"
@@ -187,15 +181,20 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
                                                            bool quiet, SelfCalibrationMode mode,
                                                            bool save_subject) {
   runner::AnalysisOptions o = o_in;
-  std::optional<nlohmann::json> self_calibration;
-  if (!o.out_dir.empty() && needs_self_calibration(o, mode)) {
-    DS_ASSIGN_OR_RETURN(self_calibration,
-                        self_calibrate_for_analysis(o, mode, quiet, save_subject));
+  std::optional<nlohmann::json> calibration_status;
+  if (!o.out_dir.empty() && self_calibration::needs_self_calibration(o, mode)) {
+    self_calibration::ForAnalysisOptions so;
+    so.mode = mode;
+    so.save_subject = save_subject;
+    if (!quiet)
+      so.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+    DS_ASSIGN_OR_RETURN(calibration_status, self_calibration::self_calibrate_for_analysis(o, so));
   }
   auto r = with_progress(
       "analyse", quiet, [&](const auto& progress) { return runner::analyze_session(o, progress); });
-  if (r && self_calibration)
-    DS_RETURN_IF_ERROR(add_self_calibration_to_summary(o.out_dir, *self_calibration));
+  if (r && calibration_status)
+    DS_RETURN_IF_ERROR(
+        self_calibration::add_self_calibration_to_summary(o.out_dir, *calibration_status));
   return r;
 }
 
@@ -293,11 +292,6 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   });
 }
 
-namespace {
-std::atomic<bool> g_stop_live{false};
-extern "C" void on_live_stop_signal(int /*signal*/) { g_stop_live = true; }
-}  // namespace
-
 void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<AnalyzeFlags>();
   CLI::App* cmd = app.add_subcommand(
@@ -333,109 +327,54 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       ->default_val(flags->ui_host);
   add_analysis_flags(*cmd, *flags);
   cmd->callback([flags, &g, &exit_code] {
-    std::unique_ptr<publish::DdsPublisher> publisher;
+    live::LiveAnalysisOptions lo;
+    lo.analysis.out_dir = flags->out;
+    if (auto s = apply_analysis_flags(*flags, lo.analysis); !s) {
+      exit_code = fail(s.error());
+      return;
+    }
+    lo.config = flags->config;
+    if (!flags->record.empty()) lo.record = flags->record;
+    lo.duration_s = flags->duration_s;
     if (flags->publish == "dds") {
       publish::DdsPublisherOptions po;
       po.domain_id = flags->dds_domain;
       po.network = flags->dds_network;
-      auto p = publish::DdsPublisher::create(po);
-      if (!p) {
-        exit_code = fail(p.error());
-        return;
-      }
-      publisher = std::move(*p);
+      lo.dds = po;
     }
-    auto config = sources::read_record_config(flags->config);
-    if (!config) {
-      exit_code = fail(config.error());
-      return;
-    }
-    runner::AnalysisOptions o;
-    o.out_dir = flags->out;
-    if (auto s = apply_analysis_flags(*flags, o); !s) {
-      exit_code = fail(s.error());
-      return;
-    }
-    std::unique_ptr<ui::OperatorPage> page;
     if (flags->ui_port >= 0) {
       ui::OperatorPageOptions uo;
       uo.port = flags->ui_port;
       uo.host = flags->ui_host;
       uo.blur_faces = flags->blur_faces;
-      auto p = ui::OperatorPage::start(uo);
-      if (!p) {
-        exit_code = fail(p.error());
-        return;
-      }
-      page = std::move(*p);
-      std::fprintf(stderr, "operator page: %s\n", page->url().c_str());
-      auto ticks = std::make_shared<uint64_t>(0);
-      o.on_tick_frames = [&page, ticks](const MultiFrame& tick) {
-        for (const auto& [id, frame] : tick.frames) page->update_frame(id, frame);
-        page->set_status({{"ticks", ++*ticks}, {"stamp_s", tick.stamp.seconds()}});
-      };
+      lo.ui = uo;
     }
-    if (publisher || page)
-      o.on_records = [&publisher, &page](const std::vector<primitives::PrimitiveRecord>& records) {
-        if (page) page->update(records);
-        return publisher ? publisher->publish(records) : ok_status();
-      };
-    std::optional<std::filesystem::path> record;
-    if (!flags->record.empty()) record = flags->record;
-    auto capture = sources::LiveCapture::open(*config, record);
-    if (!capture) {
-      exit_code = fail(capture.error());
-      return;
-    }
-    std::signal(SIGINT, on_live_stop_signal);
-    std::signal(SIGTERM, on_live_stop_signal);
-    if (!g.quiet)
-      std::fprintf(stderr, "live analysis into %s%s (%s)\n", flags->out.c_str(),
-                   record ? (" recording into " + record->string()).c_str() : "",
-                   flags->duration_s > 0 ? fmt::format("{} s", flags->duration_s).c_str()
-                                         : "Ctrl-C to stop");
-    std::atomic<bool> analysis_done{false};
-    std::atomic<bool> analysis_ready{false};
-    o.on_ready = [&analysis_ready] { analysis_ready = true; };
-    Result<runner::AnalysisSummary> result = make_error(ErrorCode::kInternal, "not run");
-    std::thread analysis([&] {
-      result = runner::analyze_live(o, **capture);
-      analysis_done = true;
-      (*capture)->stop();  // an analysis error ends the capture too
-    });
-    // --duration counts analysed time: from when the analysers are ready (models loaded).
-    while (!analysis_done && !analysis_ready && !g_stop_live)
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    const auto start = std::chrono::steady_clock::now();
-    while (!analysis_done && !g_stop_live &&
-           !(flags->duration_s > 0 &&
-             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >=
-                 flags->duration_s))
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    (*capture)->stop();
-    analysis.join();
-    std::signal(SIGINT, SIG_DFL);
-    std::signal(SIGTERM, SIG_DFL);
-    auto stats = (*capture)->finish();
-    if (!result) {
-      exit_code = fail(result.error());
-      return;
-    }
-    if (!stats) {
-      exit_code = fail(stats.error());
+    lo.on_ui_started = [](const std::string& url) {
+      std::fprintf(stderr, "operator page: %s\n", url.c_str());
+    };
+    lo.on_capture_started = [&] {
+      if (!g.quiet)
+        std::fprintf(stderr, "live analysis into %s%s (%s)\n", flags->out.c_str(),
+                     lo.record ? (" recording into " + lo.record->string()).c_str() : "",
+                     flags->duration_s > 0 ? fmt::format("{} s", flags->duration_s).c_str()
+                                           : "Ctrl-C to stop");
+    };
+    auto r = live::run_live_analysis(lo);
+    if (!r) {
+      exit_code = fail(r.error());
       return;
     }
     if (!g.quiet) {
-      if (!g.quiet) print_summary(*result, o.out_dir);
-      for (const auto& [id, st] : stats->streams)
+      print_summary(r->analysis, lo.analysis.out_dir);
+      for (const auto& [id, st] : r->capture.streams)
         std::fprintf(stderr, "  %s: %llu frames captured, %llu dropped, %llu overruns\n",
                      id.c_str(), static_cast<unsigned long long>(st.frames_written),
                      static_cast<unsigned long long>(st.frames_dropped),
                      static_cast<unsigned long long>(st.overruns));
-      if (publisher)
+      if (r->dds)
         std::fprintf(stderr, "DDS: %llu messages published, %llu refused\n",
-                     static_cast<unsigned long long>(publisher->stats().published),
-                     static_cast<unsigned long long>(publisher->stats().failed));
+                     static_cast<unsigned long long>(r->dds->published),
+                     static_cast<unsigned long long>(r->dds->failed));
     }
   });
 }

@@ -1,129 +1,16 @@
 // Self-calibration before an analysis (issue 15): `--subject auto`, and the default when the
-// session's subject has no calibration folder. The algorithm is in modalities/head_pose
-// (self_calibration.hpp) and eval (self_calibration.hpp); this only decides when it runs, points
-// the analysis at its files and records its status in summary.json.
-
-#include "dreamsense/core/log.hpp"
-#include "dreamsense/eval/self_calibration.hpp"
-#include "dreamsense/sources/session.hpp"
-
-#include <fmt/format.h>
-
-#include <cstdio>
-#include <fstream>
+// session's subject has no calibration folder. The library self_calibration/ decides when it
+// runs, builds the face model from the session and points the analysis at its files; this maps
+// the flags to its mode.
 
 #include "commands.hpp"
 
 namespace dreamsense::app {
-namespace fs = std::filesystem;
 
 SelfCalibrationMode self_calibration_mode(const SubjectFlags& flags) {
   if (flags.subject == "auto") return SelfCalibrationMode::kAlways;
   if (flags.subject == "none") return SelfCalibrationMode::kNever;
   return SelfCalibrationMode::kWhenNoSubject;
-}
-
-bool needs_self_calibration(const runner::AnalysisOptions& o, SelfCalibrationMode mode) {
-  if (mode == SelfCalibrationMode::kAlways) return true;
-  if (mode == SelfCalibrationMode::kNever) return false;
-  if (!o.plan.subject_from_session || !o.plan.subject_dir.empty() || !o.plan.face_model.empty() ||
-      !o.plan.gaze_model.empty())
-    return false;
-  auto manifest = sources::read_manifest(o.session_dir);
-  if (!manifest) return false;  // the analysis reports the error
-  // Only sessions with calibrated colour cameras (the self-calibration triangulates).
-  bool colour = false;
-  for (const auto& s : manifest->streams)
-    if (s.kind == SensorKind::kColor && !s.calibration.empty()) colour = true;
-  if (!colour) return false;
-  const auto it = manifest->metadata.find("subject");
-  if (it == manifest->metadata.end() || it->second.empty()) return true;
-  return !fs::is_directory(o.plan.subjects_dir / it->second);
-}
-
-Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
-                                                   SelfCalibrationMode mode, bool quiet,
-                                                   bool save_subject) {
-  if (!quiet) std::fprintf(stderr, "self-calibration: the child's face from the session...\n");
-  DS_ASSIGN_OR_RETURN(const eval::SessionSelfCalibration c,
-                      eval::self_calibrate_session(o.session_dir));
-  const fs::path dir = o.out_dir / "self_calibration";
-  DS_RETURN_IF_ERROR(eval::write_self_calibration(c, dir));
-  nlohmann::json j = c.to_json();
-  if (mode == SelfCalibrationMode::kAlways) o.plan.subject_from_session = false;
-  if (c.face.converged()) {
-    o.plan.face_model = dir / "face_model.yaml";
-    o.plan.gaze_model = dir / "gaze.yaml";
-    // The planner would otherwise log that the subject's missing folder means a generic model.
-    if (o.plan.subject_from_session) {
-      if (auto manifest = sources::read_manifest(o.session_dir)) {
-        const auto it = manifest->metadata.find("subject");
-        if (it != manifest->metadata.end())
-          log::info("no calibration for subject '{}' in {}: self-calibrated from the session",
-                    it->second, o.plan.subjects_dir.string());
-      }
-      o.plan.subject_from_session = false;
-    }
-    j["face_model"] = "self-calibrated";
-    j["files"] = dir.string();
-    if (!quiet)
-      std::fprintf(stderr, "self-calibration converged: %s (%.1f s CPU)\n", c.face.reason.c_str(),
-                   c.cpu_s);
-    if (save_subject) {
-      auto manifest = sources::read_manifest(o.session_dir);
-      if (!manifest) return tl::unexpected(manifest.error());
-      const auto it = manifest->metadata.find("subject");
-      if (it == manifest->metadata.end() || it->second.empty() ||
-          it->second.find('/') != std::string::npos)
-        return make_error(ErrorCode::kInvalidArgument,
-                          "{}: --save-subject needs the session's metadata subject id",
-                          o.session_dir.string());
-      const fs::path target = o.plan.subjects_dir / it->second;
-      if (fs::exists(target))
-        return make_error(ErrorCode::kInvalidArgument,
-                          "{}: subject folder exists; not overwritten by --save-subject",
-                          target.string());
-      std::error_code ec;
-      fs::create_directories(target, ec);
-      for (const char* name : {"face_model.yaml", "gaze.yaml", "self_calibration.json"})
-        if (!ec) fs::copy_file(dir / name, target / name, ec);
-      if (ec) return make_error(ErrorCode::kIoError, "{}: {}", target.string(), ec.message());
-      j["saved_to"] = target.string();
-      log::info("self-calibration saved to {}", target.string());
-    }
-  } else {
-    j["face_model"] = "generic_51 (self-calibration did not converge)";
-    log::warn(
-        "self-calibration did not converge ({}): {}; generic face model and built-in gaze "
-        "constants",
-        head_pose::to_string(c.face.status), c.face.reason);
-  }
-  return j;
-}
-
-Status add_self_calibration_to_summary(const fs::path& out_dir, const nlohmann::json& j) {
-  const fs::path path = out_dir / "summary.json";
-  nlohmann::json summary;
-  {
-    std::ifstream in(path);
-    if (!in) return make_error(ErrorCode::kNotFound, "{}: not written", path.string());
-    try {
-      in >> summary;
-    } catch (const nlohmann::json::exception& e) {
-      return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.what());
-    }
-  }
-  summary["self_calibration"] = j;
-  const fs::path partial = path.string() + ".partial";
-  {
-    std::ofstream f(partial);
-    f << summary.dump(2) << "\n";
-    if (!f) return make_error(ErrorCode::kIoError, "{}: cannot write", partial.string());
-  }
-  std::error_code ec;
-  fs::rename(partial, path, ec);
-  if (ec) return make_error(ErrorCode::kIoError, "{}: {}", path.string(), ec.message());
-  return ok_status();
 }
 
 }  // namespace dreamsense::app

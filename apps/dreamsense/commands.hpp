@@ -3,6 +3,7 @@
 
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/runner/analysis.hpp"
+#include "dreamsense/self_calibration/analysis.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -76,20 +77,12 @@ struct SubjectFlags {
 };
 void add_subject_flags(CLI::App& cmd, SubjectFlags& flags);
 void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o);
-// Self-calibration (issue 15, cmd_selfcal.cpp): `--subject auto` always; by default when the
-// session's subject has no calibration folder (and no explicit model file); never with
+// Self-calibration (issue 15, library self_calibration/): `--subject auto` always; by default
+// when the session's subject has no calibration folder (and no explicit model file); never with
 // `--subject none` or a subject folder. run_analysis_with_progress runs it first, uses its files
 // and adds its status to summary.json.
-enum class SelfCalibrationMode { kWhenNoSubject, kAlways, kNever };
-SelfCalibrationMode self_calibration_mode(const SubjectFlags& flags);
-bool needs_self_calibration(const runner::AnalysisOptions& o, SelfCalibrationMode mode);
-// Writes OUT/self_calibration/ and points `o` at its files when it converged; with
-// `save_subject`, also copies them to subjects_dir/<the session's subject> (a new folder).
-Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
-                                                   SelfCalibrationMode mode, bool quiet,
-                                                   bool save_subject);
-Status add_self_calibration_to_summary(const std::filesystem::path& out_dir,
-                                       const nlohmann::json& j);
+using self_calibration::SelfCalibrationMode;
+SelfCalibrationMode self_calibration_mode(const SubjectFlags& flags);  // cmd_selfcal.cpp
 Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o,
                                                            bool quiet, SelfCalibrationMode mode,
                                                            bool save_subject = false);

@@ -1,5 +1,7 @@
 #include "dreamsense/primitives/actions.hpp"
 
+#include "dreamsense/primitives/registry.hpp"
+
 namespace dreamsense::primitives {
 
 Answer<ClassLabelValue> identify_trajectory(const PrimitiveContext& ctx,
@@ -23,6 +25,12 @@ Answer<ClassLabelValue> identify_trajectory(const PrimitiveContext& ctx,
   a.value = std::move(v);
   a.confidence = obs.entry->confidence;
   return a;
+}
+
+// The row of the actions family.
+void register_actions_primitives(PrimitiveRegistry& r) {
+  r.add(PrimitiveId::kIdentifyTrajectory, {keys::kChildAction.name},
+        [](const PrimitiveContext& c) { return identify_trajectory(c); });
 }
 
 }  // namespace dreamsense::primitives

@@ -3,8 +3,17 @@
 #include "dreamsense/perception/sound_direction.hpp"
 #include "dreamsense/perception/speech.hpp"
 #include "dreamsense/perception/voice_id.hpp"
+#include "dreamsense/primitives/registry.hpp"
 
 namespace dreamsense::primitives {
+
+Status AudioPrimitiveOptions::check() const {
+  if (!(sound_direction.threshold >= 0 && sound_direction.threshold <= 1))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "AudioPrimitiveOptions: sound_direction threshold must be in [0, 1]");
+  return ok_status();
+}
+
 namespace {
 
 // The first sensor behind `key` (the audio stream), reported with every status.
@@ -64,6 +73,16 @@ Answer<SpeechValue> recognize_speech(const PrimitiveContext& ctx) {
   a.confidence = o.entry->confidence;
   a.value = SpeechValue{s.text, s.tag, s.confidence, s.start.ns(), s.end.ns()};
   return a;
+}
+
+// The rows of the audio family (the microphone array's analysers).
+void register_audio_primitives(PrimitiveRegistry& r) {
+  using P = PrimitiveId;
+  r.add(P::kGetSoundDirection, {keys::kSoundDirection.name}, [](const PrimitiveContext& c) {
+    return get_sound_direction(c, c.family_options<AudioPrimitiveOptions>().sound_direction);
+  });
+  r.add(P::kIdentifyVoice, {keys::kSpeakerIdentity.name}, identify_voice);
+  r.add(P::kRecognizeSpeech, {keys::kRecognizedSpeech.name}, recognize_speech);
 }
 
 }  // namespace dreamsense::primitives

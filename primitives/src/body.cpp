@@ -1,8 +1,17 @@
 #include "dreamsense/primitives/body.hpp"
 
+#include "dreamsense/primitives/registry.hpp"
+
 #include <cmath>
 
 namespace dreamsense::primitives {
+
+Status BodyPrimitiveOptions::check() const {
+  if (!(track_hand_dt_s >= 0))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "BodyPrimitiveOptions: track_hand_dt_s must be >= 0");
+  return ok_status();
+}
 
 namespace {
 constexpr double kArmRadToDeg = 180.0 / M_PI;
@@ -208,7 +217,7 @@ Answer<TrackValue> track_hand(const PrimitiveContext& ctx, const std::optional<T
       a.status = PrimitiveStatus::kNoData;
       return a;
     }
-    q = TrackQuery{*seed, ctx.options().track_hand_dt_s};
+    q = TrackQuery{*seed, ctx.family_options<BodyPrimitiveOptions>().track_hand_dt_s};
   }
   a.query = q;
   auto p = predict_hand(ctx.view().history(keys::kChildBody, 16), q.seed_m, q.dt_s);
@@ -223,6 +232,17 @@ Answer<TrackValue> track_hand(const PrimitiveContext& ctx, const std::optional<T
   v.samples = p->samples;
   answer_ok(a, b, v);
   return a;
+}
+
+// The rows of the body family: everything is answered from the child's skeleton.
+void register_body_primitives(PrimitiveRegistry& r) {
+  using P = PrimitiveId;
+  const std::vector<std::string> body{keys::kChildBody.name};
+  r.add(P::kGetArmAngle, body, get_arm_angle);
+  r.add(P::kGetBody, body, get_body);
+  r.add(P::kGetBodyPose, body, get_body_pose);
+  r.add(P::kGetHands, body, get_hands);
+  r.add(P::kTrackHand, body, [](const PrimitiveContext& c) { return track_hand(c); });
 }
 
 }  // namespace dreamsense::primitives

@@ -4,22 +4,17 @@
 
 namespace dreamsense::primitives {
 
+Status FamilyOptions::check() const {
+  for (const auto& [type, block] : blocks_) DS_RETURN_IF_ERROR(block.check());
+  return ok_status();
+}
+
 Status EvaluatorOptions::check() const {
   std::string bad;
   if (freshness.ns() <= 0) bad += " freshness must be > 0;";
   if (offline_after <= freshness) bad += " offline_after must exceed freshness;";
-  if (!(track_hand_dt_s >= 0)) bad += " track_hand_dt_s must be >= 0;";
-  if (!(sound_direction_threshold >= 0 && sound_direction_threshold <= 1))
-    bad += " sound_direction_threshold must be in [0, 1];";
-  if (!(track_face_dt_s >= 0)) bad += " track_face_dt_s must be >= 0;";
-  if (!(track_object_dt_s >= 0)) bad += " track_object_dt_s must be >= 0;";
-  if (!(objects_circle_radius_m > 0)) bad += " objects_circle_radius_m must be > 0;";
-  if (!(object_query_radius_m > 0)) bad += " object_query_radius_m must be > 0;";
-  const cv::Vec3d n =
-      (head_gaze_plane[1] - head_gaze_plane[0]).cross(head_gaze_plane[2] - head_gaze_plane[0]);
-  if (!(cv::norm(n) > 1e-9)) bad += " the three head_gaze_plane points are collinear;";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "EvaluatorOptions:" + bad);
-  return face_geometry.check();
+  return families.check();
 }
 
 const std::vector<SensorId>& PrimitiveContext::sensors_of(std::string_view key) const {

@@ -4,6 +4,7 @@
 #include "dreamsense/perception/face_tracks.hpp"
 #include "dreamsense/perception/gaze.hpp"
 #include "dreamsense/perception/head_pose.hpp"
+#include "dreamsense/primitives/registry.hpp"
 
 #include <algorithm>
 
@@ -17,6 +18,16 @@ Status FaceGeometryOptions::check() const {
     return make_error(ErrorCode::kInvalidArgument,
                       "FaceGeometryOptions: same_face_distance_m must be > 0");
   return ok_status();
+}
+
+Status FacePrimitiveOptions::check() const {
+  std::string bad;
+  if (!(track_face_dt_s >= 0)) bad += " track_face_dt_s must be >= 0;";
+  const auto& p = head_gaze_plane.points;
+  if (!(cv::norm((p[1] - p[0]).cross(p[2] - p[0])) > 1e-9))
+    bad += " the three head_gaze_plane points are collinear;";
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "FacePrimitiveOptions:" + bad);
+  return geometry.check();
 }
 
 std::optional<cv::Vec3d> face_position_from_box(const CameraModel& camera, const cv::Rect2d& box,
@@ -162,7 +173,8 @@ Answer<FacesValue> get_faces(const PrimitiveContext& ctx) {
                                   ? selected->value.get()
                                   : nullptr;
   FacesValue v;
-  v.faces = associate_faces(d.value(), sel, ctx.cameras(), ctx.options().face_geometry);
+  v.faces = associate_faces(d.value(), sel, ctx.cameras(),
+                            ctx.family_options<FacePrimitiveOptions>().geometry);
   for (const auto& [cam, cf] : d.value().cameras) {
     auto& list = v.cameras[cam];
     for (const auto& f : cf.faces) list.push_back(CameraFace{f.box_px, f.score, f.frontalness});
@@ -240,7 +252,7 @@ Answer<TrackValue> track_face(const PrimitiveContext& ctx, const std::optional<T
     return a;
   }
   const FaceTrack* track = &tracks.tracks.front();
-  TrackQuery q{track->position_world_m, ctx.options().track_face_dt_s};
+  TrackQuery q{track->position_world_m, ctx.family_options<FacePrimitiveOptions>().track_face_dt_s};
   if (query) {
     q = *query;
     for (const auto& t : tracks.tracks)
@@ -257,6 +269,23 @@ Answer<TrackValue> track_face(const PrimitiveContext& ctx, const std::optional<T
   a.confidence = e.entry->confidence;
   a.value = v;
   return a;
+}
+
+// The rows of the face chain's family.
+void register_face_primitives(PrimitiveRegistry& r) {
+  using P = PrimitiveId;
+  r.add(P::kCheckMutualGaze, {keys::kMutualGaze.name}, check_mutual_gaze);
+  r.add(P::kGetEyeGaze, {keys::kEyeGaze.name},
+        [](const PrimitiveContext& c) { return get_eye_gaze(c); });
+  r.add(P::kGetEyes, {keys::kEyeCenters.name}, get_eyes);
+  r.add(P::kGetFaces, {keys::kFaceDetections.name}, get_faces);
+  r.add(P::kGetHead, {keys::kHeadPose.name}, get_head);
+  r.add(P::kGetHeadGaze, {keys::kHeadPose.name}, get_head_gaze);
+  r.add(P::kGetHeadGazePlane, {keys::kHeadPose.name}, [](const PrimitiveContext& c) {
+    return get_head_gaze_plane(c, c.family_options<FacePrimitiveOptions>().head_gaze_plane);
+  });
+  r.add(P::kTrackFace, {keys::kFaceTracks.name},
+        [](const PrimitiveContext& c) { return track_face(c); });
 }
 
 }  // namespace dreamsense::primitives

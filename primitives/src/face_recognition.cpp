@@ -2,6 +2,7 @@
 
 #include "dreamsense/perception/expression.hpp"
 #include "dreamsense/perception/face_identity.hpp"
+#include "dreamsense/primitives/registry.hpp"
 
 #include <array>
 
@@ -39,6 +40,13 @@ int dream_expression_id(std::string_view label) {
   for (size_t i = 0; i < kIds.size(); ++i)
     if (label == kIds[i][0] || label == kIds[i][1]) return static_cast<int>(i);
   return -1;
+}
+
+// The rows of the face recognition family.
+void register_face_recognition_primitives(PrimitiveRegistry& r) {
+  r.add(PrimitiveId::kIdentifyFace, {keys::kFaceIdentity.name}, identify_face);
+  r.add(PrimitiveId::kIdentifyFaceExpression, {keys::kFaceExpression.name},
+        identify_face_expression);
 }
 
 }  // namespace dreamsense::primitives

@@ -1,9 +1,21 @@
 #include "dreamsense/primitives/objects.hpp"
 
+#include "dreamsense/primitives/registry.hpp"
+
 #include <algorithm>
 #include <limits>
 
 namespace dreamsense::primitives {
+
+Status ObjectPrimitiveOptions::check() const {
+  std::string bad;
+  if (!(circle.radius_m > 0)) bad += " circle radius_m must be > 0;";
+  if (!(query_radius_m > 0)) bad += " query_radius_m must be > 0;";
+  if (!(track_dt_s >= 0)) bad += " track_dt_s must be >= 0;";
+  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "ObjectPrimitiveOptions:" + bad);
+  return ok_status();
+}
+
 namespace {
 
 // The table camera, reported with every status.
@@ -36,7 +48,7 @@ const TableObject* pick(const PrimitiveContext& ctx, const TableObjects& objects
                         const std::optional<cv::Vec3d>& position, bool need_position = true) {
   const TableObject* best = nullptr;
   if (position) {
-    double best_d = ctx.options().object_query_radius_m;
+    double best_d = ctx.family_options<ObjectPrimitiveOptions>().query_radius_m;
     for (const auto& o : objects.objects) {
       if (!o.position_m) continue;
       const double d = cv::norm(*o.position_m - *position);
@@ -179,7 +191,8 @@ Answer<TrackValue> track_object(const PrimitiveContext& ctx,
     return a;
   }
   const TrackQuery q =
-      query ? *query : TrackQuery{*obj->position_m, ctx.options().track_object_dt_s};
+      query ? *query
+            : TrackQuery{*obj->position_m, ctx.family_options<ObjectPrimitiveOptions>().track_dt_s};
   a.query = q;
   TrackValue v;
   const Timestamp at = ctx.tick() + Duration::from_seconds(q.dt_s);
@@ -200,6 +213,21 @@ std::vector<ObjectTrajectoryPoint> object_history(const PrimitiveContext& ctx, i
   for (const auto& o : e->value->objects)
     if (o.track_id == track_id) return o.trajectory;
   return {};
+}
+
+// The rows of the objects family: everything is answered from the toys on the table.
+void register_objects_primitives(PrimitiveRegistry& r) {
+  using P = PrimitiveId;
+  const std::vector<std::string> table{keys::kTableObjects.name};
+  r.add(P::kGetGripLocation, table, [](const PrimitiveContext& c) { return get_grip_location(c); });
+  r.add(P::kGetObjects, table, get_objects);
+  r.add(P::kGetObjectsCircle, table, [](const PrimitiveContext& c) {
+    return get_objects_in_circle(c, c.family_options<ObjectPrimitiveOptions>().circle);
+  });
+  r.add(P::kGetObjectTableDistance, table,
+        [](const PrimitiveContext& c) { return get_object_table_distance(c); });
+  r.add(P::kIdentifyObject, table, [](const PrimitiveContext& c) { return identify_object(c); });
+  r.add(P::kTrackObject, table, [](const PrimitiveContext& c) { return track_object(c); });
 }
 
 }  // namespace dreamsense::primitives

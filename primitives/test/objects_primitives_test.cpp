@@ -152,7 +152,8 @@ TEST(ObjectPrimitives, TrackObjectPredictsWithConstantVelocityFromTheLastObserva
   // Default query: the first object with a position, dt = track_object_dt_s.
   t = track_object(f.context(ms(1000)));
   ASSERT_TRUE(t.ok());
-  EXPECT_NEAR(t.value->position_m[0], -0.20 + 0.1 * f.options.track_object_dt_s, 1e-9);
+  EXPECT_NEAR(t.value->position_m[0],
+              -0.20 + 0.1 * f.options.families.get<ObjectPrimitiveOptions>().track_dt_s, 1e-9);
   ASSERT_TRUE(std::holds_alternative<TrackQuery>(t.query));
 
   const auto h = object_history(f.context(), 4);
@@ -187,8 +188,9 @@ TEST(ObjectPrimitives, StatusesNoDataStaleOfflineDisabled) {
 TEST(ObjectPrimitives, EvaluatorAnswersAllSixAndJsonAndLegacyRoundTrip) {
   Fixture f(scene(ms(1000)));
   EvaluatorOptions o;
-  o.objects_circle_centre_m = {0, 0.3, 0.6};
-  o.objects_circle_radius_m = 0.4;
+  ObjectPrimitiveOptions objects;  // the family's own options block
+  objects.circle = CircleQuery{{0, 0.3, 0.6}, 0.4};
+  o.families.set(objects);
   Evaluator ev(o, f.sensors);
   MultiFrame tick;
   tick.stamp = ms(1000);
@@ -216,8 +218,23 @@ TEST(ObjectPrimitives, EvaluatorAnswersAllSixAndJsonAndLegacyRoundTrip) {
   ASSERT_EQ(legacy(PrimitiveId::kGetObjectTableDistance).size(), 1u);
   EXPECT_NEAR(legacy(PrimitiveId::kGetObjectTableDistance)[0], 30, 1e-9);
   EXPECT_EQ(legacy(PrimitiveId::kGetGripLocation).size(), 3u);
-  EXPECT_NEAR(legacy(PrimitiveId::kTrackObject)[0], -200 + 100 * o.track_object_dt_s, 1e-9);
+  EXPECT_NEAR(legacy(PrimitiveId::kTrackObject)[0], -200 + 100 * objects.track_dt_s, 1e-9);
   EXPECT_STREQ(dream::port(PrimitiveId::kTrackObject), "trackObject:o");  // not trackHand's
+  const auto& circle = records[static_cast<size_t>(PrimitiveId::kGetObjectsCircle) - 1];
+  ASSERT_NE(std::get_if<CircleQuery>(&circle.query), nullptr);
+  EXPECT_DOUBLE_EQ(std::get<CircleQuery>(circle.query).radius_m, 0.4) << "the family's option";
+}
+
+TEST(ObjectPrimitives, FamilyOptionsAreChecked) {
+  EvaluatorOptions o;
+  EXPECT_TRUE(o.check()) << "defaults of every family";
+  ObjectPrimitiveOptions bad;
+  bad.query_radius_m = 0;
+  o.families.set(bad);
+  const auto s = o.check();
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("ObjectPrimitiveOptions: query_radius_m"), std::string::npos)
+      << s.error().message;
 }
 
 }  // namespace

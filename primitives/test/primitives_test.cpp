@@ -4,6 +4,7 @@
 #include "dreamsense/primitives/audio.hpp"
 #include "dreamsense/primitives/body.hpp"
 #include "dreamsense/primitives/evaluator.hpp"
+#include "dreamsense/primitives/registry.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -152,6 +153,44 @@ TEST(Evaluator, EnabledExactlyWhenEveryKeyReadHasAWriter) {
   EXPECT_TRUE(faces.enabled(PrimitiveId::kGetHeadGazePlane));
   EXPECT_FALSE(faces.enabled(PrimitiveId::kCheckMutualGaze)) << "no gaze writer";
   for (const auto& i : catalogue()) EXPECT_FALSE(keys_read(i.id).empty()) << i.name;
+}
+
+// Every primitive has exactly one row, registered by its family; a second row is refused.
+TEST(PrimitiveRegistry, EveryPrimitiveHasOneRowFromItsFamily) {
+  for (const auto& i : catalogue()) {
+    const PrimitiveRow* row = builtin_primitives().find(i.id);
+    ASSERT_NE(row, nullptr) << i.code << " " << i.name;
+    EXPECT_EQ(row->id, i.id);
+    EXPECT_TRUE(static_cast<bool>(row->evaluate)) << i.name;
+  }
+  PrimitiveRegistry r;
+  r.add(PrimitiveId::kGetBody, {"body.child"}, get_body);
+  EXPECT_THROW(r.add(PrimitiveId::kGetBody, {"body.child"}, get_body), CheckFailure);
+  EXPECT_THROW(r.add(PrimitiveId::kGetHands, {}, get_hands), CheckFailure) << "reads nothing";
+  // An evaluator over a registry without a row answers that primitive as disabled.
+  const Evaluator ev({}, {{"body.child", {"skel"}}}, {}, r);
+  EXPECT_TRUE(ev.enabled(PrimitiveId::kGetBody));
+  EXPECT_FALSE(ev.enabled(PrimitiveId::kGetHands)) << "no row";
+}
+
+// The default query of a parametrised primitive comes from its family's options block.
+TEST(Evaluator, DefaultQueryComesFromTheFamilyOptions) {
+  EvaluatorOptions o;
+  o.families.set(AudioPrimitiveOptions{ThresholdQuery{0.7}});
+  Evaluator ev(o, {{"audio.sound_direction", {"mic"}}});
+  Blackboard bb;
+  BlackboardWriter w("sound");
+  w.set(keys::kSoundDirection, SoundDirection{20, std::nullopt, {0, 0, 1}, {0, 0, 1}, 0.3, "mic"},
+        ms(200), 0.6f);
+  bb.commit(w, ms(200));
+  MultiFrame mf;
+  mf.stamp = ms(200);
+  mf.chunks["mic"].push_back(make_frame("mic", ms(200), 0, AudioChunk{}));
+  const auto& sd =
+      ev.evaluate(mf, bb.snapshot())[static_cast<int>(PrimitiveId::kGetSoundDirection) - 1];
+  EXPECT_EQ(sd.status, PrimitiveStatus::kNoData) << "0.6 is below the family's 0.7";
+  ASSERT_NE(std::get_if<ThresholdQuery>(&sd.query), nullptr);
+  EXPECT_DOUBLE_EQ(std::get<ThresholdQuery>(sd.query).threshold, 0.7);
 }
 
 // Parametrised primitives answer any query through the C++ API, not only the evaluator's

@@ -16,9 +16,10 @@
 //                                  answered ok (F14 with the evaluator's default circle counts
 //                                  only ticks where a truth toy lies in that circle)
 
+#include "dreamsense/primitives/objects.hpp"
+
 #include "dreamsense/eval/metrics.hpp"
 #include "dreamsense/eval/session_metrics.hpp"
-#include "dreamsense/primitives/context.hpp"
 
 #include <opencv2/core.hpp>
 
@@ -125,7 +126,8 @@ MetricGroup object_metrics() {
     }
 
     // The six primitives at the ticks whose newest top frame has truth toys.
-    const primitives::EvaluatorOptions defaults;
+    const primitives::CircleQuery circle =
+        primitives::ObjectPrimitiveOptions{}.circle;  // F14's default
     const PrimitiveId six[] = {PrimitiveId::kGetGripLocation,  PrimitiveId::kGetObjects,
                                PrimitiveId::kGetObjectsCircle, PrimitiveId::kGetObjectTableDistance,
                                PrimitiveId::kIdentifyObject,   PrimitiveId::kTrackObject};
@@ -149,9 +151,9 @@ MetricGroup object_metrics() {
     }
     auto in_default_circle = [&](int64_t frame) {
       for (const auto& t : truth.at(frame)) {
-        cv::Vec3d v = t.position - defaults.objects_circle_centre_m;
+        cv::Vec3d v = t.position - circle.centre_m;
         if (normal) v -= v.dot(*normal) * *normal;  // in the table plane, as F14 measures
-        if (cv::norm(v) <= defaults.objects_circle_radius_m) return true;
+        if (cv::norm(v) <= circle.radius_m) return true;
       }
       return false;
     };

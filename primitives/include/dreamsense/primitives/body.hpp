@@ -13,6 +13,14 @@
 
 namespace dreamsense::primitives {
 
+// The body family's options block (EvaluatorOptions::families).
+struct BodyPrimitiveOptions {
+  // Default query of trackHand in batch analysis: the right hand's current position, predicted
+  // this far ahead.
+  double track_hand_dt_s = 0.2;
+  Status check() const;
+};
+
 // Arm angles in the torso frame:
 //   x_t: towards the child's left (from right to left shoulder),
 //   y_t: up the spine (shoulder centre minus spine/hip centre, made orthogonal to x_t),
@@ -47,7 +55,7 @@ Answer<BodyValue> get_body(const PrimitiveContext& ctx);
 Answer<BodyPoseValue> get_body_pose(const PrimitiveContext& ctx);
 Answer<HandsValue> get_hands(const PrimitiveContext& ctx);
 // trackHand(seed, dt); without a query the seed is the right hand's current position (else the
-// left hand's) and dt the options' track_hand_dt_s.
+// left hand's) and dt BodyPrimitiveOptions::track_hand_dt_s.
 Answer<TrackValue> track_hand(const PrimitiveContext& ctx,
                               const std::optional<TrackQuery>& query = std::nullopt);
 

@@ -14,45 +14,52 @@
 #include "dreamsense/primitives/catalogue.hpp"
 
 #include <array>
+#include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
+#include <typeindex>
 #include <vector>
 
 namespace dreamsense::primitives {
 
-struct FaceGeometryOptions {
-  // Physical width that a frontal-cascade box spans. 0.15 m fits an adult face (and the demo's
-  // portrait); children's faces are smaller (~0.12-0.13 m): set it per study.
-  double face_width_m = 0.15;
-  double same_face_distance_m = 0.3;
-  Status check() const;
+// Per-family parameters. Each primitive family defines its own options block next to its
+// functions (a struct with documented defaults and `Status check() const`, e.g.
+// ObjectPrimitiveOptions in objects.hpp): the default queries the evaluator answers with and the
+// family's own parameters. FamilyOptions holds them by type; a block that was never set answers
+// with its defaults, so a new family needs no edit here.
+class FamilyOptions {
+ public:
+  template <typename T>
+  void set(T block) {
+    auto held = std::make_shared<const T>(std::move(block));
+    blocks_[std::type_index(typeid(T))] = Block{held, [held] { return held->check(); }};
+  }
+  // The block set for T, else T's defaults.
+  template <typename T>
+  const T& get() const {
+    auto it = blocks_.find(std::type_index(typeid(T)));
+    if (it == blocks_.end()) {
+      static const T kDefaults{};
+      return kDefaults;
+    }
+    return *static_cast<const T*>(it->second.value.get());
+  }
+  Status check() const;  // every set block's check()
+
+ private:
+  struct Block {
+    std::shared_ptr<const void> value;
+    std::function<Status()> check;
+  };
+  std::map<std::type_index, Block> blocks_;
 };
 
 struct EvaluatorOptions {
   Duration freshness = Duration::from_ms(100);  // older observations are stale
   Duration offline_after = Duration::from_seconds(1.0);
-  // Default query of trackHand in batch analysis: the right hand's current position, predicted
-  // this far ahead.
-  double track_hand_dt_s = 0.2;
-  // Default query of getSoundDirection: directions with a lower confidence are no_data. The
-  // confidence is calibrated (modalities/sound_direction/README.md): >= 0.5 is within 10 deg
-  // about 90 % of the time in eval doa's rooms, >= 0.7 (DREAM's consumer) about 98 %.
-  double sound_direction_threshold = 0.5;
-  FaceGeometryOptions face_geometry;
-  // Default query of getHeadGaze (plane), F12: three points (world, m) spanning the plane; the
-  // default is the world plane z = 0 (the front sensor's image plane, where the robot stands).
-  std::array<cv::Vec3d, 3> head_gaze_plane{cv::Vec3d(0, 0, 0), cv::Vec3d(1, 0, 0),
-                                           cv::Vec3d(0, 1, 0)};
-  // Default query of trackFace (F23): predict the face this far ahead.
-  double track_face_dt_s = 0.2;
-  // Default query of trackObject (F25): predict the first object this far ahead.
-  double track_object_dt_s = 0.2;
-  // Default query of getObjects (circle), F14: a circle on the table (world, m).
-  cv::Vec3d objects_circle_centre_m{0, 0.3, 0.6};
-  double objects_circle_radius_m = 0.15;
-  // F8, F15, F19, F25 with a position: the object nearest to it, if within this distance.
-  double object_query_radius_m = 0.15;
+  FamilyOptions families;  // each family's default queries and parameters
   Status check() const;
 };
 
@@ -88,6 +95,11 @@ class PrimitiveContext {
   const BlackboardView& view() const { return view_; }
   Timestamp tick() const { return tick_; }
   const EvaluatorOptions& options() const { return options_; }
+  // The options block of a primitive family (its defaults unless set in EvaluatorOptions).
+  template <typename T>
+  const T& family_options() const {
+    return options_.families.get<T>();
+  }
   // Calibrated cameras of the session (for 3-D positions from image boxes).
   const std::map<SensorId, CameraModel>& cameras() const { return cameras_; }
   // True when an analyser of this pipeline writes `key`.

@@ -1,12 +1,13 @@
 #pragma once
 // Evaluates all 25 primitives at each tick from a blackboard snapshot (catalogue order, one record
 // each). A primitive is enabled when every blackboard key it reads has a writer in the pipeline
-// (KeySensors); otherwise its record is `disabled`. The evaluator holds no per-analyser code: each
-// primitive is one row of the table in evaluator.cpp (the keys it reads and its function with the
-// default query of EvaluatorOptions).
+// (KeySensors); otherwise its record is `disabled`. The evaluator holds no per-primitive code:
+// each primitive is one row registered by its family (registry.hpp: the keys it reads and its
+// function with the default query of the family's options block).
 
 #include "dreamsense/core/multi_frame.hpp"
 #include "dreamsense/primitives/context.hpp"
+#include "dreamsense/primitives/registry.hpp"
 
 #include <map>
 #include <vector>
@@ -14,14 +15,17 @@
 namespace dreamsense::primitives {
 
 // The blackboard keys a primitive reads; all must have a writer for it to be enabled.
-const std::vector<std::string>& keys_read(PrimitiveId id);
+const std::vector<std::string>& keys_read(PrimitiveId id,
+                                          const PrimitiveRegistry& registry = builtin_primitives());
 
 class Evaluator {
  public:
   // `key_sensors`: the keys this pipeline writes and the sensors behind each
-  // (Pipeline::key_sensors). `cameras`: the session's calibrated cameras.
+  // (Pipeline::key_sensors). `cameras`: the session's calibrated cameras. `registry`: the
+  // primitive rows (must outlive the evaluator).
   Evaluator(EvaluatorOptions options, KeySensors key_sensors,
-            std::map<SensorId, CameraModel> cameras = {});
+            std::map<SensorId, CameraModel> cameras = {},
+            const PrimitiveRegistry& registry = builtin_primitives());
 
   bool enabled(PrimitiveId id) const;
   std::vector<PrimitiveRecord> evaluate(const MultiFrame& tick, const BlackboardView& view);
@@ -35,6 +39,7 @@ class Evaluator {
   EvaluatorOptions options_;
   KeySensors key_sensors_;
   std::map<SensorId, CameraModel> cameras_;
+  const PrimitiveRegistry* registry_;
   std::map<SensorId, Timestamp> last_seen_;
   Timestamp first_tick_ = Timestamp::unset();
 };

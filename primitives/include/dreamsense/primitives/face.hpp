@@ -16,6 +16,25 @@
 
 namespace dreamsense::primitives {
 
+struct FaceGeometryOptions {
+  // Physical width that a frontal-cascade box spans. 0.15 m fits an adult face (and the demo's
+  // portrait); children's faces are smaller (~0.12-0.13 m): set it per study.
+  double face_width_m = 0.15;
+  double same_face_distance_m = 0.3;
+  Status check() const;
+};
+
+// The face family's options block (EvaluatorOptions::families).
+struct FacePrimitiveOptions {
+  FaceGeometryOptions geometry;  // getFaces' 3-D positions
+  // Default query of getHeadGaze (plane), F12: the world plane z = 0 (the front sensor's image
+  // plane, where the robot stands).
+  PlaneQuery head_gaze_plane;
+  // Default query of trackFace (F23): predict the face this far ahead.
+  double track_face_dt_s = 0.2;
+  Status check() const;
+};
+
 // World position of a face from its box in one camera; nullopt for an empty box.
 std::optional<cv::Vec3d> face_position_from_box(const CameraModel& camera, const cv::Rect2d& box,
                                                 double face_width_m);
@@ -37,7 +56,8 @@ Answer<HeadGazeValue> get_head_gaze(const PrimitiveContext& ctx);
 Answer<HeadGazePlaneValue> get_head_gaze_plane(const PrimitiveContext& ctx,
                                                const PlaneQuery& query);
 // trackFace(seed, dt): the face track nearest to the seed, predicted dt ahead (constant
-// velocity). Without a query: the newest track (the child's face), dt = track_face_dt_s.
+// velocity). Without a query: the newest track (the child's face), dt =
+// FacePrimitiveOptions::track_face_dt_s.
 Answer<TrackValue> track_face(const PrimitiveContext& ctx,
                               const std::optional<TrackQuery>& query = std::nullopt);
 

@@ -4,7 +4,7 @@
 // F19 identifyObject, F25 trackObject, and the object history (V26).
 //
 // Which object. A query position picks the object nearest to it (3-D distance) when it is within
-// EvaluatorOptions::object_query_radius_m, otherwise the answer is no_data; without a query (batch
+// ObjectPrimitiveOptions::query_radius_m, otherwise the answer is no_data; without a query (batch
 // analysis) the primitive answers for the first object of getObjects (the oldest track). Objects
 // without a 3-D position (no table plane yet) are left out of every answer but identifyObject's
 // default one. Nothing on the table is no_data.
@@ -16,6 +16,17 @@
 #include <vector>
 
 namespace dreamsense::primitives {
+
+// The objects family's options block (EvaluatorOptions::families).
+struct ObjectPrimitiveOptions {
+  // Default query of getObjects (circle), F14: a circle on the table (world, m).
+  CircleQuery circle{cv::Vec3d(0, 0.3, 0.6), 0.15};
+  // F8, F15, F19, F25 with a position: the object nearest to it, if within this distance.
+  double query_radius_m = 0.15;
+  // Default query of trackObject (F25): predict the first object this far ahead.
+  double track_dt_s = 0.2;
+  Status check() const;
+};
 
 // F13: every toy on the table with a position, by track id.
 Answer<ObjectsValue> get_objects(const PrimitiveContext& ctx);
@@ -34,7 +45,7 @@ Answer<ObjectIdentityValue> identify_object(const PrimitiveContext& ctx,
 // F25: the track nearest to the seed, predicted dt ahead by a constant-velocity model (the
 // velocity is the least-squares slope of the track's recent positions), from the object's last
 // observation to tick + dt, kept at the same height above the table. Without a query: the first
-// object, dt = track_object_dt_s.
+// object, dt = ObjectPrimitiveOptions::track_dt_s.
 Answer<TrackValue> track_object(const PrimitiveContext& ctx,
                                 const std::optional<TrackQuery>& query = std::nullopt);
 

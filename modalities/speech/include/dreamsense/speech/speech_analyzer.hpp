@@ -30,8 +30,9 @@
 
 namespace dreamsense::speech {
 
-// The segmenter's defaults for speech: VAD on the mean of all channels (vad_channel -1); the
-// stream's rate and channel count are filled in from the first chunk.
+// The segmenter's defaults for speech: the tree's one VAD (audio::VoiceActivityDetector, the
+// energy gate voice_id uses too) on the mean of all channels (vad_channel -1); the stream's rate
+// and channel count are filled in from the first chunk.
 inline audio::UtteranceSegmenterOptions default_speech_segmenter() {
   audio::UtteranceSegmenterOptions o;
   o.vad_channel = -1;

@@ -34,15 +34,11 @@ struct DirectionRuleOptions {
   Status check() const;
 };
 
-// The segmenter's settings for voice identification: the shared segmenter's timing (0.15 s of
-// speech opens, 0.25 s pre-roll, 0.5 s hangover, 10 s at most) with the energy-gate decision
-// (10 dB over a floor rising at most 3 dB/s), which keeps a reader's long sentence in one piece
-// (the spectral VAD's adaptive floor splits it; measured in README.md).
-inline audio::UtteranceSegmenterOptions default_voice_segmenter() {
-  audio::UtteranceSegmenterOptions o;
-  o.vad.method = audio::VoiceActivityMethod::kEnergyGate;
-  return o;
-}
+// The segmenter's settings for voice identification: the shared segmenter's defaults (0.15 s of
+// speech opens, 0.25 s pre-roll, 0.5 s hangover, 10 s at most) with the tree's one VAD (energy
+// gate: 10 dB over a floor rising at most 3 dB/s), which keeps a reader's long sentence in one
+// piece (measured in README.md).
+inline audio::UtteranceSegmenterOptions default_voice_segmenter() { return {}; }
 
 struct VoiceIdAnalyzerOptions {
   SensorId audio_sensor = "mic_array";

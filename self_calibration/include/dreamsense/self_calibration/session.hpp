@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace dreamsense::eval {
+namespace dreamsense::self_calibration {
 
 struct SessionSelfCalibrationOptions {
   // The ticks are spread over up to 20 s (every 6th tick at 25 Hz: 0.24 s apart) rather than
@@ -57,4 +57,4 @@ Result<SessionSelfCalibration> self_calibrate_session(
 // gaze.yaml (eyeball method, head_plane) as a subject folder.
 Status write_self_calibration(const SessionSelfCalibration& c, const std::filesystem::path& dir);
 
-}  // namespace dreamsense::eval
+}  // namespace dreamsense::self_calibration

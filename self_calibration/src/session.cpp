@@ -1,4 +1,4 @@
-#include "dreamsense/eval/self_calibration.hpp"
+#include "dreamsense/self_calibration/session.hpp"
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
@@ -15,7 +15,7 @@
 #include <fstream>
 #include <map>
 
-namespace dreamsense::eval {
+namespace dreamsense::self_calibration {
 namespace {
 
 // Frames closer than this belong to the same tick (cameras of one rig are triggered together;
@@ -214,4 +214,4 @@ Status write_self_calibration(const SessionSelfCalibration& c, const std::filesy
   return ok_status();
 }
 
-}  // namespace dreamsense::eval
+}  // namespace dreamsense::self_calibration

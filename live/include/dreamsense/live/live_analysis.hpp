@@ -1,0 +1,46 @@
+#pragma once
+// Live analysis (`dreamsense live`, docs/recording.md): opens the devices of a configuration,
+// optionally records them, analyses them as they deliver (runner::analyze_live on its own
+// thread) until the duration is reached, SIGINT/SIGTERM arrives or the analysis ends, and
+// optionally publishes the primitives on DDS and serves the operator page. The verb only parses
+// flags into LiveAnalysisOptions and prints the summary.
+
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/publish/dds_publisher.hpp"
+#include "dreamsense/runner/analysis.hpp"
+#include "dreamsense/sources/recorder.hpp"
+#include "dreamsense/ui/operator_page.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace dreamsense::live {
+
+struct LiveAnalysisOptions {
+  // The analysis (out_dir, plan, ...); its on_tick_frames / on_records are replaced when the
+  // operator page or DDS is on.
+  runner::AnalysisOptions analysis;
+  std::filesystem::path config;                     // device configuration (YAML)
+  std::optional<std::filesystem::path> record;      // also record the session into this new folder
+  double duration_s = 0;                            // stop after this long (0: until a signal)
+  bool stop_on_signals = true;                      // SIGINT / SIGTERM stop the run
+  std::optional<publish::DdsPublisherOptions> dds;  // publish the primitives
+  std::optional<ui::OperatorPageOptions> ui;        // serve the operator page
+  // Called once the operator page serves (its URL), and once the capture runs.
+  std::function<void(const std::string& url)> on_ui_started;
+  std::function<void()> on_capture_started;
+};
+
+struct LiveAnalysisSummary {
+  runner::AnalysisSummary analysis;
+  sources::RecordStats capture;
+  std::optional<publish::DdsPublisherStats> dds;  // when publishing
+};
+
+// Errors: the publisher, the configuration, the operator page or a device that cannot start;
+// an analysis or capture error (the first of them).
+Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options);
+
+}  // namespace dreamsense::live

@@ -1,0 +1,80 @@
+#include "dreamsense/live/live_analysis.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <memory>
+#include <thread>
+
+namespace dreamsense::live {
+namespace {
+std::atomic<bool> g_stop_live{false};
+extern "C" void on_live_stop_signal(int /*signal*/) { g_stop_live = true; }
+}  // namespace
+
+Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options) {
+  std::unique_ptr<publish::DdsPublisher> publisher;
+  if (options.dds) {
+    DS_ASSIGN_OR_RETURN(publisher, publish::DdsPublisher::create(*options.dds));
+  }
+  DS_ASSIGN_OR_RETURN(const sources::RecordConfig config,
+                      sources::read_record_config(options.config));
+  runner::AnalysisOptions o = options.analysis;
+  std::unique_ptr<ui::OperatorPage> page;
+  if (options.ui) {
+    DS_ASSIGN_OR_RETURN(page, ui::OperatorPage::start(*options.ui));
+    if (options.on_ui_started) options.on_ui_started(page->url());
+    auto ticks = std::make_shared<uint64_t>(0);
+    o.on_tick_frames = [&page, ticks](const MultiFrame& tick) {
+      for (const auto& [id, frame] : tick.frames) page->update_frame(id, frame);
+      page->set_status({{"ticks", ++*ticks}, {"stamp_s", tick.stamp.seconds()}});
+    };
+  }
+  if (publisher || page)
+    o.on_records = [&publisher, &page](const std::vector<primitives::PrimitiveRecord>& records) {
+      if (page) page->update(records);
+      return publisher ? publisher->publish(records) : ok_status();
+    };
+  DS_ASSIGN_OR_RETURN(auto capture, sources::LiveCapture::open(config, options.record));
+  g_stop_live = false;
+  if (options.stop_on_signals) {
+    std::signal(SIGINT, on_live_stop_signal);
+    std::signal(SIGTERM, on_live_stop_signal);
+  }
+  if (options.on_capture_started) options.on_capture_started();
+  std::atomic<bool> analysis_done{false};
+  std::atomic<bool> analysis_ready{false};
+  o.on_ready = [&analysis_ready] { analysis_ready = true; };
+  Result<runner::AnalysisSummary> result = make_error(ErrorCode::kInternal, "not run");
+  std::thread analysis([&] {
+    result = runner::analyze_live(o, *capture);
+    analysis_done = true;
+    capture->stop();  // an analysis error ends the capture too
+  });
+  // --duration counts analysed time: from when the analysers are ready (models loaded), so a
+  // slow start does not eat it.
+  while (!analysis_done && !analysis_ready && !g_stop_live)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const auto start = std::chrono::steady_clock::now();
+  while (!analysis_done && !g_stop_live &&
+         !(options.duration_s > 0 &&
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >=
+               options.duration_s))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  capture->stop();
+  analysis.join();
+  if (options.stop_on_signals) {
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+  }
+  auto stats = capture->finish();
+  if (!result) return tl::unexpected(result.error());
+  if (!stats) return tl::unexpected(stats.error());
+  LiveAnalysisSummary s;
+  s.analysis = std::move(*result);
+  s.capture = std::move(*stats);
+  if (publisher) s.dds = publisher->stats();
+  return s;
+}
+
+}  // namespace dreamsense::live

@@ -1,0 +1,42 @@
+#pragma once
+// Self-calibration before an analysis (issue 15): when it runs, pointing the analysis at its
+// files, and its status in summary.json. `--subject auto` runs it always; by default it runs
+// when the session's subject has no calibration folder (and no explicit model file); never with
+// `--subject none` or a subject folder. The session-level algorithm is in session.hpp; the
+// face-model fit in modalities/head_pose (self_calibration.hpp).
+
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/runner/analysis.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <string>
+
+namespace dreamsense::self_calibration {
+
+enum class SelfCalibrationMode { kWhenNoSubject, kAlways, kNever };
+
+// True when the analysis `o` should self-calibrate first (see above; only sessions with
+// calibrated colour cameras: the self-calibration triangulates).
+bool needs_self_calibration(const runner::AnalysisOptions& o, SelfCalibrationMode mode);
+
+struct ForAnalysisOptions {
+  SelfCalibrationMode mode = SelfCalibrationMode::kWhenNoSubject;
+  // Also copy the converged files to subjects_dir/<the session's subject> (a new folder).
+  bool save_subject = false;
+  // One-line progress messages for the user ("self-calibration: ...", "... converged: ...").
+  std::function<void(const std::string&)> progress;
+};
+
+// Writes OUT/self_calibration/ and points `o` at its files when it converged; returns the
+// status for summary.json's `self_calibration`.
+Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
+                                                   const ForAnalysisOptions& options);
+
+// Adds `j` as `self_calibration` to OUT/summary.json (atomic rewrite).
+Status add_self_calibration_to_summary(const std::filesystem::path& out_dir,
+                                       const nlohmann::json& j);
+
+}  // namespace dreamsense::self_calibration
