@@ -220,7 +220,9 @@ TEST_F(Privacy, IncludeNamesWritesThemWhereExpected) {
   EXPECT_EQ(voices.front()["name"], kChildFolder);
   EXPECT_EQ(voices.front()["speaker_id"], "speaker_2") << "the id does not change with names";
   const auto faces = ok_values(out, "identifyFace");
-  if (!faces.empty()) EXPECT_EQ(faces.front()["name"], kGalleryName);
+  if (!faces.empty()) {
+    EXPECT_EQ(faces.front()["name"], kGalleryName);
+  }
   EXPECT_NE(slurp(out / "report.html").find(kSessionName), std::string::npos);
   EXPECT_NE(slurp(out / "dream.json").find(kSessionName), std::string::npos);
   EXPECT_NE(r.err.find(kTherapistFolder), std::string::npos)
