@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <sndfile.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -283,6 +284,44 @@ TEST(SpeechEval, UnknownLayoutAndBadOptions) {
   EXPECT_TRUE(ro.check());
   ro.front_end_upper_hz = 4000;
   EXPECT_FALSE(ro.check());
+}
+
+}  // namespace
+}  // namespace dreamsense::speech
+
+namespace dreamsense::speech {
+namespace {
+
+// The shipped speech-commands model: decoys read, means-only folder decoded over its base model
+// (a regression: the folder argument aliased options.model_dir and the base's own means were
+// read instead).
+TEST(SpeechCommandsModel, ShippedFolderIsMeansOnlyOverEnUsWithDecoys) {
+  const fs::path dir = commands_model_dir();
+  ASSERT_TRUE(fs::exists(dir / "means")) << dir;
+  auto decoys = read_decoy_words(dir / "decoys.txt");
+  ASSERT_TRUE(decoys) << decoys.error().message;
+  EXPECT_GE(decoys->size(), 10u);
+  EXPECT_EQ(std::count(decoys->begin(), decoys->end(), "yes"), 0) << "a command is no decoy";
+  RecognizerOptions o;
+  if (!fs::exists(o.model_dir / "mdef")) GTEST_SKIP() << "pocketsphinx-en-us not installed";
+  o.model_dir = dir;
+  auto st = use_acoustic_model(o, o.model_dir);  // the aliasing call of run_speech_eval
+  ASSERT_TRUE(st) << st.error().message;
+  EXPECT_EQ(o.model_dir, RecognizerOptions{}.model_dir);
+  EXPECT_EQ(o.means_file, dir / "means");
+}
+
+TEST(SpeechCommandsModel, DecoyFilesAreCheckedAndCommented) {
+  TempDir t;
+  std::ofstream(t.path() / "d.txt") << "# words\ncat dog # pets\n\nbird\n";
+  auto d = read_decoy_words(t.path() / "d.txt");
+  ASSERT_TRUE(d) << d.error().message;
+  EXPECT_EQ(*d, (std::vector<std::string>{"cat", "dog", "bird"}));
+  std::ofstream(t.path() / "empty.txt") << "# nothing\n";
+  auto empty = read_decoy_words(t.path() / "empty.txt");
+  ASSERT_FALSE(empty);
+  EXPECT_NE(empty.error().message.find("empty.txt"), std::string::npos);
+  EXPECT_FALSE(read_decoy_words(t.path() / "missing.txt"));
 }
 
 }  // namespace
