@@ -583,7 +583,8 @@ std::filesystem::path commands_model_dir() {
 
 Result<std::vector<std::string>> read_decoy_words(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) return make_error(ErrorCode::kNotFound, "{}: cannot read the decoy words", path.string());
+  if (!in)
+    return make_error(ErrorCode::kNotFound, "{}: cannot read the decoy words", path.string());
   std::vector<std::string> words;
   for (std::string line; std::getline(in, line);) {
     if (auto h = line.find('#'); h != std::string::npos) line.erase(h);
@@ -734,8 +735,7 @@ Result<eval::EvalReport> run_speech_commands(const SpeechEvalOptions& o,
     size_t ok = 0, fa = 0;
     for (const auto& c : curve_items) {
       const bool accept = !c.word.empty() && c.confidence >= threshold;
-      const std::string h =
-          accept ? c.word : std::string(c.silent ? kSilenceLabel : kUnknownLabel);
+      const std::string h = accept ? c.word : std::string(c.silent ? kSilenceLabel : kUnknownLabel);
       ok += h == c.label;
       fa += accept && (c.label == kUnknownLabel || c.label == kSilenceLabel);
     }

@@ -250,9 +250,9 @@ class VoiceIdAnalyzer : public Analyzer {
       {
         std::string scores;
         for (const auto& sc : r->scores)
-          scores += fmt::format(
-              " {}={:.3f}", options_.include_names ? sc.id : public_speaker_id(*model_, sc.id),
-              sc.llr);
+          scores += fmt::format(" {}={:.3f}",
+                                options_.include_names ? sc.id : public_speaker_id(*model_, sc.id),
+                                sc.llr);
         log::debug("voice_id: utterance {:.2f}-{:.2f} s, {} frames, llr{}",
                    u.speech_start.seconds(), u.speech_end.seconds(), r->frames, scores);
       }
