@@ -20,36 +20,15 @@
 #include <unistd.h>
 #include <vector>
 
+#include "cli_support.hpp"
+
 namespace {
 namespace fs = std::filesystem;
+using dreamsense::cli_support::read_jsonl;
+using dreamsense::cli_support::run;
+using dreamsense::cli_support::RunResult;
+using dreamsense::cli_support::slurp;
 using nlohmann::json;
-
-struct RunResult {
-  int exit_code = -1;
-  std::string err;
-};
-
-RunResult run(const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("ds_check_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(DREAMSENSE_EXE) + " -q " + args + " 2> " + err_file.string();
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
-  fs::remove(err_file);
-  return r;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 void spit(const fs::path& p, const std::string& s) {
   std::ofstream(p, std::ios::binary | std::ios::trunc) << s;

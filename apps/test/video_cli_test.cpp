@@ -18,37 +18,15 @@
 #include <sstream>
 #include <sys/wait.h>
 
+#include "cli_support.hpp"
+
 namespace {
 namespace fs = std::filesystem;
+using dreamsense::cli_support::read_jsonl;
+using dreamsense::cli_support::run;
+using dreamsense::cli_support::RunResult;
+using dreamsense::cli_support::slurp;
 using nlohmann::json;
-
-struct RunResult {
-  int exit_code = -1;
-  std::string err;
-};
-
-RunResult run(const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("ds_video_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(DREAMSENSE_EXE) + " -q " + args + " 2> " + err_file.string();
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
-  fs::remove(err_file);
-  return r;
-}
-
-std::vector<json> read_jsonl(const fs::path& p) {
-  std::vector<json> out;
-  std::ifstream in(p);
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty()) out.push_back(json::parse(line));
-  return out;
-}
 
 // RFC 4180 reader (quoted cells with doubled quotes, commas and line breaks inside quotes).
 std::vector<std::vector<std::string>> read_csv(const fs::path& p) {

@@ -28,20 +28,6 @@ namespace fs = std::filesystem;
 
 constexpr size_t kListedGaps = 20;
 
-std::string kind_name(SensorKind k) {
-  switch (k) {
-    case SensorKind::kColor:
-      return "color";
-    case SensorKind::kDepth:
-      return "depth";
-    case SensorKind::kSkeleton:
-      return "skeleton";
-    case SensorKind::kAudio:
-      return "audio";
-  }
-  return "?";
-}
-
 bool indexed(const std::string& encoding) {
   return encoding == "mjpeg" || encoding == "raw16" || encoding == "png16";
 }
@@ -187,7 +173,7 @@ Result<SessionCheck> check_session_impl(const fs::path& dir, const SessionCheckO
     const StreamEntry& s = m.streams[i];
     StreamCheck c;
     c.stream = s.id;
-    c.kind = kind_name(s.kind);
+    c.kind = to_string(s.kind);
     c.encoding = s.encoding;
     c.file = s.file;
     c.index = s.index;
