@@ -100,16 +100,7 @@ class CheckCli : public ::testing::Test {
     return r;
   }
   static const fs::path& demo() {
-    static const fs::path d = [] {
-      fs::remove_all(root());
-      fs::create_directories(root());
-      const fs::path shared = DREAMSENSE_CLI_DEMO_DIR;
-      if (fs::exists(shared / "summary.json")) return shared;
-      const fs::path out = root() / "demo";
-      RunResult r = run("demo --out " + out.string() + " --seed 3 --duration 4");
-      EXPECT_EQ(r.exit_code, 0) << r.err;
-      return out;
-    }();
+    static const fs::path d = dreamsense::cli_support::fixture_demo(root());
     return d;
   }
   // A copy of the demo session: hard links, except real copies of the files in `damaged` and of

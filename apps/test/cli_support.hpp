@@ -2,6 +2,7 @@
 // What the command-line tests share: run the built `dreamsense` (DREAMSENSE_EXE, a compile
 // definition of each test target) with -q and its stderr captured, and read files back.
 
+#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdlib>
@@ -45,6 +46,21 @@ inline std::vector<nlohmann::json> read_jsonl(const std::filesystem::path& p) {
   std::ifstream in(p);
   for (std::string line; std::getline(in, line);)
     if (!line.empty()) out.push_back(nlohmann::json::parse(line));
+  return out;
+}
+
+// The 4-second demo (seed 3) that the ctest fixture `cli_demo_fixture` makes once for all the
+// command-line tests (DREAMSENSE_CLI_DEMO_DIR); a test binary run by hand makes its own under
+// `root`, which is cleared first. `analysed`: the fixture's analysis is needed too.
+inline std::filesystem::path fixture_demo(const std::filesystem::path& root, bool analysed = true) {
+  std::filesystem::remove_all(root);
+  std::filesystem::create_directories(root);
+  const std::filesystem::path shared = DREAMSENSE_CLI_DEMO_DIR;
+  if (std::filesystem::exists(shared / (analysed ? "summary.json" : "session.yaml"))) return shared;
+  const std::filesystem::path out = root / "demo";
+  RunResult r = run("demo --out " + out.string() + " --seed 3 --duration 4" +
+                    (analysed ? "" : " --no-analyze"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
   return out;
 }
 

@@ -37,16 +37,7 @@ class Cli : public ::testing::Test {
   // A 4-second demo (seed 3), analysed: the ctest fixture `cli_demo_fixture` makes it once for
   // all tests; a test binary run by hand makes its own.
   static const fs::path& demo() {
-    static const fs::path d = [] {
-      fs::remove_all(root());
-      fs::create_directories(root());
-      const fs::path shared = DREAMSENSE_CLI_DEMO_DIR;
-      if (fs::exists(shared / "summary.json")) return shared;
-      const fs::path out = root() / "demo";
-      RunResult r = run("demo --out " + out.string() + " --seed 3 --duration 4");
-      EXPECT_EQ(r.exit_code, 0) << r.err;
-      return out;
-    }();
+    static const fs::path d = dreamsense::cli_support::fixture_demo(root());
     return d;
   }
   // A copy of the demo made of hard links (cheap); `damaged` is a real copy, safe to modify.

@@ -74,16 +74,7 @@ class VideoCli : public ::testing::Test {
   }
   // The demo session (the ctest fixture's, or made here when run by hand).
   static const fs::path& demo() {
-    static const fs::path d = [] {
-      fs::remove_all(root());
-      fs::create_directories(root());
-      const fs::path shared = DREAMSENSE_CLI_DEMO_DIR;
-      if (fs::exists(shared / "session.yaml")) return shared;
-      const fs::path out = root() / "demo";
-      RunResult r = run("demo --out " + out.string() + " --seed 3 --duration 4 --no-analyze");
-      EXPECT_EQ(r.exit_code, 0) << r.err;
-      return out;
-    }();
+    static const fs::path d = dreamsense::cli_support::fixture_demo(root(), /*analysed=*/false);
     return d;
   }
   // The demo's middle camera as an mp4 (MPEG-4 part 2, 640x480, 25 fps), made once.
