@@ -25,6 +25,7 @@ struct AnalyzeFlags {
   std::string policy = "settled";
   std::string grammar;
   bool overlay = false;
+  bool overlay_mosaic = false;
   bool force = false;  // replace an earlier analysis in the output folder
   bool allow_damaged = false;
   bool follow_links = false;
@@ -89,8 +90,12 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
                  "(= --set speech.grammar=FILE)")
       ->check(CLI::ExistingFile);
   cmd.add_flag("--overlay", flags.overlay,
-               "Also write overlay.mp4: the selected camera with face boxes, landmarks, head "
-               "axes, eye centres, gaze rays and mutual gaze");
+               "Also write overlay.mp4 (H.264): the selected camera with face boxes, landmarks, "
+               "head axes, eye centres, gaze rays, mutual gaze, skeleton, sound direction, "
+               "gesture, speech subtitles and a legend");
+  cmd.add_flag("--overlay-mosaic", flags.overlay_mosaic,
+               "overlay.mp4 shows every colour camera tiled, not only the selected one "
+               "(implies --overlay)");
   cmd.add_flag("--force", flags.force,
                "Replace an earlier analysis in the output folder (all of its files; without "
                "this an output folder that holds one is an error)");
@@ -128,7 +133,8 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
 }
 
 Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& o) {
-  o.overlay = flags.overlay;
+  o.overlay = flags.overlay || flags.overlay_mosaic;
+  o.overlay_mosaic = flags.overlay_mosaic;
   o.replace_existing = flags.force;
   o.allow_damaged = flags.allow_damaged;
   o.follow_links_outside = flags.follow_links;

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <set>
+#include <string>
 #include <unistd.h>
 
 namespace dreamsense::dream {
@@ -30,7 +32,13 @@ TEST(DreamIds, CamerasLabelsAndPorts) {
   EXPECT_EQ(trajectory_id("drink"), 6);
   EXPECT_EQ(trajectory_id("custom5"), 11);
   EXPECT_EQ(object_id("plane"), 3);
-  EXPECT_STREQ(port(PrimitiveId::kGetHeadGazePlane), "getHeadGaze:o");
+  EXPECT_STREQ(port(PrimitiveId::kGetHeadGaze), "getHeadGaze:o");
+  EXPECT_STREQ(port(PrimitiveId::kGetHeadGazePlane), "getHeadGaze_plane:o") << "F12 told from F11";
+  EXPECT_STREQ(port(PrimitiveId::kGetObjectsCircle), "getObjects_circle:o") << "F14 from F13";
+  // Every primitive has its own port name.
+  std::set<std::string> names;
+  for (int i = 1; i <= kPrimitiveCount; ++i) names.insert(port(static_cast<PrimitiveId>(i)));
+  EXPECT_EQ(names.size(), static_cast<size_t>(kPrimitiveCount));
   EXPECT_STREQ(port(PrimitiveId::kTrackObject), "trackObject:o") << "not the trackHand port";
 }
 

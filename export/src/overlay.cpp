@@ -1,13 +1,20 @@
 #include "dreamsense/export/overlay.hpp"
 
+#include "dreamsense/core/log.hpp"
 #include "dreamsense/core/output_file.hpp"
+#include "dreamsense/core/skeleton_bones.hpp"
 #include "dreamsense/dream/legacy.hpp"
+#include "dreamsense/perception/actions.hpp"
+#include "dreamsense/perception/body.hpp"
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/perception/face_tracks.hpp"
 #include "dreamsense/perception/gaze.hpp"
 #include "dreamsense/perception/head_pose.hpp"
+#include "dreamsense/perception/sound_direction.hpp"
+#include "dreamsense/perception/speech.hpp"
+#include "dreamsense/perception/voice_id.hpp"
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -27,6 +34,16 @@ const T* this_tick(const BlackboardView& view, Key<T> key, Timestamp tick,
                    std::shared_ptr<const T>& keep) {
   const auto e = view.get(key);
   if (!e || e->stamp != tick || !e->present()) return nullptr;
+  keep = e->value;
+  return keep.get();
+}
+
+// The newest entry of `key` holding a value, if it is at most `max_age` older than the tick.
+template <typename T>
+const T* recent(const BlackboardView& view, Key<T> key, Timestamp tick, Duration max_age,
+                std::shared_ptr<const T>& keep) {
+  const auto e = view.get(key);
+  if (!e || !e->present() || e->stamp > tick || tick - e->stamp > max_age) return nullptr;
   keep = e->value;
   return keep.get();
 }
@@ -304,8 +321,91 @@ cv::Mat draw_overlay(const cv::Mat& image, const SensorId& camera, const MultiFr
     }
   }
 
-  // Header: shown camera, selection, time.
+  // The child's skeleton (world joints, through this camera's model).
+  std::shared_ptr<const BodyState> body_keep;
+  if (const BodyState* body =
+          options.skeleton ? this_tick(view, keys::kChildBody, t, body_keep) : nullptr) {
+    for (const auto& [a, b] : kSkeletonBones) {
+      const JointObservation &ja = body->body.joint(a), &jb = body->body.joint(b);
+      if (ja.valid() && jb.valid())
+        draw_segment(canvas, map, model, shown, ja.position_m, jb.position_m,
+                     overlay_colors::kSkeleton, st.thin);
+    }
+  }
+
   const int line = static_cast<int>(std::lround(28 * st.font / 0.5));
+  // Selected camera: a frame around the picture.
+  if (sel != nullptr && sel->camera == camera && !image.empty())
+    cv::rectangle(
+        canvas,
+        cv::Rect(cv::Point(static_cast<int>(map.offset.x), static_cast<int>(map.offset.y)),
+                 cv::Size(static_cast<int>(std::lround(shown.width * map.scale)),
+                          static_cast<int>(std::lround(shown.height * map.scale)))),
+        overlay_colors::kSelectedFaceBox, st.thick);
+
+  // Sound direction, gesture (left, above the mutual-gaze box) and the last utterance (subtitle).
+  int row = out_size.height - line / 2 - line;
+  std::shared_ptr<const SoundDirection> sound_keep;
+  if (const SoundDirection* sd =
+          options.sound_direction
+              ? recent(view, keys::kSoundDirection, t, Duration::from_seconds(0.5), sound_keep)
+              : nullptr) {
+    label(canvas, fmt::format("sound az {:+.0f} deg", sd->azimuth_deg), {8, row}, {255, 255, 255},
+          {90, 60, 20}, st);
+    row -= line;
+  }
+  std::shared_ptr<const ActionState> action_keep;
+  if (const ActionState* action =
+          options.gesture ? this_tick(view, keys::kChildAction, t, action_keep) : nullptr;
+      action != nullptr && action->ready && action->label != "none") {
+    double score = 0;
+    for (const auto& [name, p] : action->scores)
+      if (name == action->label) score = p;
+    label(canvas, fmt::format("gesture {} {:.2f}", action->label, score), {8, row}, {0, 0, 0},
+          overlay_colors::kSkeleton, st);
+  }
+  std::shared_ptr<const RecognizedSpeech> speech_keep;
+  if (const RecognizedSpeech* speech =
+          options.subtitles ? recent(view, keys::kRecognizedSpeech, t,
+                                     Duration::from_seconds(options.subtitle_s), speech_keep)
+                            : nullptr) {
+    std::shared_ptr<const SpeakerIdentity> speaker_keep;
+    const SpeakerIdentity* speaker = recent(
+        view, keys::kSpeakerIdentity, t, Duration::from_seconds(options.subtitle_s), speaker_keep);
+    std::string text = "\"" + speech->text + "\"";
+    if (speaker != nullptr) text += " - " + speaker->speaker_id;
+    int baseline = 0;
+    const int w =
+        cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, st.font, st.thin, &baseline).width;
+    label(canvas, text, {(out_size.width - w) / 2, out_size.height - 2 * line - line / 2},
+          {255, 255, 255}, {0, 0, 0}, st);
+  }
+
+  // Legend (bottom right).
+  if (options.legend) {
+    const std::pair<const char*, cv::Scalar> items[] = {
+        {"face", overlay_colors::kFaceBox},
+        {"selected face", overlay_colors::kSelectedFaceBox},
+        {"landmarks", overlay_colors::kLandmark},
+        {"eye centres", overlay_colors::kEyeCenter},
+        {"gaze", overlay_colors::kGaze},
+        {"head x/y/z", {0, 0, 255}},
+        {"skeleton", overlay_colors::kSkeleton}};
+    const double small = st.font * 0.8;
+    const int step = static_cast<int>(std::lround(line * 0.8));
+    int y = out_size.height - static_cast<int>(std::size(items)) * step - line / 2;
+    for (const auto& [name, colour] : items) {
+      int baseline = 0;
+      const cv::Size sz = cv::getTextSize(name, cv::FONT_HERSHEY_SIMPLEX, small, 1, &baseline);
+      const int x = out_size.width - sz.width - step - 8;
+      cv::rectangle(canvas, {x - step, y - sz.height}, {x - 4, y}, colour, cv::FILLED);
+      cv::putText(canvas, name, {x, y}, cv::FONT_HERSHEY_SIMPLEX, small, {255, 255, 255}, 1,
+                  cv::LINE_AA);
+      y += step;
+    }
+  }
+
+  // Header: shown camera, selection, time.
   label(canvas, fmt::format("{} (DREAM {})", camera, dream::camera_id(camera)), {8, line},
         {255, 255, 255}, {40, 40, 40}, st);
   const std::string sel_text = sel == nullptr ? std::string("selected: none")
@@ -341,6 +441,54 @@ struct OverlayWriter::Impl {
   int64_t frames = 0;
   int64_t pending = 0;  // ticks before the first picture
   std::optional<SensorId> shown;
+  std::string codec;
+  std::vector<SensorId> tiles;              // mosaic: the cameras, in order
+  std::map<SensorId, cv::Mat> last_images;  // mosaic: each camera's last frame
+
+  // Starts the encoder for pictures of `picture_size`' aspect: the configured fourcc, else mp4v.
+  Status start(cv::Size picture_size) {
+    const int h =
+        2 * std::max(1, static_cast<int>(std::lround(options.width_px * picture_size.height /
+                                                     (2.0 * std::max(1, picture_size.width)))));
+    size = cv::Size(options.width_px - options.width_px % 2, h);
+    std::vector<std::string> tries{options.fourcc};
+    if (options.fourcc != "mp4v") tries.emplace_back("mp4v");
+    for (const std::string& f : tries) {
+      if (writer.open(partial_path.string(), cv::CAP_FFMPEG,
+                      cv::VideoWriter::fourcc(f[0], f[1], f[2], f[3]), options.fps, size, true)) {
+        if (f != options.fourcc)
+          log::warn("{}: no '{}' encoder in OpenCV's FFmpeg, written as '{}'", final_path.string(),
+                    options.fourcc, f);
+        codec = f;
+        return ok_status();
+      }
+    }
+    std::error_code ec;
+    fs::remove(partial_path, ec);
+    return make_error(ErrorCode::kUnsupported,
+                      "{}: cannot encode '{}' video with OpenCV's FFmpeg backend",
+                      final_path.string(), options.fourcc);
+  }
+
+  // Mosaic: every camera's last picture in a grid of tiles, each with its own overlay.
+  cv::Mat draw_mosaic(const MultiFrame& tick, const BlackboardView& view) const {
+    const int n = static_cast<int>(tiles.size());
+    const int cols = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+    const int rows = (n + cols - 1) / cols;
+    cv::Mat canvas(size, CV_8UC3, cv::Scalar::all(0));
+    const cv::Size tile(size.width / cols, size.height / rows);
+    OverlayOptions o = options;
+    o.legend = false;
+    for (int i = 0; i < n; ++i) {
+      const auto it = last_images.find(tiles[static_cast<size_t>(i)]);
+      if (it == last_images.end()) continue;
+      o.legend = i == n - 1;
+      draw_overlay(it->second, it->first, tick, view, o, tile)
+          .copyTo(canvas(cv::Rect((i % cols) * tile.width, (i / cols) * tile.height, tile.width,
+                                  tile.height)));
+    }
+    return canvas;
+  }
 
   void write(const cv::Mat& picture) {
     writer.write(picture);
@@ -363,6 +511,9 @@ Status OverlayWriter::open(const fs::path& path, const OverlayOptions& options) 
   m.frames = 0;
   m.pending = 0;
   m.shown.reset();
+  m.codec.clear();
+  m.tiles.clear();
+  m.last_images.clear();
   m.final_path = path;
   m.partial_path = dir / (path.stem().string() + ".partial" + path.extension().string());
   std::error_code ec;
@@ -405,21 +556,25 @@ Status OverlayWriter::add(const MultiFrame& tick, const BlackboardView& view) {
     return ok_status();
   }
 
-  if (!m.writer.isOpened()) {
-    const int h = 2 * std::max(1, static_cast<int>(std::lround(m.options.width_px * image->rows /
-                                                               (2.0 * image->cols))));
-    m.size = cv::Size(m.options.width_px - m.options.width_px % 2, h);
-    const std::string& f = m.options.fourcc;
-    if (!m.writer.open(m.partial_path.string(), cv::CAP_FFMPEG,
-                       cv::VideoWriter::fourcc(f[0], f[1], f[2], f[3]), m.options.fps, m.size,
-                       true)) {
-      std::error_code ec;
-      fs::remove(m.partial_path, ec);
-      return make_error(ErrorCode::kUnsupported,
-                        "{}: cannot encode '{}' video with OpenCV's FFmpeg backend",
-                        m.final_path.string(), f);
+  if (m.options.mosaic) {
+    if (m.tiles.empty())
+      for (const auto& [id, f] : tick.frames)
+        if (color_image(tick, id) != nullptr) m.tiles.push_back(id);
+    for (const SensorId& id : m.tiles)
+      if (const cv::Mat* img = color_image(tick, id)) m.last_images[id] = *img;
+    if (!m.writer.isOpened()) {
+      const int n = static_cast<int>(m.tiles.size());
+      const int cols = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+      const int rows = (n + cols - 1) / cols;
+      if (auto s = m.start({image->cols * cols, image->rows * rows}); !s) return s;
     }
+    m.last = m.draw_mosaic(tick, view);
+    for (; m.pending > 0; --m.pending) m.write(m.last);
+    m.write(m.last);
+    return ok_status();
   }
+  if (!m.writer.isOpened())
+    if (auto s = m.start(image->size()); !s) return s;
   m.shown = camera;
   m.last = draw_overlay(*image, camera, tick, view, m.options, m.size);
   for (; m.pending > 0; --m.pending) m.write(m.last);
@@ -467,6 +622,7 @@ void OverlayWriter::abandon() {
 bool OverlayWriter::is_open() const { return impl_->open; }
 int64_t OverlayWriter::frames_written() const { return impl_->frames; }
 cv::Size OverlayWriter::frame_size() const { return impl_->size; }
+std::string OverlayWriter::codec() const { return impl_->codec; }
 const fs::path& OverlayWriter::path() const { return impl_->final_path; }
 
 }  // namespace dreamsense::exporters

@@ -3,18 +3,25 @@
 
 #include "dreamsense/export/overlay.hpp"
 
+#include "dreamsense/perception/actions.hpp"
+#include "dreamsense/perception/body.hpp"
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/perception/face_tracks.hpp"
 #include "dreamsense/perception/gaze.hpp"
 #include "dreamsense/perception/head_pose.hpp"
+#include "dreamsense/perception/sound_direction.hpp"
+#include "dreamsense/perception/speech.hpp"
+#include "dreamsense/perception/voice_id.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <chrono>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <unistd.h>
 
@@ -216,7 +223,7 @@ TEST(OverlayWriter, OneFramePerTickBoxVisibleAfterDecoding) {
   ASSERT_EQ(static_cast<int>(frames.size()), ticks);
   EXPECT_EQ(static_cast<int>(reported), ticks);
   ASSERT_EQ(frames[0].size(), cv::Size(960, 720));
-  // The selected face box's right edge (x = 450, y 225..375, 3 px wide) after mp4v coding.
+  // The selected face box's right edge (x = 450, y 225..375, 3 px wide) after H.264 coding.
   const cv::Rect edge(446, 260, 9, 80);
   for (int i : {0, 5, 11, 19})
     EXPECT_LT(best_match(frames[static_cast<size_t>(i)], edge, overlay_colors::kSelectedFaceBox),
@@ -256,6 +263,114 @@ TEST(OverlayWriter, SwitchesCameraWithTheSelectionAndLetterboxes) {
   fs::remove_all(dir);
 }
 
+// Skeleton, sound direction, gesture, subtitle and speaker: what issue 21 added to the picture.
+void write_body_and_audio(Blackboard& bb, Timestamp t) {
+  BlackboardWriter w("test2");
+  BodyState body;
+  // A vertical spine 1.5 m in front of camera_middle: shoulder centre (0, -0.2), hip (0, 0.3).
+  body.body.joint(JointId::kShoulderCenter) = {{0, -0.2, 1.5}, 1.f};
+  body.body.joint(JointId::kSpine) = {{0, 0.05, 1.5}, 1.f};
+  body.body.joint(JointId::kHipCenter) = {{0, 0.3, 1.5}, 1.f};
+  w.set(keys::kChildBody, body, t, 1.f);
+  SoundDirection sd;
+  sd.azimuth_deg = -23;
+  w.set(keys::kSoundDirection, sd, t, 1.f);
+  ActionState action;
+  action.label = "wave";
+  action.ready = true;
+  action.scores = {{"wave", 0.8}, {"none", 0.2}};
+  w.set(keys::kChildAction, action, t, 1.f);
+  RecognizedSpeech speech;
+  speech.text = "go forward";
+  w.set(keys::kRecognizedSpeech, speech, t, 1.f);
+  SpeakerIdentity who;
+  who.speaker_id = "child";
+  w.set(keys::kSpeakerIdentity, who, t, 1.f);
+  bb.commit(w, t);
+}
+
+TEST(DrawOverlay, SkeletonSoundGestureSubtitleAndLegend) {
+  OverlayOptions o;
+  o.cameras["camera_middle"] = middle_model();
+  Blackboard bb;
+  const MultiFrame mf = tick_with(3, {{"camera_middle", scene(1)}});
+  write_body_and_audio(bb, mf.stamp);
+  const cv::Mat pic = draw_overlay(scene(1), "camera_middle", mf, bb.snapshot(), o, {960, 720});
+  // Spine: x = 640 * 0.75 = 480, from y (480 - 1100 * 0.2 / 1.5) * 0.75 = 250 to 525.
+  EXPECT_LT(best_match(pic, {476, 440, 9, 60}, overlay_colors::kSkeleton), 40);
+  // Gesture label (violet box) and sound direction label (dark blue box) at the left.
+  EXPECT_LT(best_match(pic, {0, 560, 120, 120}, overlay_colors::kSkeleton), 1);
+  EXPECT_LT(best_match(pic, {0, 600, 120, 100}, {90, 60, 20}), 1);
+  // Subtitle: a black box with white (anti-aliased) text at the bottom centre.
+  EXPECT_LT(best_match(pic, {330, 600, 300, 60}, {255, 255, 255}), 20);
+  // Legend swatches at the bottom right: the gaze colour and the skeleton colour.
+  EXPECT_LT(best_match(pic, {700, 500, 260, 220}, overlay_colors::kGaze), 1);
+
+  // A subtitle stays for subtitle_s; 4 s later it, the gesture and the sound are gone.
+  const MultiFrame later = tick_with(3 + 25, {{"camera_middle", scene(1)}});
+  const cv::Mat after =
+      draw_overlay(scene(1), "camera_middle", later, bb.snapshot(), o, {960, 720});
+  EXPECT_LT(best_match(after, {330, 600, 300, 60}, {255, 255, 255}), 20) << "1 s later: kept";
+  const cv::Mat gone =
+      draw_overlay(scene(1), "camera_middle", tick_with(3 + 100, {}), bb.snapshot(), o, {960, 720});
+  EXPECT_GT(best_match(gone, {0, 560, 120, 120}, overlay_colors::kSkeleton), 60);
+  EXPECT_GT(best_match(gone, {330, 600, 300, 60}, {255, 255, 255}), 60) << "4 s later: gone";
+  EXPECT_GT(best_match(gone, {0, 600, 120, 100}, {90, 60, 20}), 30);  // grey scene: >= 50
+
+  // Everything off: no skeleton, labels, subtitle or legend.
+  o.skeleton = o.sound_direction = o.gesture = o.subtitles = o.legend = false;
+  const cv::Mat off = draw_overlay(scene(1), "camera_middle", mf, bb.snapshot(), o, {960, 720});
+  EXPECT_GT(best_match(off, {476, 440, 9, 60}, overlay_colors::kSkeleton), 60);
+  EXPECT_GT(best_match(off, {0, 560, 120, 120}, overlay_colors::kSkeleton), 60);
+  EXPECT_GT(best_match(off, {700, 500, 260, 220}, overlay_colors::kGaze), 60);
+}
+
+TEST(OverlayWriter, WritesBrowserPlayableH264) {
+  const auto dir = temp_dir("h264");
+  OverlayWriter w;
+  ASSERT_TRUE(w.open(dir / "overlay.mp4"));
+  Blackboard bb;
+  for (int i = 0; i < 10; ++i)
+    ASSERT_TRUE(w.add(tick_with(i, {{"camera_middle", scene(i)}}), bb.snapshot()));
+  ASSERT_TRUE(w.commit());
+  EXPECT_EQ(w.codec(), "avc1");
+  // The MP4's sample description names the codec: 'avc1' (H.264), not 'mp4v' (MPEG-4 Part 2).
+  std::ifstream in(dir / "overlay.mp4", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(bytes.find("avc1"), std::string::npos);
+  EXPECT_NE(bytes.find("avcC"), std::string::npos) << "H.264 decoder configuration record";
+  EXPECT_EQ(bytes.find("mp4v"), std::string::npos);
+  EXPECT_EQ(read_video(dir / "overlay.mp4").size(), 10u);
+  fs::remove_all(dir);
+}
+
+TEST(OverlayWriter, MosaicShowsEveryCamera) {
+  const auto dir = temp_dir("mosaic");
+  OverlayOptions o;
+  o.mosaic = true;
+  o.legend = false;
+  OverlayWriter w;
+  ASSERT_TRUE(w.open(dir / "overlay.mp4", o));
+  Blackboard bb;
+  for (int i = 0; i < 10; ++i) {
+    std::map<SensorId, cv::Mat> images{
+        {"camera_left", cv::Mat(960, 1280, CV_8UC3, cv::Scalar(40, 60, 200))},
+        {"camera_middle", cv::Mat(960, 1280, CV_8UC3, cv::Scalar(150, 90, 60))}};
+    if (i >= 5) images.erase("camera_left");  // keeps its last picture
+    ASSERT_TRUE(w.add(tick_with(i, images), bb.snapshot()));
+  }
+  ASSERT_TRUE(w.commit());
+  const auto frames = read_video(dir / "overlay.mp4");
+  ASSERT_EQ(frames.size(), 10u);
+  // Two cameras: two tiles side by side (camera_left first), 960 wide, 4:3 tiles of 480x360.
+  EXPECT_EQ(frames[0].size(), cv::Size(960, 360));
+  for (int i : {2, 8}) {
+    EXPECT_LT(best_match(frames[static_cast<size_t>(i)], {200, 250, 20, 20}, {40, 60, 200}), 25);
+    EXPECT_LT(best_match(frames[static_cast<size_t>(i)], {680, 250, 20, 20}, {150, 90, 60}), 25);
+  }
+  fs::remove_all(dir);
+}
+
 TEST(OverlayWriter, NothingUnderTheFinalNameUnlessCommitted) {
   const auto dir = temp_dir("partial");
   {
@@ -286,7 +401,7 @@ TEST(OverlayWriter, NothingUnderTheFinalNameUnlessCommitted) {
 }
 
 TEST(OverlayWriter, CostPerFrame) {
-  // 1280x960 camera frames -> 960x720 mp4v with every element drawn; frames made beforehand.
+  // 1280x960 camera frames -> 960x720 H.264 with every element drawn; frames made beforehand.
   const auto dir = temp_dir("cost");
   OverlayOptions o;
   o.cameras["camera_middle"] = middle_model();
@@ -311,7 +426,7 @@ TEST(OverlayWriter, CostPerFrame) {
   }
   ASSERT_TRUE(w.commit());
   std::cout << "[overlay 1280x960 -> 960x720] draw " << draw_ms / ticks.size()
-            << " ms/frame, add (draw + mp4v encode) " << add_ms / ticks.size() << " ms/frame\n";
+            << " ms/frame, add (draw + H.264 encode) " << add_ms / ticks.size() << " ms/frame\n";
   fs::remove_all(dir);
 }
 

@@ -35,7 +35,11 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
       if (page) page->update(records);
       return publisher ? publisher->publish(records) : ok_status();
     };
-  DS_ASSIGN_OR_RETURN(auto capture, sources::LiveCapture::open(config, options.record));
+  // With a --duration the run lasts that long even when every device (a video file) ends first.
+  sources::LiveCaptureOptions capture_options;
+  capture_options.until_stopped = options.duration_s > 0;
+  DS_ASSIGN_OR_RETURN(auto capture,
+                      sources::LiveCapture::open(config, options.record, {}, capture_options));
   g_stop_live = false;
   if (options.stop_on_signals) {
     std::signal(SIGINT, on_live_stop_signal);

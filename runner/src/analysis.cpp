@@ -207,6 +207,7 @@ Result<AnalysisSummary> run_plan(
   if (want_overlay) {
     exporters::OverlayOptions oo;
     oo.cameras = overlay_cameras;
+    oo.mosaic = options.overlay_mosaic;
     oo.fps = manifest.frame_rate > 0 ? manifest.frame_rate : 25.0;
     oo.blur_faces = options.blur_faces;
     DS_RETURN_IF_ERROR(overlay.open(out("overlay.mp4"), oo));

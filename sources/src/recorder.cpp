@@ -201,8 +201,11 @@ struct LiveCapture::Impl {
   // Frames of all devices waiting for next(); the oldest are dropped when the consumer falls
   // behind. Finished with the first failure when the last pump ends.
   detail::CaptureQueue queue{256};
-  mutable std::mutex mutex;  // writer, stats, running, failure
-  int running = 0;           // pump threads still delivering
+  mutable std::mutex mutex;    // writer, stats, running, failure
+  int running = 0;             // pump threads still delivering
+  bool until_stopped = false;  // LiveCaptureOptions
+  bool stopped = false;        // stop_all() was called
+  bool devices_ended = false;  // every device ended by itself; the queue waits for stop_all()
   std::optional<Error> failure;
   bool finished = false;
   RecordStats stats;
@@ -214,8 +217,15 @@ struct LiveCapture::Impl {
   }
 
   void stop_all() {
+    bool end_now = false;
+    {
+      std::lock_guard lock(mutex);
+      stopped = true;
+      end_now = devices_ended;
+    }
     for (auto& c : cameras) c->stop();
     if (audio) audio->stop();
+    if (end_now) queue.finish(std::nullopt);
   }
 
   void fail(const Error& e) {
@@ -254,6 +264,10 @@ struct LiveCapture::Impl {
       std::lock_guard lock(mutex);
       if (--running > 0) return;
       end = failure;
+      if (until_stopped && !stopped && !failure) {
+        devices_ended = true;  // stop_all() ends the stream
+        return;
+      }
     }
     queue.finish(std::move(end));
   }
@@ -264,7 +278,8 @@ LiveCapture::~LiveCapture() = default;
 
 Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& config,
                                                        const std::optional<fs::path>& record_dir,
-                                                       const SessionWriterOptions& writer_options) {
+                                                       const SessionWriterOptions& writer_options,
+                                                       const LiveCaptureOptions& capture_options) {
   if (auto st = config.check(); !st) return tl::unexpected(st.error());
   if (auto st = writer_options.check(); !st) return tl::unexpected(st.error());
   if (record_dir && fs::exists(*record_dir / kManifestName))
@@ -272,6 +287,7 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
                       "{} already holds a session (choose a new folder)", record_dir->string());
 
   auto m = std::make_unique<Impl>();
+  m->until_stopped = capture_options.until_stopped;
   // Open every device first: a missing camera is an error before anything is written.
   m->origin = std::chrono::steady_clock::now();
   const auto wall_origin = std::chrono::system_clock::now();

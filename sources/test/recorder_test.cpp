@@ -10,7 +10,10 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <atomic>
+#include <chrono>
 #include <fstream>
+#include <thread>
 
 #include "session_test_util.hpp"
 
@@ -224,6 +227,48 @@ TEST(Recorder, StopFlagEndsTheRecording) {
   auto m = read_manifest(tmp.path() / "session");
   ASSERT_TRUE(m) << m.error().message;
   EXPECT_TRUE(m->complete);
+}
+
+// A device that ends (a video file runs out) ends the stream, unless until_stopped: then the
+// stream stays open, next() waiting, until stop() (live --duration, issue 21).
+TEST(LiveCapture, EndsWithTheLastDeviceUnlessHeldUntilStopped) {
+  TempDir tmp;
+  RecordConfig c;
+  RecordCameraConfig cam;
+  cam.id = "camera_middle";
+  cam.device = write_video(tmp.path(), 5).string();  // 0.2 s
+  c.cameras.push_back(cam);
+  auto drain = [](LiveCapture& capture) {
+    int frames = 0;
+    while (true) {
+      auto f = capture.next();
+      if (!f) return is_end_of_stream(f.error()) ? frames : -1;
+      ++frames;
+    }
+  };
+  {
+    auto capture = LiveCapture::open(c);
+    ASSERT_TRUE(capture) << capture.error().message;
+    EXPECT_EQ(drain(**capture), 5) << "ends by itself";
+    ASSERT_TRUE((*capture)->finish());
+  }
+  LiveCaptureOptions hold;
+  hold.until_stopped = true;
+  auto capture = LiveCapture::open(c, {}, {}, hold);
+  ASSERT_TRUE(capture) << capture.error().message;
+  std::atomic<bool> ended{false};
+  int frames = 0;
+  std::thread consumer([&] {
+    frames = drain(**capture);
+    ended = true;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));  // the video ended after 0.2 s
+  EXPECT_FALSE(ended) << "the stream must wait for stop()";
+  (*capture)->stop();
+  consumer.join();
+  EXPECT_TRUE(ended);
+  EXPECT_EQ(frames, 5);
+  ASSERT_TRUE((*capture)->finish());
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "dreamsense/actions/normalization.hpp"
 
+#include "dreamsense/core/skeleton_bones.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,27 +13,7 @@ namespace {
 constexpr int J(JointId id) { return static_cast<int>(id); }
 
 // The Kinect v1 skeleton tree (undirected edges), used to fill joints never seen in a window.
-constexpr std::array<std::pair<JointId, JointId>, 19> kBones = {{
-    {JointId::kShoulderCenter, JointId::kHead},
-    {JointId::kShoulderCenter, JointId::kShoulderLeft},
-    {JointId::kShoulderLeft, JointId::kElbowLeft},
-    {JointId::kElbowLeft, JointId::kWristLeft},
-    {JointId::kWristLeft, JointId::kHandLeft},
-    {JointId::kShoulderCenter, JointId::kShoulderRight},
-    {JointId::kShoulderRight, JointId::kElbowRight},
-    {JointId::kElbowRight, JointId::kWristRight},
-    {JointId::kWristRight, JointId::kHandRight},
-    {JointId::kShoulderCenter, JointId::kSpine},
-    {JointId::kSpine, JointId::kHipCenter},
-    {JointId::kHipCenter, JointId::kHipLeft},
-    {JointId::kHipLeft, JointId::kKneeLeft},
-    {JointId::kKneeLeft, JointId::kAnkleLeft},
-    {JointId::kAnkleLeft, JointId::kFootLeft},
-    {JointId::kHipCenter, JointId::kHipRight},
-    {JointId::kHipRight, JointId::kKneeRight},
-    {JointId::kKneeRight, JointId::kAnkleRight},
-    {JointId::kAnkleRight, JointId::kFootRight},
-}};
+constexpr const auto& kBones = kSkeletonBones;
 
 // Reference bone lengths (parent, child, length in body units = torso + shoulder width), in an
 // order where every parent comes before its children (from the hip centre). Adult proportions

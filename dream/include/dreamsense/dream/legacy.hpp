@@ -18,8 +18,10 @@ namespace dreamsense::dream {
 // other stream.
 int camera_id(std::string_view camera);
 
-// The YARP port short name of a primitive ("getHeadGaze:o"). F11 and F12 shared DREAM's
-// getHeadGaze port, F13 and F14 its getObjects port.
+// The YARP port short name of a primitive ("getHeadGaze:o"). DREAM answered F11 and F12 on one
+// getHeadGaze port and F13 and F14 on one getObjects port (the parametrised forms were never
+// used, original-dream.md 1.10); here they are told apart as getHeadGaze_plane:o and
+// getObjects_circle:o (the names of their CSV tables), so an events.log line names its primitive.
 const char* port(primitives::PrimitiveId id);
 
 // DREAM's expression ids (identifyFaceExpression): 0 happy, 1 sad, 2 angry, 3 fear, 4 neutral;

@@ -16,6 +16,11 @@
 //    the right and left eye (thin) and both eyes (thick);
 //  - mutual gaze (keys::kMutualGaze): a green "MUTUAL 1.2 s" box, grey "no mutual gaze", or grey
 //    "no gaze" when the key is absent;
+//  - the child's skeleton (keys::kChildBody, world joints projected with the camera model);
+//  - the sound direction (keys::kSoundDirection, up to 0.5 s old: azimuth, left/right), the
+//    current gesture (keys::kChildAction, when one is recognised) and the last utterance as a
+//    subtitle for 3 s (keys::kRecognizedSpeech, with the speaker of keys::kSpeakerIdentity);
+//  - a legend of the colours (bottom right), a yellow frame around the selected camera's picture;
 //  - the tick time (session clock, seconds) and tick index.
 // Which camera: options.camera = "selected" follows keys::kSelectedCamera (the picture switches
 // camera with it; while no camera is selected the last one shown stays, and before any selection
@@ -25,7 +30,11 @@
 // Head axes and gaze rays need the camera's model (options.cameras); without one they are not
 // drawn. Nothing here throws on missing data.
 //
-// The file is encoded with cv::VideoWriter (FFmpeg backend) as MPEG-4 Part 2 ('mp4v') in .mp4,
+// With options.mosaic every colour camera of the first tick that has one is shown, tiled (the
+// others keep their last picture while one has no frame), instead of one camera.
+// The file is encoded with cv::VideoWriter (FFmpeg backend) as H.264 ('avc1', libx264 through
+// Debian's FFmpeg) in .mp4, which browsers play; when that encoder is missing it falls back to
+// MPEG-4 Part 2 ('mp4v') with a warning (codec() says which),
 // written as "<stem>.partial<ext>" next to the final path (FFmpeg picks the container from the
 // extension, so the extension stays last) and renamed by commit(); on failure or without
 // commit() nothing is left under the final name.
@@ -49,7 +58,14 @@ struct OverlayOptions {
   std::string camera = "selected";  // "selected" or a colour stream id
   int width_px = 960;               // output width; height from the first picture's aspect (even)
   double fps = 25;                  // the session's frame (tick) rate
-  std::string fourcc = "mp4v";      // "MJPG" with an .avi path also works with Debian's OpenCV
+  std::string fourcc = "avc1";      // H.264; "mp4v", or "MJPG" with an .avi path, also work
+  bool mosaic = false;              // every colour camera tiled instead of one
+  bool legend = true;               // colour key, bottom right
+  bool skeleton = true;             // the child's skeleton
+  bool sound_direction = true;      // azimuth of the last voice
+  bool subtitles = true;            // last utterance and speaker, for subtitle_s
+  bool gesture = true;              // the recognised gesture
+  double subtitle_s = 3.0;
   std::map<SensorId, CameraModel> cameras;  // for head axes and gaze rays (world -> pixels)
   double head_axis_length_m = 0.08;
   double gaze_length_m = 0.3;
@@ -83,6 +99,7 @@ inline const cv::Scalar kEyeCenter{255, 0, 255};  // magenta
 inline const cv::Scalar kGaze{0, 140, 255};       // orange
 inline const cv::Scalar kMutual{0, 190, 0};       // green
 inline const cv::Scalar kNoMutual{110, 110, 110};
+inline const cv::Scalar kSkeleton{255, 120, 200};  // violet
 }  // namespace overlay_colors
 
 // Draws the overlay of `camera`'s `image` for one tick into a picture of `out_size` (the image
@@ -109,6 +126,7 @@ class OverlayWriter {
   bool is_open() const;
   int64_t frames_written() const;
   cv::Size frame_size() const;  // empty until the first picture
+  std::string codec() const;    // the fourcc really used ("avc1", or "mp4v" after a fallback)
   const std::filesystem::path& path() const;
 
  private:

@@ -49,6 +49,7 @@ struct AnalysisOptions {
   bool follow_links_outside = false;
   // Also write overlay.mp4 (boxes, landmarks, head axes, gaze rays, selected camera).
   bool overlay = false;
+  bool overlay_mosaic = false;  // overlay.mp4 shows every colour camera, tiled
   // Privacy (--blur-faces): faces pixelated in every picture written (overlay.mp4, the report's
   // key frames; export/overlay.hpp face_regions_px).
   bool blur_faces = false;

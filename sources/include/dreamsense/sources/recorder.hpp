@@ -76,6 +76,13 @@ struct RecordStats {
 // manifest() describes the streams. Its file references (calibration, speech grammar, voice
 // enrolment) are absolute paths into the configuration's files, so analysers can be set up from
 // it without a recording; the recorded session.yaml holds its own copies under relative names.
+struct LiveCaptureOptions {
+  // When every device has ended by itself (video files run out), keep the stream open (next()
+  // waits) until stop(): a run with a fixed duration lasts that long, its sensors offline.
+  // false: the stream ends with the last device.
+  bool until_stopped = false;
+};
+
 class LiveCapture : public Source {
  public:
   // Opens every device (an error before anything is written when one fails). With
@@ -83,7 +90,7 @@ class LiveCapture : public Source {
   // delivered frame into it.
   static Result<std::unique_ptr<LiveCapture>> open(
       const RecordConfig& config, const std::optional<std::filesystem::path>& record_dir = {},
-      const SessionWriterOptions& writer = {});
+      const SessionWriterOptions& writer = {}, const LiveCaptureOptions& options = {});
   ~LiveCapture() override;
   LiveCapture(const LiveCapture&) = delete;
   LiveCapture& operator=(const LiveCapture&) = delete;
