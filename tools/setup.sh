@@ -18,6 +18,8 @@ packages=(
   libjpeg62-turbo-dev
   # DDS publishing of the primitives (live --publish dds; publish/), operator page (live --ui; ui/)
   libfastrtps-dev libcpp-httplib-dev
+  # typed ROS 2 / ROS4HRI messages generated from publish/idl at build time (Java)
+  fastddsgen
   # models and media (the demo session is built from these; nothing is downloaded)
   opencv-data opencv-doc libdlib-data pocketsphinx-en-us pocketsphinx-testdata python3-skimage
   # the demo's other children's portraits (sim/include/dreamsense/sim/demo_children.hpp)

@@ -15,12 +15,15 @@ namespace {
 
 struct AnalyzeFlags {
   std::string session, out;
-  std::string config, record;  // live
-  double duration_s = 0;       // live
-  std::string publish;         // live: "dds"
-  int dds_domain = 0;          // live
-  bool dds_network = false;    // live
-  int ui_port = -1;            // live: operator page (-1: none)
+  std::string config, record;             // live
+  double duration_s = 0;                  // live
+  std::string publish;                    // live: "dds"
+  int dds_domain = 0;                     // live
+  bool dds_json = false;                  // live: also the JSON-string topics
+  std::vector<std::string> publish_only;  // live
+  bool publish_all_statuses = false;      // live
+  bool dds_network = false;               // live
+  int ui_port = -1;                       // live: operator page (-1: none)
   std::string ui_host = "127.0.0.1";
   std::string policy = "settled";
   std::string grammar;
@@ -316,9 +319,18 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
          "(default: until Ctrl-C or SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--publish", flags->publish,
-                  "Publish the primitives as they are produced: dds (ROS 2 topics "
-                  "rt/dreamsense/<primitive>, std_msgs/String holding the primitives.jsonl line)")
+                  "Publish the primitives as they are produced: dds (typed ROS 2 messages on "
+                  "ROS4HRI topics /humans/faces/..., /humans/voices/... and "
+                  "/dreamsense/mutual_gaze; publish/README.md)")
       ->check(CLI::IsMember({"dds"}));
+  cmd->add_flag("--dds-json", flags->dds_json,
+                "Also publish every primitive as JSON on rt/dreamsense/<primitive> "
+                "(std_msgs/String holding the primitives.jsonl line)");
+  cmd->add_option("--publish-only", flags->publish_only,
+                  "Publish only these primitives (names as in primitives.jsonl)")
+      ->delimiter(',');
+  cmd->add_flag("--publish-all-statuses", flags->publish_all_statuses,
+                "JSON topics: also publish records that are not ok (no_data, disabled, ...)");
   cmd->add_option("--dds-domain", flags->dds_domain, "DDS domain (ROS_DOMAIN_ID)")
       ->default_val(0)
       ->check(CLI::Range(0, 232));
@@ -346,6 +358,13 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       publish::DdsPublisherOptions po;
       po.domain_id = flags->dds_domain;
       po.network = flags->dds_network;
+      po.json_topics = flags->dds_json;
+      po.only = {flags->publish_only.begin(), flags->publish_only.end()};
+      po.all_statuses = flags->publish_all_statuses;
+      if (auto s = po.check(); !s) {
+        exit_code = fail(s.error());
+        return;
+      }
       lo.dds = po;
     }
     if (flags->ui_port >= 0) {

@@ -336,10 +336,11 @@ TEST_F(Cli, LiveAnalysesACameraAsItDeliversAndRecordsIt) {
   dds.domain_id = 100 + static_cast<int>(::getpid() % 100);
   auto faces_topic = dreamsense::publish::DdsStringSubscriber::create(dds, "getFaces");
   const bool have_dds = static_cast<bool>(faces_topic);
-  RunResult r = run(
-      "live --config " + (dir / "live.yaml").string() + " --out " + (dir / "out").string() +
-      " --record " + (dir / "rec").string() + " --duration 3 --ui 0" +
-      (have_dds ? " --publish dds --dds-domain " + std::to_string(dds.domain_id) : std::string()));
+  RunResult r =
+      run("live --config " + (dir / "live.yaml").string() + " --out " + (dir / "out").string() +
+          " --record " + (dir / "rec").string() + " --duration 3 --ui 0" +
+          (have_dds ? " --publish dds --dds-json --dds-domain " + std::to_string(dds.domain_id)
+                    : std::string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("operator page: http://127.0.0.1:"), std::string::npos) << r.err;
   int faces_ok = 0, head_ok = 0, ticks = 0;

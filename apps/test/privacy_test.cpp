@@ -238,6 +238,7 @@ std::vector<std::string> dds_messages(const fs::path& session, bool include_name
   publish::DdsPublisherOptions po;
   po.domain_id = 201 + static_cast<int>(::getpid() % 15) * 2 + (include_names ? 1 : 0);
   po.only = {"identifyVoice", "identifyFace"};
+  po.json_topics = true;
   auto voice = publish::DdsStringSubscriber::create(po, "identifyVoice");
   if (!voice && voice.error().code == ErrorCode::kUnsupported) return {"unsupported"};
   EXPECT_TRUE(voice) << voice.error().message;

@@ -13,12 +13,17 @@ extern "C" void on_live_stop_signal(int /*signal*/) { g_stop_live = true; }
 }  // namespace
 
 Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options) {
-  std::unique_ptr<publish::DdsPublisher> publisher;
-  if (options.dds) {
-    DS_ASSIGN_OR_RETURN(publisher, publish::DdsPublisher::create(*options.dds));
-  }
   DS_ASSIGN_OR_RETURN(const sources::RecordConfig config,
                       sources::read_record_config(options.config));
+  std::unique_ptr<publish::DdsPublisher> publisher;
+  if (options.dds) {
+    publish::DdsPublisherOptions po = *options.dds;
+    // Sizes to normalise face boxes by (/humans/faces/<id>/roi): the requested camera sizes.
+    for (const auto& c : config.cameras)
+      if (c.width > 0 && c.height > 0 && !po.image_sizes.count(c.id))
+        po.image_sizes[c.id] = cv::Size(c.width, c.height);
+    DS_ASSIGN_OR_RETURN(publisher, publish::DdsPublisher::create(po));
+  }
   runner::AnalysisOptions o = options.analysis;
   std::unique_ptr<ui::OperatorPage> page;
   if (options.ui) {

@@ -9,6 +9,8 @@
 #include <map>
 #include <mutex>
 
+#include "ros_hri.hpp"
+
 #ifdef DREAMSENSE_HAVE_DDS
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
@@ -62,6 +64,7 @@ Status DdsPublisherOptions::check() const {
                     topic_prefix));
   for (const auto& name : only)
     if (!is_primitive_name(name)) add(fmt::format("'{}' is not a primitive name", name));
+  if (!ros_topics && !json_topics) add("nothing to publish (ros_topics and json_topics both off)");
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "DdsPublisherOptions: {}", bad);
   return ok_status();
 }
@@ -149,7 +152,10 @@ struct DdsPublisher::Impl {
   dds::DomainParticipant* participant = nullptr;
   dds::Publisher* publisher = nullptr;
   dds::TypeSupport type{new StringType()};
-  std::map<std::string, std::pair<dds::Topic*, dds::DataWriter*>> writers;  // by primitive name
+  std::map<std::string, std::pair<dds::Topic*, dds::DataWriter*>> writers;  // by topic name
+#ifdef DREAMSENSE_HAVE_ROS_MSGS
+  detail::RosHriTopics ros;
+#endif
   mutable std::mutex mutex;
   DdsPublisherStats stats;
 
@@ -164,11 +170,11 @@ struct DdsPublisher::Impl {
     dds::DomainParticipantFactory::get_instance()->delete_participant(participant);
   }
 
-  dds::DataWriter* writer_for(const std::string& primitive) {
-    auto it = writers.find(primitive);
+  dds::DataWriter* writer_for(const std::string& topic_name, dds::TypeSupport& topic_type) {
+    auto it = writers.find(topic_name);
     if (it != writers.end()) return it->second.second;
-    dds::Topic* topic = participant->create_topic(dds_topic_name(options, primitive),
-                                                  type.get_type_name(), topic_qos());
+    dds::Topic* topic =
+        participant->create_topic(topic_name, topic_type.get_type_name(), topic_qos());
     if (topic == nullptr) return nullptr;
     dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
     wq.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
@@ -179,7 +185,7 @@ struct DdsPublisher::Impl {
     wq.durability().kind = dds::TRANSIENT_LOCAL_DURABILITY_QOS;
     wq.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
     dds::DataWriter* w = publisher->create_datawriter(topic, wq);
-    writers[primitive] = {topic, w};
+    writers[topic_name] = {topic, w};
     return w;
   }
 };
@@ -189,6 +195,11 @@ DdsPublisher::~DdsPublisher() = default;
 
 Result<std::unique_ptr<DdsPublisher>> DdsPublisher::create(const DdsPublisherOptions& options) {
   if (auto st = options.check(); !st) return tl::unexpected(st.error());
+  if (options.ros_topics && !have_ros_messages())
+    return make_error(
+        ErrorCode::kUnsupported,
+        "DDS: typed ROS 2 messages are not in this build (install Debian's fastddsgen "
+        "and rebuild), or publish the JSON topics only");
   auto m = std::make_unique<Impl>();
   m->options = options;
   m->participant = make_participant(options, "dreamsense");
@@ -197,10 +208,18 @@ Result<std::unique_ptr<DdsPublisher>> DdsPublisher::create(const DdsPublisherOpt
                       options.domain_id);
   if (m->type.register_type(m->participant) != ReturnCode_t::RETCODE_OK)
     return make_error(ErrorCode::kInternal, "DDS: cannot register type {}", kDdsStringTypeName);
+#ifdef DREAMSENSE_HAVE_ROS_MSGS
+  if (options.ros_topics) DS_RETURN_IF_ERROR(m->ros.register_types(m->participant));
+#endif
   m->publisher = m->participant->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
   if (m->publisher == nullptr)
     return make_error(ErrorCode::kIoError, "DDS: cannot create a publisher");
-  log::info("DDS: publishing primitives on rt/{}/<primitive> (domain {}, {})", options.topic_prefix,
+  log::info("DDS: publishing {}{}{} (domain {}, {})",
+            options.ros_topics
+                ? "ROS4HRI topics rt/humans/... and rt/" + options.topic_prefix + "/mutual_gaze"
+                : "",
+            options.ros_topics && options.json_topics ? " and " : "",
+            options.json_topics ? "JSON topics rt/" + options.topic_prefix + "/<primitive>" : "",
             options.domain_id, options.network ? "all network interfaces" : "this machine only");
   if (options.network)
     log::warn(
@@ -212,11 +231,21 @@ Result<std::unique_ptr<DdsPublisher>> DdsPublisher::create(const DdsPublisherOpt
 Status DdsPublisher::publish(const std::vector<primitives::PrimitiveRecord>& records) {
   Impl& m = *impl_;
   std::lock_guard lock(m.mutex);
+#ifdef DREAMSENSE_HAVE_ROS_MSGS
+  if (m.options.ros_topics)
+    DS_RETURN_IF_ERROR(m.ros.publish(
+        records, m.options,
+        [&m](const std::string& topic, dds::TypeSupport& type) {
+          return m.writer_for(topic, type);
+        },
+        m.stats));
+#endif
+  if (!m.options.json_topics) return ok_status();
   for (const auto& r : records) {
     if (!m.options.all_statuses && r.status != primitives::PrimitiveStatus::kOk) continue;
     const std::string name = primitives::info(r.id).name;
     if (!m.options.only.empty() && !m.options.only.count(name)) continue;
-    dds::DataWriter* w = m.writer_for(name);
+    dds::DataWriter* w = m.writer_for(dds_topic_name(m.options, name), m.type);
     if (w == nullptr)
       return make_error(ErrorCode::kIoError, "DDS: cannot create the writer of {}",
                         dds_topic_name(m.options, name));

@@ -43,6 +43,32 @@ TEST(DdsPublisherOptions, BadOptionsAreNamed) {
   EXPECT_NE(st.error().message.find("domain_id"), std::string::npos);
   EXPECT_NE(st.error().message.find("topic_prefix"), std::string::npos);
   EXPECT_NE(st.error().message.find("'getFace' is not a primitive name"), std::string::npos);
+  DdsPublisherOptions none;
+  none.ros_topics = none.json_topics = false;
+  EXPECT_FALSE(none.check()) << "nothing to publish";
+}
+
+TEST(RosMapping, TimeExpressionAndNormalisedBox) {
+  const RosTime t = ros_time(Timestamp::from_ns(12'345'678'901LL));
+  EXPECT_EQ(t.sec, 12);
+  EXPECT_EQ(t.nanosec, 345'678'901u);
+  const RosTime neg = ros_time(Timestamp::from_ns(-1));
+  EXPECT_EQ(neg.sec, -1);
+  EXPECT_EQ(neg.nanosec, 999'999'999u);
+  EXPECT_EQ(hri_expression("sadness"), "sad");
+  EXPECT_EQ(hri_expression("fear"), "scared");
+  EXPECT_EQ(hri_expression("neutral"), "neutral");
+  EXPECT_EQ(hri_expression("contempt"), "contempt") << "no ROS4HRI equivalent: unchanged";
+  const auto roi = normalized_roi({320, 240, 640, 480}, {1280, 960});
+  ASSERT_TRUE(roi);
+  EXPECT_FLOAT_EQ((*roi)[0], 0.25f);
+  EXPECT_FLOAT_EQ((*roi)[3], 0.75f);
+  EXPECT_FALSE(normalized_roi({2000, 10, 50, 50}, {1280, 960})) << "outside the image";
+  EXPECT_FALSE(normalized_roi({0, 0, 50, 50}, {0, 0}));
+  const auto clipped = normalized_roi({-100, -100, 200, 200}, {1000, 1000});
+  ASSERT_TRUE(clipped);
+  EXPECT_FLOAT_EQ((*clipped)[0], 0.f);
+  EXPECT_FLOAT_EQ((*clipped)[2], 0.1f);
 }
 
 PrimitiveRecord record(PrimitiveId id, PrimitiveStatus status, int64_t stamp_ns) {
@@ -62,6 +88,8 @@ PrimitiveRecord record(PrimitiveId id, PrimitiveStatus status, int64_t stamp_ns)
 TEST(DdsPublisher, SubscriberReceivesOkRecordsAsPrimitivesJsonLines) {
   DdsPublisherOptions o;
   o.domain_id = 100 + static_cast<int>(::getpid() % 100);  // parallel test runs do not mix
+  o.json_topics = true;
+  o.ros_topics = false;
   auto sub = DdsStringSubscriber::create(o, "getFaces");
   if (!sub && sub.error().code == ErrorCode::kUnsupported) GTEST_SKIP() << sub.error().message;
   ASSERT_TRUE(sub) << sub.error().message;

@@ -1,6 +1,11 @@
 #pragma once
 // Publishing the perception primitives over DDS (eProsima Fast DDS, Debian libfastrtps), with
-// ROS 2 naming so ROS 2 nodes subscribe without a bridge:
+// ROS 2 naming so ROS 2 nodes subscribe without a bridge.
+// Typed (ros_topics, default): ROS4HRI (REP-155) topics rt/humans/faces/tracked,
+// rt/humans/faces/<id>/{roi,expression,gaze}, rt/humans/voices/tracked,
+// rt/humans/voices/<id>/speech and rt/<prefix>/mutual_gaze, with hri_msgs / dreamsense_msgs types
+// generated from publish/idl by fastddsgen, std_msgs/Header stamps = analysis stamps
+// (publish/README.md has the table). JSON (json_topics):
 //   topic  rt/<prefix>/<primitiveName>      e.g. rt/dreamsense/getFaces (dds_topic_name)
 //   type   std_msgs::msg::dds_::String_     (ROS 2 std_msgs/msg/String)
 //   data   the record exactly as one line of primitives.jsonl (docs/primitives.md)
@@ -14,8 +19,13 @@
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/primitives/catalogue.hpp"
 
+#include <opencv2/core.hpp>
+
+#include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -26,6 +36,15 @@ struct DdsPublisherOptions {
   int domain_id = 0;                        // ROS_DOMAIN_ID
   std::string topic_prefix = "dreamsense";  // topics rt/<prefix>/<primitiveName>
   bool network = false;                     // false: this machine only (127.0.0.1 + shared memory)
+  // Typed ROS 2 messages (ROS4HRI / REP-155 topics and dreamsense_msgs; publish/README.md). Needs
+  // a build with fastddsgen; create() is an error when asked for without it.
+  bool ros_topics = true;
+  // The JSON-string topics rt/<prefix>/<primitiveName> (std_msgs/String, one primitives.jsonl
+  // line each).
+  bool json_topics = false;
+  // Image sizes of the cameras, to normalise face boxes for /humans/faces/<id>/roi (a camera
+  // without a size gets no roi message).
+  std::map<std::string, cv::Size> image_sizes;
   // Also publish records whose status is not ok (disabled, no_data, ...): a subscriber then sees
   // every tick. Default: ok records only.
   bool all_statuses = false;
@@ -39,6 +58,23 @@ struct DdsPublisherOptions {
 std::string dds_topic_token(const std::string& primitive);
 std::string dds_topic_name(const DdsPublisherOptions& options, const std::string& primitive);
 inline constexpr const char* kDdsStringTypeName = "std_msgs::msg::dds_::String_";
+
+// ROS 2 / ROS4HRI mapping, exposed for tests.
+struct RosTime {
+  int32_t sec = 0;
+  uint32_t nanosec = 0;
+};
+RosTime ros_time(Timestamp t);  // builtin_interfaces/Time of a stamp (ns -> sec + nanosec)
+// The hri_msgs/Expression constant for an expression label ("sadness" -> "sad", "fear" ->
+// "scared", ...); a label without an equivalent is passed on unchanged.
+std::string hri_expression(const std::string& label);
+// A pixel box as (xmin, ymin, xmax, ymax) normalised by the image size and clipped to [0, 1];
+// nullopt for an empty image size or a box outside the image.
+std::optional<std::array<float, 4>> normalized_roi(const cv::Rect2d& box, cv::Size image);
+// Whether this build can publish the typed messages.
+bool have_ros_messages();
+inline constexpr const char* kRosTrackedFacesTopic = "rt/humans/faces/tracked";
+inline constexpr const char* kRosTrackedVoicesTopic = "rt/humans/voices/tracked";
 
 struct DdsPublisherStats {
   uint64_t published = 0;
