@@ -3,6 +3,7 @@
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/export/overlay.hpp"
 #include "dreamsense/export/primitive_json.hpp"
+#include "dreamsense/perception/face_detection.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -52,7 +53,7 @@ body{font-family:system-ui,sans-serif;margin:0;background:#f2f2f2;color:#222}
 #cams{display:flex;flex-wrap:wrap;gap:10px;padding:0 14px 10px}
 .cam{flex:1 1 30%;min-width:260px;background:#000;border:4px solid #546e7a;border-radius:6px;position:relative}
 .cam img{display:block;width:100%;min-height:120px}
-.cam .label{position:absolute;left:0;top:0;background:#000a;color:#fff;padding:2px 8px;font-size:15px}
+.cam .label{position:absolute;right:0;bottom:0;background:#000a;color:#fff;padding:2px 8px;font-size:15px}
 .cam.selected{border:6px solid #ffca28}
 .cam.selected .label{background:#ffca28;color:#000;font-weight:700}
 #lower{display:grid;grid-template-columns:1fr 2fr;gap:10px;padding:0 14px 14px}
@@ -273,9 +274,16 @@ struct OperatorPage::Impl {
   std::map<std::string, nlohmann::json> records;  // by primitive name, catalogue order below
   std::map<std::string, nlohmann::json> last_ok;  // each primitive's latest ok record
   std::map<SensorId, FramePtr> frames;
-  // The latest tick with its blackboard (update_view): pictures with the overlay.
-  std::shared_ptr<const MultiFrame> tick;
-  std::optional<BlackboardView> view;
+  // Per camera the latest tick that held its frame, with the blackboard after that tick
+  // (update_view): its picture is drawn with the overlay.
+  struct Viewed {
+    std::shared_ptr<const MultiFrame> tick;
+    BlackboardView view;
+  };
+  std::map<SensorId, Viewed> viewed;
+  // The selected camera of the latest viewed tick (keys::kSelectedCamera, as the pictures draw
+  // it); before any update_view, getFaces' selected_camera.
+  std::optional<std::optional<SensorId>> view_selected;
   std::map<SensorId, std::pair<uint64_t, std::string>> jpeg_cache;  // camera -> (tick, jpeg)
   // The latest getFaces answer's boxes per camera (full-resolution pixels), for blur_faces.
   std::map<SensorId, std::vector<cv::Rect2d>> face_boxes;
@@ -314,9 +322,9 @@ struct OperatorPage::Impl {
       auto it = frames.find(id);
       if (it == frames.end()) return false;
       f = it->second;
-      if (tick && view && tick->frame(id) == f) {
-        t = tick;
-        v = view;
+      if (auto w = viewed.find(id); w != viewed.end() && w->second.tick->frame(id) == f) {
+        t = w->second.tick;
+        v = w->second.view;
         if (auto c = jpeg_cache.find(id); c != jpeg_cache.end() && c->second.first == t->tick) {
           jpeg = c->second.second;
           return true;
@@ -389,8 +397,9 @@ nlohmann::json OperatorPage::Impl::state_json() const {
   s["cameras"] = cams;
   s["selected_camera"] = nullptr;
   s["faces"] = json::object();
+  if (view_selected && *view_selected) s["selected_camera"] = **view_selected;
   if (const json* v = value_of(records, "getFaces"); v && status_of(records, "getFaces") == "ok") {
-    if (v->contains("selected_camera") && (*v)["selected_camera"].is_string())
+    if (!view_selected && v->contains("selected_camera") && (*v)["selected_camera"].is_string())
       s["selected_camera"] = (*v)["selected_camera"];
     const json per_camera = v->value("cameras", json::object());
     for (const auto& [cam, list] : per_camera.items())
@@ -412,7 +421,10 @@ nlohmann::json OperatorPage::Impl::state_json() const {
   } else if (!gs.empty()) {
     g = {{"state", gs},
          {"text", gs == "disabled" ? "not analysed" : "no gaze estimate"},
-         {"detail", gs == "no_data" ? "no face, or the eyes are not visible" : gs}};
+         {"detail", gs == "no_data"          ? "no face, or the eyes are not visible"
+                    : gs == "stale"          ? "the last estimate is too old"
+                    : gs == "sensor_offline" ? "camera offline"
+                                             : gs}};
   }
   s["mutual_gaze"] = g;
 
@@ -638,10 +650,15 @@ void OperatorPage::update_view(const MultiFrame& tick, const BlackboardView& vie
   t->tick = tick.tick;
   for (const auto& [id, f] : tick.frames)
     if (f && std::holds_alternative<ColorImage>(f->payload)) t->frames[id] = f;
+  std::optional<SensorId> selected;
+  if (auto e = view.get(keys::kSelectedCamera); e && e->present() && e->stamp == tick.stamp)
+    selected = e->value->camera;
   std::lock_guard lock(impl_->mutex);
-  for (const auto& [id, f] : t->frames) impl_->frames[id] = f;
-  impl_->tick = std::move(t);
-  impl_->view = view;
+  impl_->view_selected = selected;
+  for (const auto& [id, f] : t->frames) {
+    impl_->frames[id] = f;
+    impl_->viewed[id] = {t, view};
+  }
 }
 
 void OperatorPage::set_status(nlohmann::json status) {
