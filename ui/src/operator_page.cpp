@@ -108,7 +108,7 @@ async function mark(){
   }catch(e){text('mark-status','marker not written: '+e);}
   markPending=false;refresh();}
 $('mark').addEventListener('click',mark);
-document.addEventListener('keydown',e=>{if((e.key==='m'||e.key==='M')&&!e.ctrlKey&&!e.altKey&&!e.metaKey){e.preventDefault();mark();}});
+document.addEventListener('keydown',e=>{if((e.key==='m'||e.key==='M')&&!e.repeat&&!e.ctrlKey&&!e.altKey&&!e.metaKey){e.preventDefault();mark();}});
 function showState(s){
   text('clock',s.clock);
   const rec=$('rec');
