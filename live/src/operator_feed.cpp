@@ -40,6 +40,10 @@ void OperatorFeed::set_capture(const sources::LiveCapture& capture,
   record_dir_ = record_dir;
   if (record_dir) marker_writer_ = std::make_unique<sources::MarkerWriter>(*record_dir);
   for (const auto& s : capture.manifest().streams) streams_[s.id];
+  // Head axes and gaze rays on the pictures (a calibration that does not read is the
+  // analysis' error to report, not the page's).
+  if (auto models = sources::read_color_calibrations(fs::current_path(), capture.manifest()))
+    page_.set_camera_models(std::move(*models));
 }
 
 void OperatorFeed::on_tick(const MultiFrame& tick, const BlackboardView& view) {

@@ -281,6 +281,7 @@ struct OperatorPage::Impl {
     BlackboardView view;
   };
   std::map<SensorId, Viewed> viewed;
+  std::map<SensorId, CameraModel> camera_models;  // head axes and gaze rays
   // The selected camera of the latest viewed tick (keys::kSelectedCamera, as the pictures draw
   // it); before any update_view, getFaces' selected_camera.
   std::optional<std::optional<SensorId>> view_selected;
@@ -340,6 +341,10 @@ struct OperatorPage::Impl {
     if (t) {  // boxes, landmarks, gaze and the selected face, drawn from the blackboard
       exporters::OverlayOptions oo;
       oo.camera = id;
+      {
+        std::lock_guard lock(mutex);
+        oo.cameras = camera_models;
+      }
       oo.blur_faces = options.blur_faces;
       img = exporters::draw_overlay(c->image, id, *t, *v, oo, {w, h});
     } else {
@@ -659,6 +664,11 @@ void OperatorPage::update_view(const MultiFrame& tick, const BlackboardView& vie
     impl_->frames[id] = f;
     impl_->viewed[id] = {t, view};
   }
+}
+
+void OperatorPage::set_camera_models(std::map<SensorId, CameraModel> models) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->camera_models = std::move(models);
 }
 
 void OperatorPage::set_status(nlohmann::json status) {

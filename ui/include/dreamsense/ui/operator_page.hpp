@@ -26,6 +26,7 @@
 // the blackboard are kept by reference; pictures are drawn and encoded only when asked).
 
 #include "dreamsense/core/blackboard.hpp"
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/multi_frame.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
 #include "dreamsense/core/status.hpp"
@@ -34,6 +35,7 @@
 #include <nlohmann/json.hpp>
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -72,6 +74,8 @@ class OperatorPage {
   // The tick's colour frames and the blackboard after its analysers ran: the pictures then show
   // face boxes, landmarks, gaze and the selected camera (drawn when the page asks for them).
   void update_view(const MultiFrame& tick, const BlackboardView& view);
+  // The cameras' models, for the head axes and gaze rays of the pictures (without: not drawn).
+  void set_camera_models(std::map<SensorId, CameraModel> models);
   // The run's figures (live_analysis.cpp): {"stamp_ns", "ticks", "recording": {"on", "bytes"},
   // "streams": {id: {"dropped", "offline"}}}; shown in the status strip.
   void set_status(nlohmann::json status);
