@@ -65,6 +65,7 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   capture->stop();
   analysis.join();
+  if (feed) feed->end();
   if (options.stop_on_signals) {
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);

@@ -46,6 +46,11 @@ void OperatorFeed::set_capture(const sources::LiveCapture& capture,
     page_.set_camera_models(std::move(*models));
 }
 
+void OperatorFeed::end() {
+  std::lock_guard lock(mutex_);
+  ended_ = true;
+}
+
 void OperatorFeed::on_tick(const MultiFrame& tick, const BlackboardView& view) {
   page_.update_view(tick, view);
   nlohmann::json status;
@@ -88,6 +93,7 @@ Result<nlohmann::json> OperatorFeed::make_marker(const std::string& label) {
   std::lock_guard lock(mutex_);
   if (!clock_origin_)
     return make_error(ErrorCode::kFailedPrecondition, "the devices have not started yet");
+  if (ended_) return make_error(ErrorCode::kFailedPrecondition, "the session has ended");
   // The session clock: the capture's stamps count from its origin (stamp 0).
   sources::SessionMarker m;
   m.stamp_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(

@@ -30,6 +30,8 @@ class OperatorFeed {
   // Once the devices run: the session clock's origin, the streams and the recording folder.
   void set_capture(const sources::LiveCapture& capture,
                    const std::optional<std::filesystem::path>& record_dir);
+  // The analysis has ended: later markers are refused (they would miss the event table).
+  void end();
 
  private:
   void on_tick(const MultiFrame& tick, const BlackboardView& view);
@@ -52,6 +54,7 @@ class OperatorFeed {
   Timestamp size_checked_ = Timestamp::unset();
   uint64_t record_bytes_ = 0;
   uint64_t ticks_ = 0;
+  bool ended_ = false;
 };
 
 }  // namespace dreamsense::live
