@@ -337,11 +337,13 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_flag("--dds-network", flags->dds_network,
                 "Publish on every network interface (default: this machine only)");
   cmd->add_option("--ui", flags->ui_port,
-                  "Serve the operator page (latest primitives and camera frames) on this port "
-                  "(0: any free port)")
+                  "Serve the operator page on this port (0: any free port): cameras with face "
+                  "boxes, mutual gaze, last utterance, gesture, status strip, Mark button (key M) "
+                  "writing markers into the session (ui/README.md)")
       ->check(CLI::Range(0, 65535));
   cmd->add_option("--ui-host", flags->ui_host,
-                  "Address the operator page listens on (default 127.0.0.1: this machine only)")
+                  "Address the operator page listens on (default 127.0.0.1: this machine only; "
+                  "any other address needs the access token printed with the URL)")
       ->default_val(flags->ui_host);
   add_analysis_flags(*cmd, *flags);
   cmd->callback([flags, &g, &exit_code] {

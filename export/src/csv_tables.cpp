@@ -398,7 +398,21 @@ Result<std::vector<fs::path>> write_csv_tables(const fs::path& primitives_jsonl,
   OutputFile ev;
   DS_RETURN_IF_ERROR(ev.open(dir / "events.csv"));
   DS_RETURN_IF_ERROR(ev.write("type,label,start_s,end_s,duration_s,source,detail\n"));
-  for (const auto& e : episodes.finish())
+  std::vector<json> rows = episodes.finish();
+  for (const auto& m : options.markers) {
+    const double t = static_cast<double>(m.stamp_ns - std::max<int64_t>(first_stamp, 0)) * 1e-9;
+    rows.push_back({{"type", "marker"},
+                    {"label", m.label},
+                    {"start_s", t},
+                    {"end_s", t},
+                    {"duration_s", 0.0},
+                    {"source", m.source},
+                    {"detail", m.detail}});
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](const json& a, const json& b) {
+    return a["start_s"].get<double>() < b["start_s"].get<double>();
+  });
+  for (const auto& e : rows)
     DS_RETURN_IF_ERROR(ev.write(fmt::format(
         "{},{},{:.3f},{:.3f},{:.3f},{},{}\n", csv_cell(e["type"].get<std::string>()),
         csv_cell(e["label"].get<std::string>()), e["start_s"].get<double>(),

@@ -115,5 +115,35 @@ TEST(CsvTables, WritesTablesWithAStableHeaderAndEpisodes) {
   fs::remove_all(dir);
 }
 
+// The operator's markers become events.csv rows at their stamp, in start order with the episodes.
+TEST(CsvTables, MarkersBecomeEventRows) {
+  const fs::path dir = fs::temp_directory_path() / ("ds_csv_markers_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  {
+    std::ofstream out(dir / "primitives.jsonl");
+    for (int k = 0; k < 5; ++k)
+      out << json{{"stamp_ns", 2'000'000'000LL + k * 40'000'000LL},
+                  {"primitive", "checkMutualGaze"},
+                  {"id", "F1"},
+                  {"status", "ok"},
+                  {"value", {{"mutual", k >= 2}, {"held_s", 0.0}, {"target", "robot"}}}}
+                 .dump()
+          << "\n";
+  }
+  CsvTablesOptions o;
+  o.markers.push_back({2'150'000'000LL, "child, laughing", "operator_page", "marker 2"});
+  o.markers.push_back({2'010'000'000LL, "mark", "operator_page", "marker 1"});
+  ASSERT_TRUE(write_csv_tables(dir / "primitives.jsonl", dir / "tables", o));
+  std::ifstream in(dir / "tables" / "events.csv");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  EXPECT_EQ(ss.str(),
+            "type,label,start_s,end_s,duration_s,source,detail\n"
+            "marker,mark,0.010,0.010,0.000,operator_page,marker 1\n"
+            "mutual_gaze,looking at robot,0.080,0.200,0.120,,\n"
+            "marker,\"child, laughing\",0.150,0.150,0.000,operator_page,marker 2\n");
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dreamsense::exporters

@@ -6,6 +6,8 @@
 #include <memory>
 #include <thread>
 
+#include "operator_feed.hpp"
+
 namespace dreamsense::live {
 namespace {
 std::atomic<bool> g_stop_live{false};
@@ -26,14 +28,13 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
   }
   runner::AnalysisOptions o = options.analysis;
   std::unique_ptr<ui::OperatorPage> page;
+  std::unique_ptr<OperatorFeed> feed;  // the page's pictures, status strip and markers
   if (options.ui) {
     DS_ASSIGN_OR_RETURN(page, ui::OperatorPage::start(*options.ui));
     if (options.on_ui_started) options.on_ui_started(page->url());
-    auto ticks = std::make_shared<uint64_t>(0);
-    o.on_tick_frames = [&page, ticks](const MultiFrame& tick) {
-      for (const auto& [id, frame] : tick.frames) page->update_frame(id, frame);
-      page->set_status({{"ticks", ++*ticks}, {"stamp_s", tick.stamp.seconds()}});
-    };
+    feed = std::make_unique<OperatorFeed>(*page, o.evaluator.offline_after);
+    feed->attach(o);
+    if (!o.csv) o.csv = true;  // the page's markers go into tables/events.csv
   }
   if (publisher || page)
     o.on_records = [&publisher, &page](const std::vector<primitives::PrimitiveRecord>& records) {
@@ -45,6 +46,7 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
   capture_options.until_stopped = options.duration_s > 0;
   DS_ASSIGN_OR_RETURN(auto capture,
                       sources::LiveCapture::open(config, options.record, {}, capture_options));
+  if (feed) feed->set_capture(*capture, options.record);
   g_stop_live = false;
   if (options.stop_on_signals) {
     std::signal(SIGINT, on_live_stop_signal);
@@ -72,6 +74,7 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   capture->stop();
   analysis.join();
+  if (feed) feed->end();
   if (options.stop_on_signals) {
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);

@@ -80,6 +80,8 @@ nlohmann::json AnalysisSummary::to_json() const {
   }
   nlohmann::json outs = nlohmann::json::array();
   for (const auto& o : outputs) outs.push_back(o.filename().string());
+  nlohmann::json markers_json = nlohmann::json::array();
+  for (const auto& m : markers) markers_json.push_back(sources::to_json(m));
   return {{"ticks", pipeline.ticks},
           {"frames", pipeline.frames},
           {"media_seconds", pipeline.media_seconds},
@@ -93,6 +95,7 @@ nlohmann::json AnalysisSummary::to_json() const {
           {"non_finite_values", non_finite},
           {"per_minute", minutes},
           {"sensors", sensor_json},
+          {"markers", markers_json},
           {"outputs", outs},
           {"input", input}};
 }
@@ -256,6 +259,7 @@ Result<AnalysisSummary> run_plan(
     track_sensors(tick);
     if (want_overlay) DS_RETURN_IF_ERROR(overlay.add(tick, view));
     if (options.on_tick_frames) options.on_tick_frames(tick);
+    if (options.on_tick_view) options.on_tick_view(tick, view);
     auto records = evaluator.evaluate(tick, view);
     for (auto& r : records) {
       // No ok answer ever carries a NaN or infinity (a bad calibration or sensor value that got
@@ -289,6 +293,7 @@ Result<AnalysisSummary> run_plan(
   summary.pipeline = (*pipeline)->stats();
   close_minute();
   if (damage_of) summary.damage = damage_of();
+  if (options.markers) summary.markers = options.markers();
 
   if (write) {
     DS_RETURN_IF_ERROR(jsonl.commit());
@@ -314,6 +319,8 @@ Result<AnalysisSummary> run_plan(
       exporters::CsvTablesOptions co;
       co.approximate_calibration = summary.input.value("approximate_calibration", false);
       if (summary.input.value("kind", "") == "video") co.mutual_gaze_target = "the camera";
+      for (const auto& m : summary.markers)
+        co.markers.push_back({m.stamp_ns, m.label, m.source, fmt::format("marker {}", m.n)});
       auto tables = exporters::write_csv_tables(out("primitives.jsonl"), out("tables"), co);
       if (!tables) return tl::unexpected(tables.error());
     }
@@ -488,7 +495,14 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   fs::path session_path = fs::absolute(options.session_dir).lexically_normal();
   if (session_path.filename().empty()) session_path = session_path.parent_path();  // "dir/"
   const std::string session_name = session_path.filename().string();
-  return run_plan(options, std::move(*plan), manifest, **reader, po, progress, full_info.start,
+  // The operator's markers recorded with the session (markers.jsonl) go into the event table.
+  AnalysisOptions with_markers = options;
+  if (!with_markers.markers) {
+    auto markers = sources::read_markers(options.session_dir);
+    if (!markers) return tl::unexpected(markers.error());
+    with_markers.markers = [m = std::move(*markers)] { return m; };
+  }
+  return run_plan(with_markers, std::move(*plan), manifest, **reader, po, progress, full_info.start,
                   full_info.end, options.session_dir, session_name,
                   {{"kind", "session"}, {"name", session_name}}, damage_of);
 }

@@ -8,6 +8,7 @@
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/core/output_file.hpp"
+#include "dreamsense/sources/markers.hpp"
 
 #include <fmt/format.h>
 #include <sndfile.h>
@@ -166,6 +167,10 @@ Result<SessionCheck> check_session_impl(const fs::path& dir, const SessionCheckO
     out.session_problems.push_back(fmt::format(
         "{}: complete: false (the recorder was not closed, e.g. it crashed)", kManifestName));
   if (auto roles = stream_roles(m); !roles) out.session_problems.push_back(roles.error().message);
+  if (auto markers = read_markers(dir); markers)
+    out.markers = markers->size();
+  else
+    out.session_problems.push_back(markers.error().message);
 
   std::vector<SensorId> readable;
   std::vector<StreamInternals> local(m.streams.size());
@@ -301,11 +306,8 @@ nlohmann::json SessionCheck::to_json() const {
     s["problems"] = c.problems;
     streams_json.push_back(std::move(s));
   }
-  return {{"session", dir.string()},
-          {"sound", sound()},
-          {"complete", complete},
-          {"problems", session_problems},
-          {"streams", streams_json}};
+  return {{"session", dir.string()},      {"sound", sound()},   {"complete", complete},
+          {"problems", session_problems}, {"markers", markers}, {"streams", streams_json}};
 }
 
 std::string SessionCheck::table(size_t listed) const {
@@ -324,6 +326,7 @@ std::string SessionCheck::table(size_t listed) const {
                        w, c.kind, c.encoding, c.damage.records, c.damage.damaged,
                        c.damage.torn_tail, c.gap_count, span, calib, status);
   }
+  if (markers > 0) out += fmt::format("markers: {} (markers.jsonl)\n", markers);
   for (const std::string& p : session_problems) out += fmt::format("session: {}\n", p);
   for (const StreamCheck& c : streams) {
     for (const std::string& p : c.problems) out += fmt::format("{}: {}\n", c.stream, p);

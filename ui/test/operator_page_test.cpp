@@ -179,5 +179,207 @@ TEST(OperatorPage, BusyPortAndBadOptionsAreErrors) {
   EXPECT_FALSE(o.check());
 }
 
+// The mark button's request: a marker through the handler, answered 201 and listed on the page;
+// refused when it is not JSON (a cross-site form) or comes from another web page.
+TEST(OperatorPage, MarkerPostReachesTheHandlerAndIsListed) {
+  OperatorPageOptions o;
+  o.port = 0;
+  auto page = OperatorPage::start(o);
+  ASSERT_TRUE(page) << page.error().message;
+  httplib::Client client("127.0.0.1", (*page)->port());
+  auto none = client.Post("/api/marker", R"({"label":"mark"})", "application/json");
+  ASSERT_TRUE(none);
+  EXPECT_EQ(none->status, 503) << "no handler: markers are not recorded";
+
+  std::vector<std::string> labels;
+  (*page)->set_marker_handler([&labels](const std::string& label) -> Result<nlohmann::json> {
+    labels.push_back(label);
+    return nlohmann::json{{"n", static_cast<int>(labels.size())},
+                          {"stamp_ns", int64_t{62'345'000'000}},
+                          {"label", label}};
+  });
+  auto made = client.Post("/api/marker", R"({"label":"child left the room"})", "application/json");
+  ASSERT_TRUE(made);
+  ASSERT_EQ(made->status, 201) << made->body;
+  const auto j = nlohmann::json::parse(made->body);
+  EXPECT_EQ(j["n"], 1);
+  EXPECT_EQ(j["clock"], "01:02.3");
+  ASSERT_EQ(labels, std::vector<std::string>{"child left the room"});
+
+  auto form = client.Post("/api/marker", "label=x", "application/x-www-form-urlencoded");
+  ASSERT_TRUE(form);
+  EXPECT_EQ(form->status, 415);
+  httplib::Headers foreign = {{"Origin", "http://attacker.example"}};
+  auto cross = client.Post("/api/marker", foreign, R"({})", "application/json");
+  ASSERT_TRUE(cross);
+  EXPECT_EQ(cross->status, 403);
+  httplib::Headers own = {{"Origin", "http://127.0.0.1:" + std::to_string((*page)->port())}};
+  auto same = client.Post("/api/marker", own, R"({"label":"\u0007"})", "application/json");
+  ASSERT_TRUE(same);
+  EXPECT_EQ(same->status, 201) << same->body;
+  EXPECT_EQ(labels.size(), 2u);
+  EXPECT_EQ(labels.back(), "mark") << "control characters are dropped; empty -> mark";
+
+  const auto state = nlohmann::json::parse(client.Get("/api/operator")->body);
+  ASSERT_EQ(state["markers"].size(), 2u);
+  EXPECT_EQ(state["markers"][0]["label"], "child left the room");
+  EXPECT_EQ(state["markers"][0]["clock"], "01:02.3");
+  EXPECT_EQ(state["marker_count"], 2);
+}
+
+// Off loopback every request needs the token (made at random, carried by url()); on loopback
+// none is needed unless one is given.
+TEST(OperatorPage, TokenRequiredOffLoopback) {
+  OperatorPageOptions o;
+  o.port = 0;
+  o.host = "0.0.0.0";
+  auto page = OperatorPage::start(o);
+  ASSERT_TRUE(page) << page.error().message;
+  const std::string token = (*page)->token();
+  ASSERT_GE(token.size(), 16u);
+  EXPECT_NE((*page)->url().find("?token=" + token), std::string::npos) << (*page)->url();
+  httplib::Client client("127.0.0.1", (*page)->port());
+  EXPECT_EQ(client.Get("/api/operator")->status, 401);
+  EXPECT_EQ(client.Get("/")->status, 401);
+  EXPECT_EQ(client.Get("/api/operator?token=wrong")->status, 401);
+  EXPECT_EQ(client.Get("/api/operator?token=" + token)->status, 200);
+  EXPECT_EQ(client.Get("/api/operator", {{"X-Dreamsense-Token", token}})->status, 200);
+  EXPECT_EQ(client.Post("/api/marker", R"({})", "application/json")->status, 401);
+
+  // Another page off loopback gets another token.
+  auto other = OperatorPage::start(o);
+  ASSERT_TRUE(other) << other.error().message;
+  EXPECT_NE((*other)->token(), token);
+
+  OperatorPageOptions local;
+  local.port = 0;
+  auto open = OperatorPage::start(local);
+  ASSERT_TRUE(open);
+  EXPECT_TRUE((*open)->token().empty());
+  httplib::Client lc("127.0.0.1", (*open)->port());
+  EXPECT_EQ(lc.Get("/api/operator")->status, 200);
+  local.token = "given-token";
+  auto given = OperatorPage::start(local);
+  ASSERT_TRUE(given);
+  httplib::Client gc("127.0.0.1", (*given)->port());
+  EXPECT_EQ(gc.Get("/api/operator")->status, 401);
+  EXPECT_EQ(gc.Get("/api/operator?token=given-token")->status, 200);
+  local.token = "bad token<>";
+  EXPECT_FALSE(local.check());
+}
+
+// The indicators and the status strip come rounded and with units.
+TEST(OperatorPage, StateIsRoundedWithUnits) {
+  EXPECT_EQ(session_clock_text(0), "00:00.0");
+  EXPECT_EQ(session_clock_text(83'456'789'012), "01:23.4");
+  EXPECT_EQ(session_clock_text(3'723'400'000'000), "1:02:03.4");
+  EXPECT_EQ(byte_size_text(512), "512 B");
+  EXPECT_EQ(byte_size_text(830'400), "830 kB");
+  EXPECT_EQ(byte_size_text(12'345'678), "12.3 MB");
+  EXPECT_EQ(byte_size_text(1'234'567'890), "1.23 GB");
+
+  OperatorPageOptions o;
+  o.port = 0;
+  auto page = OperatorPage::start(o);
+  ASSERT_TRUE(page) << page.error().message;
+  const Timestamp t = Timestamp::from_ns(83'456'789'012);
+  auto record = [&](PrimitiveId id, primitives::PrimitiveValue v,
+                    PrimitiveStatus st = PrimitiveStatus::kOk) {
+    PrimitiveRecord r;
+    r.id = id;
+    r.status = st;
+    r.stamp = t;
+    r.value = std::move(v);
+    return r;
+  };
+  primitives::MutualGazeValue gaze;
+  gaze.mutual = true;
+  gaze.held_s = 1.23456789;
+  primitives::SpeechValue speech;
+  speech.text = "hello robot";
+  speech.confidence = 0.87654321;
+  speech.end_ns = 80'456'789'012;
+  primitives::VoiceValue voice;
+  voice.speaker_id = "child";
+  primitives::SoundDirectionValue dir;
+  dir.azimuth_deg = 31.4159265;
+  primitives::ClassLabelValue gesture;
+  gesture.label = "wave";
+  gesture.scores = {{"wave", 0.912345}, {"none", 0.1}};
+  (*page)->update(
+      {record(PrimitiveId::kCheckMutualGaze, gaze), record(PrimitiveId::kRecognizeSpeech, speech),
+       record(PrimitiveId::kIdentifyVoice, voice), record(PrimitiveId::kGetSoundDirection, dir),
+       record(PrimitiveId::kIdentifyTrajectory, gesture)});
+  // A later no_data speech record does not erase the last utterance.
+  (*page)->update({record(PrimitiveId::kRecognizeSpeech, {}, PrimitiveStatus::kNoData)});
+  (*page)->set_status({{"stamp_ns", t.ns()},
+                       {"ticks", 2087},
+                       {"recording", {{"on", true}, {"bytes", 12'345'678}}},
+                       {"streams",
+                        {{"camera_left", {{"dropped", 3}, {"offline", false}}},
+                         {"mic_array", {{"dropped", 0}, {"offline", true}}}}}});
+  httplib::Client client("127.0.0.1", (*page)->port());
+  auto r = client.Get("/api/operator");
+  ASSERT_TRUE(r);
+  const auto s = nlohmann::json::parse(r->body);
+  EXPECT_EQ(s["clock"], "01:23.4");
+  EXPECT_DOUBLE_EQ(s["clock_s"].get<double>(), 83.5);
+  EXPECT_EQ(s["recording"]["size"], "12.3 MB");
+  EXPECT_EQ(s["recording"]["on"], true);
+  EXPECT_EQ(s["sensors_offline"], nlohmann::json::array({"mic_array"}));
+  EXPECT_EQ(s["streams"][0]["id"], "camera_left");
+  EXPECT_EQ(s["streams"][0]["dropped"], 3);
+  EXPECT_EQ(s["mutual_gaze"]["state"], "mutual");
+  EXPECT_EQ(s["mutual_gaze"]["held"], "1.2 s");
+  EXPECT_DOUBLE_EQ(s["mutual_gaze"]["held_s"].get<double>(), 1.2);
+  EXPECT_EQ(s["mutual_gaze"]["text"], "Looking at the robot");
+  ASSERT_TRUE(s["utterance"].is_object()) << s.dump();
+  EXPECT_EQ(s["utterance"]["text"], "hello robot");
+  EXPECT_EQ(s["utterance"]["speaker"], "child");
+  EXPECT_EQ(s["utterance"]["direction"], "31\u00b0 azimuth");
+  EXPECT_EQ(s["utterance"]["at"], "01:20.4");
+  EXPECT_EQ(s["utterance"]["ago"], "3 s");
+  EXPECT_DOUBLE_EQ(s["utterance"]["confidence"].get<double>(), 0.88);
+  EXPECT_EQ(s["gesture"]["text"], "wave");
+  EXPECT_EQ(s["gesture"]["detail"], "score 0.91");
+  // No 17-digit floats anywhere in what the page shows.
+  EXPECT_EQ(r->body.find("1.23456789"), std::string::npos);
+  EXPECT_EQ(r->body.find("31.41"), std::string::npos);
+
+  gaze.mutual = false;
+  (*page)->update({record(PrimitiveId::kCheckMutualGaze, gaze)});
+  EXPECT_EQ((*page)->operator_state_json()["mutual_gaze"]["state"], "not_mutual");
+  (*page)->update({record(PrimitiveId::kCheckMutualGaze, {}, PrimitiveStatus::kNoData)});
+  EXPECT_EQ((*page)->operator_state_json()["mutual_gaze"]["text"], "no gaze estimate");
+}
+
+// With the tick's blackboard the picture carries the overlay (tick time, camera name, mutual-gaze
+// box), drawn when asked.
+TEST(OperatorPage, ViewedFramesAreServedWithTheOverlay) {
+  OperatorPageOptions o;
+  o.port = 0;
+  auto page = OperatorPage::start(o);
+  ASSERT_TRUE(page) << page.error().message;
+  MultiFrame tick;
+  tick.stamp = Timestamp::from_ns(40'000'000);
+  tick.tick = 1;
+  tick.frames["camera_middle"] =
+      make_frame("camera_middle", tick.stamp, 0,
+                 ColorImage{cv::Mat(480, 640, CV_8UC3, cv::Scalar(0, 0, 255))});
+  (*page)->update_view(tick, BlackboardView());
+  httplib::Client client("127.0.0.1", (*page)->port());
+  auto jpeg = client.Get("/camera/camera_middle.jpg");
+  ASSERT_TRUE(jpeg);
+  ASSERT_EQ(jpeg->status, 200);
+  const cv::Mat img =
+      cv::imdecode(std::vector<uchar>(jpeg->body.begin(), jpeg->body.end()), cv::IMREAD_COLOR);
+  ASSERT_EQ(img.size(), cv::Size(640, 480));
+  cv::Mat not_red;
+  cv::inRange(img, cv::Scalar(0, 0, 200), cv::Scalar(60, 60, 255), not_red);
+  EXPECT_GT(img.total() - cv::countNonZero(not_red), 500u) << "overlay drawn on the frame";
+  EXPECT_EQ(nlohmann::json::parse(client.Get("/api/cameras")->body),
+            nlohmann::json::array({"camera_middle"}));
+}
+
 }  // namespace
 }  // namespace dreamsense::ui

@@ -38,6 +38,13 @@ struct CsvTablesOptions {
   int max_list_items = 5;  // items of a list of objects given their own columns
   // What mutual gaze is with: empty = the record's own `target` ("robot"); "camera" for a video.
   std::string mutual_gaze_target;
+  // Operator markers (live --ui "mark", a session's markers.jsonl): events.csv rows of type
+  // "marker" at their stamp (duration 0).
+  struct Marker {
+    int64_t stamp_ns = 0;  // session clock
+    std::string label, source, detail;
+  };
+  std::vector<Marker> markers;
 };
 
 // The file name of a primitive's table: "F<NN>_<name>.csv" with the name reduced to
@@ -58,6 +65,7 @@ std::string csv_cell(const std::string& text);
 //   speaker       identifyVoice: each utterance's speaker (label = name or speaker_id)
 //   <primitive>   any primitive whose value has a string "label" (gestures, expressions, ...):
 //                 a run of ticks with the same label other than "none"/"unknown"
+//   marker        options.markers: the operator's marks (label, source; duration 0)
 // Returns the files written.
 Result<std::vector<std::filesystem::path>> write_csv_tables(
     const std::filesystem::path& primitives_jsonl, const std::filesystem::path& dir,

@@ -8,6 +8,7 @@
 #include "dreamsense/core/pipeline.hpp"
 #include "dreamsense/primitives/evaluator.hpp"
 #include "dreamsense/runner/plan.hpp"
+#include "dreamsense/sources/markers.hpp"
 #include "dreamsense/sources/session.hpp"
 
 #include <nlohmann/json.hpp>
@@ -58,6 +59,13 @@ struct AnalysisOptions {
   std::function<Status(const std::vector<primitives::PrimitiveRecord>&)> on_records;
   // Called with every tick's frames before its primitives (e.g. the operator page's cameras).
   std::function<void(const MultiFrame&)> on_tick_frames;
+  // Called with every tick's frames and the blackboard after the tick's analysers ran (the
+  // operator page draws face boxes and landmarks from it when asked; keep this cheap).
+  std::function<void(const MultiFrame&, const BlackboardView&)> on_tick_view;
+  // Operator markers (docs/session_format.md "Markers") for events.csv and summary.json
+  // "markers", asked for once at the end of the run (live: those made on the operator page).
+  // Unset for a session: its markers.jsonl.
+  std::function<std::vector<sources::SessionMarker>()> markers;
   // live: called once the analysers are built (models loaded), before the first tick; `live
   // --duration` counts from here, so a slow start does not eat the analysed time.
   std::function<void()> on_ready;
@@ -96,6 +104,7 @@ struct AnalysisSummary {
     bool offline = false;
   };
   std::map<SensorId, Sensor> sensors;
+  std::vector<sources::SessionMarker> markers;  // operator markers, summary.json "markers"
   nlohmann::json to_json() const;
 };
 

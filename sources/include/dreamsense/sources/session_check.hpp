@@ -63,8 +63,9 @@ struct SessionCheck {
   bool complete = false;                      // session.yaml's complete flag
   std::vector<std::string> session_problems;  // manifest, complete flag, clock
   std::vector<StreamCheck> streams;           // manifest order
+  size_t markers = 0;  // operator markers in markers.jsonl (a bad file: a session problem)
   bool sound() const;
-  // The `--json` document: {session, sound, complete, problems, streams: [...]}.
+  // The `--json` document: {session, sound, complete, problems, markers, streams: [...]}.
   nlohmann::json to_json() const;
   // The human table (one row per stream) and, below it, every problem (damaged records: the
   // first `listed` of each stream).
