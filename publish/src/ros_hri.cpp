@@ -33,9 +33,9 @@ RosTime ros_time(Timestamp t) {
 std::string hri_expression(const std::string& label) {
   // hri_msgs/Expression's constants for the labels our expression models use.
   static const std::map<std::string, std::string> kNames = {
-      {"anger", "angry"},         {"angry", "angry"},     {"sadness", "sad"},
-      {"sad", "sad"},             {"happy", "happy"},     {"happiness", "happy"},
-      {"fear", "scared"},         {"surprise", "surprised"}, {"disgust", "disgusted"},
+      {"anger", "angry"},    {"angry", "angry"},        {"sadness", "sad"},
+      {"sad", "sad"},        {"happy", "happy"},        {"happiness", "happy"},
+      {"fear", "scared"},    {"surprise", "surprised"}, {"disgust", "disgusted"},
       {"neutral", "neutral"}};
   const auto it = kNames.find(label);
   return it == kNames.end() ? label : it->second;
@@ -160,7 +160,7 @@ Status RosHriTopics::publish(const std::vector<PrimitiveRecord>& records,
       e.arousal(std::numeric_limits<float>::quiet_NaN());
       const auto score = v->scores.find(v->label);
       e.confidence(static_cast<float>(score != v->scores.end() ? score->second
-                                                                 : r->confidence.value_or(0.0)));
+                                                               : r->confidence.value_or(0.0)));
       write(face_topic + "expression", m.expression, &e);
     }
   if (const PrimitiveRecord* r = find(records, PrimitiveId::kGetEyeGaze);

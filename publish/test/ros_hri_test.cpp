@@ -4,13 +4,11 @@
 
 #include "dreamsense/publish/dds_publisher.hpp"
 
-#include "ExpressionPubSubTypes.h"
-#include "GazePubSubTypes.h"
-#include "IdsListPubSubTypes.h"
-#include "LiveSpeechPubSubTypes.h"
-#include "MutualGazePubSubTypes.h"
-#include "NormalizedRegionOfInterest2DPubSubTypes.h"
+#include <gtest/gtest.h>
 
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -21,13 +19,15 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
-#include <gtest/gtest.h>
-
-#include <chrono>
-#include <cmath>
-#include <condition_variable>
 #include <mutex>
 #include <unistd.h>
+
+#include "ExpressionPubSubTypes.h"
+#include "GazePubSubTypes.h"
+#include "IdsListPubSubTypes.h"
+#include "LiveSpeechPubSubTypes.h"
+#include "MutualGazePubSubTypes.h"
+#include "NormalizedRegionOfInterest2DPubSubTypes.h"
 
 namespace dreamsense::publish {
 namespace {

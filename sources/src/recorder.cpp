@@ -3,6 +3,7 @@
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/sources/alsa_audio_source.hpp"
 #include "dreamsense/sources/camera_source.hpp"
+#include "dreamsense/sources/udp_skeleton_source.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -92,7 +93,8 @@ Status copy_into(const fs::path& from, const fs::path& to) {
 Status RecordConfig::check() const {
   std::string bad;
   auto add = [&](const std::string& s) { bad += (bad.empty() ? "" : "; ") + s; };
-  if (cameras.empty() && !audio) add("no cameras and no audio: nothing to record");
+  if (cameras.empty() && skeletons.empty() && !audio)
+    add("no cameras, skeletons or audio: nothing to record");
   std::set<std::string> ids;
   for (const auto& c : cameras) {
     if (c.id.empty()) add("a camera has no id");
@@ -100,6 +102,14 @@ Status RecordConfig::check() const {
     if (!ids.insert(c.id).second) add(fmt::format("stream id '{}' is used twice", c.id));
     if (!c.calibration.empty() && !fs::is_regular_file(c.calibration))
       add(fmt::format("camera '{}': calibration {} not found", c.id, c.calibration.string()));
+  }
+  for (const auto& k : skeletons) {
+    if (k.id.empty()) add("a skeleton input has no id");
+    if (!ids.insert(k.id).second) add(fmt::format("stream id '{}' is used twice", k.id));
+    if (k.port < 0 || k.port > 65535) add(fmt::format("skeleton '{}': port out of range", k.id));
+    if (!(k.rate_hz > 0)) add(fmt::format("skeleton '{}': rate_hz must be > 0", k.id));
+    if (!k.calibration.empty() && !fs::is_regular_file(k.calibration))
+      add(fmt::format("skeleton '{}': calibration {} not found", k.id, k.calibration.string()));
   }
   if (audio) {
     if (audio->id.empty()) add("audio has no id");
@@ -127,7 +137,7 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
   }
   const ConfigReader r(file);
   RecordConfig c;
-  DS_TRY(r.only_keys(root, "", {"session", "cameras", "audio"}));
+  DS_TRY(r.only_keys(root, "", {"session", "cameras", "skeletons", "audio"}));
   if (const YAML::Node s = root["session"]; s && !s.IsNull()) {
     DS_TRY(r.only_keys(s, "session",
                        {"name", "participant", "condition", "task", "metadata", "speech_grammar",
@@ -176,6 +186,31 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
       c.cameras.push_back(cam);
     }
   }
+  if (const YAML::Node sks = root["skeletons"]; sks && !sks.IsNull()) {
+    if (!sks.IsSequence()) return r.error("skeletons", "expected a list");
+    for (size_t i = 0; i < sks.size(); ++i) {
+      const std::string ctx = fmt::format("skeletons[{}]", i);
+      RecordSkeletonConfig k;
+      DS_TRY(r.only_keys(sks[i], ctx, {"id", "udp", "rate_hz", "calibration"}));
+      DS_TRY(r.get(sks[i], ctx, "id", k.id));
+      std::string udp;
+      DS_TRY(r.get(sks[i], ctx, "udp", udp));
+      // "host:port" or a port alone (127.0.0.1).
+      const auto colon = udp.rfind(':');
+      const std::string port_text = colon == std::string::npos ? udp : udp.substr(colon + 1);
+      if (colon != std::string::npos) k.host = udp.substr(0, colon);
+      try {
+        size_t used = 0;
+        k.port = std::stoi(port_text, &used);
+        if (used != port_text.size()) throw std::invalid_argument(port_text);
+      } catch (const std::exception&) {
+        return r.error(ctx + ".udp", "expected \"host:port\" or a port number");
+      }
+      DS_TRY(r.get(sks[i], ctx, "rate_hz", k.rate_hz));
+      DS_TRY(r.get_path(sks[i], ctx, "calibration", k.calibration));
+      c.skeletons.push_back(k);
+    }
+  }
   if (const YAML::Node a = root["audio"]; a && !a.IsNull()) {
     RecordAudioConfig au;
     DS_TRY(r.only_keys(a, "audio", {"id", "device", "sample_rate", "channels", "calibration"}));
@@ -195,6 +230,7 @@ struct LiveCapture::Impl {
   SessionManifest manifest;  // absolute file references (see manifest())
   std::chrono::steady_clock::time_point origin;
   std::vector<std::unique_ptr<CameraSource>> cameras;
+  std::vector<std::unique_ptr<UdpSkeletonSource>> skeletons;
   std::unique_ptr<AlsaAudioSource> audio;
   std::unique_ptr<SessionWriter> writer;  // when recording
   std::vector<std::thread> pumps;
@@ -224,6 +260,7 @@ struct LiveCapture::Impl {
       end_now = devices_ended;
     }
     for (auto& c : cameras) c->stop();
+    for (auto& k : skeletons) k->stop();
     if (audio) audio->stop();
     if (end_now) queue.finish(std::nullopt);
   }
@@ -303,6 +340,17 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
     if (!cam) return tl::unexpected(cam.error());
     m->cameras.push_back(std::move(*cam));
   }
+  for (const auto& k : config.skeletons) {
+    UdpSkeletonSourceOptions so;
+    so.sensor = k.id;
+    so.host = k.host;
+    so.port = k.port;
+    so.rate_hz = k.rate_hz;
+    so.clock_origin = m->origin;
+    auto src = UdpSkeletonSource::open(so);
+    if (!src) return tl::unexpected(src.error());
+    m->skeletons.push_back(std::move(*src));
+  }
   if (config.audio) {
     AlsaAudioSourceOptions ao;
     ao.sensor = config.audio->id;
@@ -337,6 +385,16 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
     s.height = m->cameras[i]->size().height;
     if (!config.cameras[i].calibration.empty())
       s.calibration = absolute(config.cameras[i].calibration);
+    man.streams.push_back(s);
+  }
+  for (size_t i = 0; i < m->skeletons.size(); ++i) {
+    StreamEntry s;
+    s.id = config.skeletons[i].id;
+    s.kind = SensorKind::kSkeleton;
+    s.encoding = "jsonl";
+    s.rate_hz = config.skeletons[i].rate_hz;
+    if (!config.skeletons[i].calibration.empty())
+      s.calibration = absolute(config.skeletons[i].calibration);
     man.streams.push_back(s);
   }
   if (m->audio) {
@@ -386,9 +444,13 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
 
   for (const auto& s : man.streams) m->stats.streams[s.id] = {};
   Impl* raw = m.get();
-  m->running = static_cast<int>(m->cameras.size()) + (m->audio ? 1 : 0);
+  m->running = static_cast<int>(m->cameras.size() + m->skeletons.size()) + (m->audio ? 1 : 0);
   for (size_t i = 0; i < m->cameras.size(); ++i)
     m->pumps.emplace_back([raw, i] { raw->pump(*raw->cameras[i], raw->manifest.streams[i].id); });
+  for (size_t i = 0; i < m->skeletons.size(); ++i)
+    m->pumps.emplace_back([raw, i] {
+      raw->pump(*raw->skeletons[i], raw->manifest.streams[raw->cameras.size() + i].id);
+    });
   if (m->audio)
     m->pumps.emplace_back([raw] { raw->pump(*raw->audio, raw->manifest.streams.back().id); });
   return std::unique_ptr<LiveCapture>(new LiveCapture(std::move(m)));
@@ -416,6 +478,11 @@ SourceInfo LiveCapture::info() const {
 }
 
 const SessionManifest& LiveCapture::manifest() const { return impl_->manifest; }
+std::map<SensorId, int> LiveCapture::skeleton_ports() const {
+  std::map<SensorId, int> ports;
+  for (const auto& k : impl_->skeletons) ports[k->info().sensors.front().id] = k->port();
+  return ports;
+}
 std::chrono::steady_clock::time_point LiveCapture::clock_origin() const { return impl_->origin; }
 void LiveCapture::stop() { impl_->stop_all(); }
 

@@ -2,6 +2,7 @@
 
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/sources/session.hpp"
+#include "dreamsense/sources/skeleton_json.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -38,9 +39,6 @@ namespace {
 
 // Upper bound of SessionReaderOptions::decode_threads.
 constexpr int kMaxDecodeThreads = 16;
-
-// Skeleton joints further than this from the sensor (metres, any axis) are damage.
-constexpr double kMaxJointDistanceM = 100.0;
 
 // Streams whose first stamps are further apart than this are on different clocks.
 constexpr int64_t kMaxFirstStampSpreadNs = 10'000'000'000LL;
@@ -860,68 +858,15 @@ class SkeletonReader : public StreamReader {
 
  private:
   Result<FramePtr> parse_line(const Line& l) const {
-    auto bad = [&](const std::string& what) {
-      return make_error(ErrorCode::kCorruptData, "{}: line {}: {}", entry_.file, l.number, what);
-    };
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(l.text);
-    } catch (const nlohmann::json::exception& e) {
-      return bad(fmt::format("malformed JSON: {}", e.what()));
-    }
-    if (!j.is_object()) return bad("expected a JSON object");
-    if (!j.contains("stamp_ns") || !j["stamp_ns"].is_number_integer())
-      return bad("missing integer 'stamp_ns'");
-    const int64_t stamp = j["stamp_ns"].get<int64_t>();
-    uint64_t sequence = frames_.size();
-    if (j.contains("sequence")) {
-      if (!j["sequence"].is_number_unsigned())
-        return bad("'sequence' is not a non-negative integer");
-      sequence = j["sequence"].get<uint64_t>();
-    }
-    Skeleton sk;
-    if (j.contains("bodies")) {
-      const auto& bodies = j["bodies"];
-      if (!bodies.is_array()) return bad("'bodies' is not a list");
-      for (size_t b = 0; b < bodies.size(); ++b) {
-        const auto& jb = bodies[b];
-        if (!jb.is_object()) return bad(fmt::format("bodies[{}] is not an object", b));
-        SkeletonBody body;
-        body.body_id = static_cast<int>(b);
-        if (jb.contains("id")) {
-          if (!jb["id"].is_number_integer())
-            return bad(fmt::format("bodies[{}].id is not an integer", b));
-          body.body_id = jb["id"].get<int>();
-        }
-        if (jb.contains("joints")) {
-          const auto& joints = jb["joints"];
-          if (!joints.is_object()) return bad(fmt::format("bodies[{}].joints is not an object", b));
-          for (const auto& [name, v] : joints.items()) {
-            auto id = joint_from_name(name);
-            if (!id) return bad(fmt::format("bodies[{}]: unknown joint '{}'", b, name));
-            if (!v.is_array() || (v.size() != 3 && v.size() != 4) ||
-                !std::all_of(v.begin(), v.end(), [](const auto& x) { return x.is_number(); }))
-              return bad(
-                  fmt::format("bodies[{}].joints.{}: expected [x, y, z, confidence]", b, name));
-            // Plausible (docs/session_format.md): finite, within 100 m of the sensor,
-            // confidence in [0, 1].
-            const cv::Vec3d p(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
-            const double c = v.size() == 4 ? v[3].get<double>() : 1.0;
-            if (!cv::checkRange(p, true, nullptr, -kMaxJointDistanceM, kMaxJointDistanceM) ||
-                !std::isfinite(c) || c < 0 || c > 1)
-              return bad(
-                  fmt::format("bodies[{}].joints.{}: implausible value (position within "
-                              "{} m, confidence in [0, 1])",
-                              b, name, kMaxJointDistanceM));
-            JointObservation& o = body.joint(*id);
-            o.position_m = p;
-            o.confidence = static_cast<float>(c);
-          }
-        }
-        sk.bodies.push_back(body);
-      }
-    }
-    return make_frame(entry_.id, Timestamp::from_ns(stamp), sequence, std::move(sk));
+    auto parsed = parse_skeleton_json(l.text);
+    if (!parsed)
+      return make_error(ErrorCode::kCorruptData, "{}: line {}: {}", entry_.file, l.number,
+                        parsed.error().message);
+    if (!parsed->stamp_ns)
+      return make_error(ErrorCode::kCorruptData, "{}: line {}: missing integer 'stamp_ns'",
+                        entry_.file, l.number);
+    return make_frame(entry_.id, Timestamp::from_ns(*parsed->stamp_ns),
+                      parsed->sequence.value_or(frames_.size()), std::move(parsed->skeleton));
   }
 
   std::vector<FramePtr> frames_;

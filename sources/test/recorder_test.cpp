@@ -10,10 +10,14 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <arpa/inet.h>
 #include <atomic>
 #include <chrono>
 #include <fstream>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <thread>
+#include <unistd.h>
 
 #include "session_test_util.hpp"
 
@@ -269,6 +273,82 @@ TEST(LiveCapture, EndsWithTheLastDeviceUnlessHeldUntilStopped) {
   EXPECT_TRUE(ended);
   EXPECT_EQ(frames, 5);
   ASSERT_TRUE((*capture)->finish());
+}
+
+// A body tracker's skeletons over UDP: parsed into frames stamped on arrival, a bad datagram
+// skipped, and recorded into the session's skeleton stream (issue 21).
+TEST(LiveCapture, SkeletonsFromAnExternalTrackerOverUdpAreAnalysedAndRecorded) {
+  TempDir tmp;
+  RecordConfig c;
+  RecordSkeletonConfig sk;
+  sk.id = "front.skeleton";
+  sk.port = 0;  // any free port
+  c.skeletons.push_back(sk);
+  const fs::path rec = tmp.path() / "session";
+  auto capture = LiveCapture::open(c, rec);
+  ASSERT_TRUE(capture) << capture.error().message;
+  const int port = (*capture)->skeleton_ports().at("front.skeleton");
+  ASSERT_GT(port, 0);
+  EXPECT_EQ((*capture)->manifest().find("front.skeleton")->kind, SensorKind::kSkeleton);
+
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<uint16_t>(port));
+  inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+  auto send = [&](const std::string& text) {
+    ::sendto(fd, text.data(), text.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  };
+  send(
+      R"({"bodies": [{"id": 4, "joints": {"head": [0.1, -0.5, 1.6, 1.0], "hand_left": [0.3, 0, 1.4]}}]})");
+  send(R"({"bodies": [{"joints": {"head": "not a number"}}]})");  // skipped, counted
+  send(R"({"stamp_ns": 5, "bodies": []})");                       // the sender's stamp is ignored
+  std::vector<FramePtr> frames;
+  for (int i = 0; i < 2; ++i) {
+    auto f = (*capture)->next();
+    ASSERT_TRUE(f) << f.error().message;
+    frames.push_back(*f);
+  }
+  ::close(fd);
+  (*capture)->stop();
+  EXPECT_FALSE((*capture)->next()) << "ends after stop()";
+  ASSERT_TRUE((*capture)->finish());
+
+  const auto* first = frames[0]->as<Skeleton>();
+  ASSERT_NE(first, nullptr);
+  ASSERT_EQ(first->bodies.size(), 1u);
+  EXPECT_EQ(first->bodies[0].body_id, 4);
+  EXPECT_DOUBLE_EQ(first->bodies[0].joint(JointId::kHead).position_m[1], -0.5);
+  EXPECT_FLOAT_EQ(first->bodies[0].joint(JointId::kHandLeft).confidence, 1.f);
+  EXPECT_TRUE(frames[1]->as<Skeleton>()->bodies.empty());
+  EXPECT_GT(frames[1]->stamp.ns(), frames[0]->stamp.ns());
+  EXPECT_GT(frames[1]->stamp.ns(), 5) << "arrival time on the capture clock";
+
+  auto reader = SessionReader::open(rec);
+  ASSERT_TRUE(reader) << reader.error().message;
+  int read = 0;
+  for (auto f = (*reader)->next(); f; f = (*reader)->next()) {
+    EXPECT_EQ((*f)->sensor, "front.skeleton");
+    ++read;
+  }
+  EXPECT_EQ(read, 2);
+}
+
+TEST(RecordConfig, SkeletonInputsAreRead) {
+  TempDir tmp;
+  write_text(tmp.path() / "a.yaml",
+             "skeletons:\n  - {id: front.skeleton, udp: \"127.0.0.1:9870\", rate_hz: 30}\n");
+  auto c = read_record_config(tmp.path() / "a.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_EQ(c->skeletons.size(), 1u);
+  EXPECT_EQ(c->skeletons[0].port, 9870);
+  EXPECT_EQ(c->skeletons[0].host, "127.0.0.1");
+  write_text(tmp.path() / "b.yaml", "skeletons:\n  - {id: s, udp: \"127.0.0.1:x\"}\n");
+  auto b = read_record_config(tmp.path() / "b.yaml");
+  ASSERT_FALSE(b);
+  EXPECT_NE(b.error().message.find("skeletons[0].udp"), std::string::npos) << b.error().message;
 }
 
 }  // namespace

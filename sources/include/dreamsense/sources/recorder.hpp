@@ -42,6 +42,15 @@ struct RecordAudioConfig {
   std::filesystem::path calibration;  // microphone geometry YAML, copied to calib/<id>.yaml
 };
 
+// Skeletons from an external body tracker over UDP (udp_skeleton_source.hpp).
+struct RecordSkeletonConfig {
+  SensorId id = "front.skeleton";  // the body analyser takes the first skeleton stream
+  std::string host = "127.0.0.1";  // listen address (config key `udp: "host:port"`)
+  int port = 0;
+  double rate_hz = 30;
+  std::filesystem::path calibration;  // the tracker's sensor pose (CameraModel YAML), optional
+};
+
 struct RecordConfig {
   std::string name;  // session name (default: the output folder's name)
   Participant participant;
@@ -51,6 +60,7 @@ struct RecordConfig {
   std::filesystem::path speech_grammar;         // copied to speech.gram (metadata speech_grammar)
   std::filesystem::path voice_enroll;  // folder <speaker>/*.wav, copied to enroll/ (voice_enroll)
   std::vector<RecordCameraConfig> cameras;
+  std::vector<RecordSkeletonConfig> skeletons;
   std::optional<RecordAudioConfig> audio;
   Status check() const;  // every problem in one message
 };
@@ -100,6 +110,8 @@ class LiveCapture : public Source {
   Result<FramePtr> next() override;
   SourceInfo info() const override;
   const SessionManifest& manifest() const;
+  // The UDP port each skeleton input listens on (port 0 in the configuration: a free one).
+  std::map<SensorId, int> skeleton_ports() const;
   // The steady-clock time of stamp 0.
   std::chrono::steady_clock::time_point clock_origin() const;
   void stop();          // thread-safe; ends every device
