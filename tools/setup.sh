@@ -20,6 +20,8 @@ packages=(
   libfastrtps-dev libcpp-httplib-dev
   # typed ROS 2 / ROS4HRI messages generated from publish/idl at build time (Java)
   fastddsgen
+  # live depth sensors: Kinect v1 (libfreenect), OpenNI2 devices (Kinect, Xtion, Orbbec)
+  libfreenect-dev libopenni2-dev
   # models and media (the demo session is built from these; nothing is downloaded)
   opencv-data opencv-doc libdlib-data pocketsphinx-en-us pocketsphinx-testdata python3-skimage
   # the demo's other children's portraits (sim/include/dreamsense/sim/demo_children.hpp)

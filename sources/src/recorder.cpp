@@ -3,6 +3,7 @@
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/sources/alsa_audio_source.hpp"
 #include "dreamsense/sources/camera_source.hpp"
+#include "dreamsense/sources/depth_sensor_source.hpp"
 #include "dreamsense/sources/udp_skeleton_source.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -93,9 +94,21 @@ Status copy_into(const fs::path& from, const fs::path& to) {
 Status RecordConfig::check() const {
   std::string bad;
   auto add = [&](const std::string& s) { bad += (bad.empty() ? "" : "; ") + s; };
-  if (cameras.empty() && skeletons.empty() && !audio)
-    add("no cameras, skeletons or audio: nothing to record");
+  if (cameras.empty() && skeletons.empty() && depth_sensors.empty() && !audio)
+    add("no cameras, depth sensors, skeletons or audio: nothing to record");
   std::set<std::string> ids;
+  for (const auto& d : depth_sensors) {
+    DepthSensorOptions o;
+    o.id = d.id;
+    o.driver = d.driver;
+    o.device = d.device;
+    o.fps = d.fps;
+    if (auto st = o.check(); !st) add(st.error().message);
+    for (const std::string& sid : {d.id + ".depth", d.id + ".color"})
+      if (!ids.insert(sid).second) add(fmt::format("stream id '{}' is used twice", sid));
+    if (!d.calibration.empty() && !fs::is_regular_file(d.calibration))
+      add(fmt::format("depth sensor '{}': calibration {} not found", d.id, d.calibration.string()));
+  }
   for (const auto& c : cameras) {
     if (c.id.empty()) add("a camera has no id");
     if (c.device.empty()) add(fmt::format("camera '{}' has no device", c.id));
@@ -137,7 +150,7 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
   }
   const ConfigReader r(file);
   RecordConfig c;
-  DS_TRY(r.only_keys(root, "", {"session", "cameras", "skeletons", "audio"}));
+  DS_TRY(r.only_keys(root, "", {"session", "cameras", "depth_sensors", "skeletons", "audio"}));
   if (const YAML::Node s = root["session"]; s && !s.IsNull()) {
     DS_TRY(r.only_keys(s, "session",
                        {"name", "participant", "condition", "task", "metadata", "speech_grammar",
@@ -186,6 +199,24 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
       c.cameras.push_back(cam);
     }
   }
+  if (const YAML::Node ds = root["depth_sensors"]; ds && !ds.IsNull()) {
+    if (!ds.IsSequence()) return r.error("depth_sensors", "expected a list");
+    for (size_t i = 0; i < ds.size(); ++i) {
+      const std::string ctx = fmt::format("depth_sensors[{}]", i);
+      RecordDepthSensorConfig d;
+      DS_TRY(r.only_keys(ds[i], ctx, {"id", "driver", "device", "fps", "color", "calibration"}));
+      DS_TRY(r.get(ds[i], ctx, "id", d.id));
+      DS_TRY(r.get(ds[i], ctx, "driver", d.driver));
+      DS_TRY(r.get(ds[i], ctx, "device", d.device));
+      DS_TRY(r.get(ds[i], ctx, "fps", d.fps));
+      DS_TRY(r.get(ds[i], ctx, "color", d.color));
+      DS_TRY(r.get_path(ds[i], ctx, "calibration", d.calibration));
+      // An .oni recording given by a relative path is relative to the configuration.
+      if (!d.device.empty() && fs::is_regular_file(file.parent_path() / d.device))
+        d.device = (file.parent_path() / d.device).string();
+      c.depth_sensors.push_back(d);
+    }
+  }
   if (const YAML::Node sks = root["skeletons"]; sks && !sks.IsNull()) {
     if (!sks.IsSequence()) return r.error("skeletons", "expected a list");
     for (size_t i = 0; i < sks.size(); ++i) {
@@ -231,6 +262,7 @@ struct LiveCapture::Impl {
   std::chrono::steady_clock::time_point origin;
   std::vector<std::unique_ptr<CameraSource>> cameras;
   std::vector<std::unique_ptr<UdpSkeletonSource>> skeletons;
+  std::vector<std::unique_ptr<DepthSensorSource>> depth_sensors;
   std::unique_ptr<AlsaAudioSource> audio;
   std::unique_ptr<SessionWriter> writer;  // when recording
   std::vector<std::thread> pumps;
@@ -261,6 +293,7 @@ struct LiveCapture::Impl {
     }
     for (auto& c : cameras) c->stop();
     for (auto& k : skeletons) k->stop();
+    for (auto& d : depth_sensors) d->stop();
     if (audio) audio->stop();
     if (end_now) queue.finish(std::nullopt);
   }
@@ -274,7 +307,7 @@ struct LiveCapture::Impl {
   }
 
   // Moves one device's frames into the recording and the merged queue.
-  void pump(Source& source, const SensorId& id) {
+  void pump(Source& source) {
     while (true) {
       auto f = source.next();
       if (!f) {
@@ -285,7 +318,7 @@ struct LiveCapture::Impl {
       {
         std::lock_guard lock(mutex);
         if (writer) written = writer->write(**f);
-        if (written) ++stats.streams[id].frames_written;
+        if (written) ++stats.streams[(*f)->sensor].frames_written;
       }
       if (!written) {
         fail(written.error());
@@ -340,6 +373,18 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
     if (!cam) return tl::unexpected(cam.error());
     m->cameras.push_back(std::move(*cam));
   }
+  for (const auto& d : config.depth_sensors) {
+    DepthSensorOptions o;
+    o.id = d.id;
+    o.driver = d.driver;
+    o.device = d.device;
+    o.fps = d.fps;
+    o.color = d.color;
+    o.clock_origin = m->origin;
+    auto src = DepthSensorSource::open(o);
+    if (!src) return tl::unexpected(src.error());
+    m->depth_sensors.push_back(std::move(*src));
+  }
   for (const auto& k : config.skeletons) {
     UdpSkeletonSourceOptions so;
     so.sensor = k.id;
@@ -387,6 +432,19 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
       s.calibration = absolute(config.cameras[i].calibration);
     man.streams.push_back(s);
   }
+  for (size_t i = 0; i < m->depth_sensors.size(); ++i)
+    for (const SensorDescription& d : m->depth_sensors[i]->info().sensors) {
+      StreamEntry s;
+      s.id = d.id;
+      s.kind = d.kind;
+      s.encoding = d.kind == SensorKind::kDepth ? "raw16" : "mjpeg";
+      s.rate_hz = d.rate_hz;
+      s.width = d.width;
+      s.height = d.height;
+      if (!config.depth_sensors[i].calibration.empty())
+        s.calibration = absolute(config.depth_sensors[i].calibration);
+      man.streams.push_back(s);
+    }
   for (size_t i = 0; i < m->skeletons.size(); ++i) {
     StreamEntry s;
     s.id = config.skeletons[i].id;
@@ -444,15 +502,15 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
 
   for (const auto& s : man.streams) m->stats.streams[s.id] = {};
   Impl* raw = m.get();
-  m->running = static_cast<int>(m->cameras.size() + m->skeletons.size()) + (m->audio ? 1 : 0);
+  m->running = static_cast<int>(m->cameras.size() + m->skeletons.size() + m->depth_sensors.size()) +
+               (m->audio ? 1 : 0);
   for (size_t i = 0; i < m->cameras.size(); ++i)
-    m->pumps.emplace_back([raw, i] { raw->pump(*raw->cameras[i], raw->manifest.streams[i].id); });
+    m->pumps.emplace_back([raw, i] { raw->pump(*raw->cameras[i]); });
   for (size_t i = 0; i < m->skeletons.size(); ++i)
-    m->pumps.emplace_back([raw, i] {
-      raw->pump(*raw->skeletons[i], raw->manifest.streams[raw->cameras.size() + i].id);
-    });
-  if (m->audio)
-    m->pumps.emplace_back([raw] { raw->pump(*raw->audio, raw->manifest.streams.back().id); });
+    m->pumps.emplace_back([raw, i] { raw->pump(*raw->skeletons[i]); });
+  for (size_t i = 0; i < m->depth_sensors.size(); ++i)
+    m->pumps.emplace_back([raw, i] { raw->pump(*raw->depth_sensors[i]); });
+  if (m->audio) m->pumps.emplace_back([raw] { raw->pump(*raw->audio); });
   return std::unique_ptr<LiveCapture>(new LiveCapture(std::move(m)));
 }
 

@@ -4,16 +4,15 @@
 #include "dreamsense/sources/skeleton_json.hpp"
 
 #include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
+#include <netinet/in.h>
+#include <poll.h>
 #include <string_view>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <vector>
 
 namespace dreamsense::sources {
@@ -25,7 +24,8 @@ Status UdpSkeletonSourceOptions::check() const {
   if (!(rate_hz > 0)) bad += " rate_hz must be > 0;";
   in_addr a{};
   if (inet_pton(AF_INET, host.c_str(), &a) != 1) bad += " host must be an IPv4 address;";
-  if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "UdpSkeletonSourceOptions:{}", bad);
+  if (!bad.empty())
+    return make_error(ErrorCode::kInvalidArgument, "UdpSkeletonSourceOptions:{}", bad);
   return ok_status();
 }
 

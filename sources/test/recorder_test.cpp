@@ -336,6 +336,65 @@ TEST(LiveCapture, SkeletonsFromAnExternalTrackerOverUdpAreAnalysedAndRecorded) {
   EXPECT_EQ(read, 2);
 }
 
+// A live RGB-D sensor behind the depth-sensor interface: the `fake` driver (no hardware here;
+// freenect and openni2 are used the same way when a device is present).
+TEST(LiveCapture, DepthSensorDeliversDepthAndColourAndIsRecorded) {
+  TempDir tmp;
+  RecordConfig c;
+  RecordDepthSensorConfig d;
+  d.id = "front";
+  d.driver = "fake";
+  d.fps = 30;
+  c.depth_sensors.push_back(d);
+  const fs::path rec = tmp.path() / "session";
+  auto capture = LiveCapture::open(c, rec);
+  ASSERT_TRUE(capture) << capture.error().message;
+  const auto* depth_entry = (*capture)->manifest().find("front.depth");
+  ASSERT_NE(depth_entry, nullptr);
+  EXPECT_EQ(depth_entry->kind, SensorKind::kDepth);
+  EXPECT_EQ(depth_entry->encoding, "raw16");
+  ASSERT_NE((*capture)->manifest().find("front.color"), nullptr);
+  int depth = 0, color = 0;
+  int64_t last = -1;
+  for (int i = 0; i < 12; ++i) {
+    auto f = (*capture)->next();
+    ASSERT_TRUE(f) << f.error().message;
+    if (const auto* di = (*f)->as<DepthImage>()) {
+      ++depth;
+      EXPECT_EQ(di->depth_mm.type(), CV_16UC1);
+      // The table plane and the ball: millimetres between 0.5 and 4 m where measured.
+      double lo = 0, hi = 0;
+      cv::minMaxLoc(di->depth_mm, &lo, &hi, nullptr, nullptr, di->depth_mm > 0);
+      EXPECT_GT(lo, 500);
+      EXPECT_LT(hi, 4001);
+      EXPECT_GT((*f)->stamp.ns(), last);
+      last = (*f)->stamp.ns();
+    } else if ((*f)->as<ColorImage>() != nullptr) {
+      ++color;
+    }
+  }
+  EXPECT_EQ(depth, 6);
+  EXPECT_EQ(color, 6);
+  (*capture)->stop();
+  while ((*capture)->next()) {
+  }
+  ASSERT_TRUE((*capture)->finish());
+  auto reader = SessionReader::open(rec);
+  ASSERT_TRUE(reader) << reader.error().message;
+  int read_depth = 0;
+  for (auto f = (*reader)->next(); f; f = (*reader)->next())
+    read_depth += (*f)->as<DepthImage>() != nullptr;
+  EXPECT_GE(read_depth, 6);
+
+  RecordConfig bad;
+  RecordDepthSensorConfig k;
+  k.driver = "kinect2";
+  bad.depth_sensors.push_back(k);
+  auto st = bad.check();
+  ASSERT_FALSE(st);
+  EXPECT_NE(st.error().message.find("driver must be freenect, openni2 or fake"), std::string::npos);
+}
+
 TEST(RecordConfig, SkeletonInputsAreRead) {
   TempDir tmp;
   write_text(tmp.path() / "a.yaml",
@@ -345,6 +404,12 @@ TEST(RecordConfig, SkeletonInputsAreRead) {
   ASSERT_EQ(c->skeletons.size(), 1u);
   EXPECT_EQ(c->skeletons[0].port, 9870);
   EXPECT_EQ(c->skeletons[0].host, "127.0.0.1");
+  write_text(tmp.path() / "d.yaml",
+             "depth_sensors:\n  - {id: front, driver: openni2, device: \"\", fps: 30}\n");
+  auto d = read_record_config(tmp.path() / "d.yaml");
+  ASSERT_TRUE(d) << d.error().message;
+  ASSERT_EQ(d->depth_sensors.size(), 1u);
+  EXPECT_EQ(d->depth_sensors[0].driver, "openni2");
   write_text(tmp.path() / "b.yaml", "skeletons:\n  - {id: s, udp: \"127.0.0.1:x\"}\n");
   auto b = read_record_config(tmp.path() / "b.yaml");
   ASSERT_FALSE(b);

@@ -51,6 +51,16 @@ struct RecordSkeletonConfig {
   std::filesystem::path calibration;  // the tracker's sensor pose (CameraModel YAML), optional
 };
 
+// A live RGB-D sensor (depth_sensor_source.hpp): streams <id>.depth (raw16) and <id>.color.
+struct RecordDepthSensorConfig {
+  std::string id = "front";
+  std::string driver = "freenect";  // freenect | openni2 | fake
+  std::string device;               // freenect: index; openni2: URI or .oni file; "" = first
+  double fps = 30;
+  bool color = true;
+  std::filesystem::path calibration;  // CameraModel YAML of the (registered) sensor, optional
+};
+
 struct RecordConfig {
   std::string name;  // session name (default: the output folder's name)
   Participant participant;
@@ -61,6 +71,7 @@ struct RecordConfig {
   std::filesystem::path voice_enroll;  // folder <speaker>/*.wav, copied to enroll/ (voice_enroll)
   std::vector<RecordCameraConfig> cameras;
   std::vector<RecordSkeletonConfig> skeletons;
+  std::vector<RecordDepthSensorConfig> depth_sensors;
   std::optional<RecordAudioConfig> audio;
   Status check() const;  // every problem in one message
 };

@@ -44,7 +44,7 @@ class UdpSkeletonSource : public Source {
   // Blocks until a valid datagram arrives; after stop(): kEndOfStream.
   Result<FramePtr> next() override;
   SourceInfo info() const override;
-  void stop();     // thread-safe
+  void stop();       // thread-safe
   int port() const;  // the bound port
   UdpSkeletonStats stats() const;
 
