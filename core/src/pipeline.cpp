@@ -207,6 +207,15 @@ Status Pipeline::run_settled(Source& source, const TickCallback& on_tick,
     }
     return ok_status();
   };
+  // Streams the source has not yet said are over (Source::stream_ended).
+  std::vector<SensorId> open_streams(used.begin(), used.end());
+  auto end_finished_streams = [&] {
+    std::erase_if(open_streams, [&](const SensorId& id) {
+      if (!source.stream_ended(id)) return false;
+      sync.end_stream(id);
+      return true;
+    });
+  };
   while (true) {
     Result<FramePtr> r = source.next();
     if (!r) {
@@ -216,6 +225,7 @@ Status Pipeline::run_settled(Source& source, const TickCallback& on_tick,
     if (used.count((*r)->sensor) == 0) continue;
     stats_.frames++;
     if (auto st = sync.push(*r); !st) return st;
+    end_finished_streams();
     if (auto st = drain(); !st) return st;
   }
   sync.end_all();
