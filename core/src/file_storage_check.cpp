@@ -1,12 +1,11 @@
 #include "dreamsense/core/file_storage_check.hpp"
 
-#include <tinyxml2.h>
-
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <tinyxml2.h>
 
 namespace dreamsense {
 

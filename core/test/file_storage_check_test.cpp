@@ -32,7 +32,9 @@ TEST(FileStorageCheck, FilesOpenCvWritesPass) {
     const fs::path p = fs::path(::testing::TempDir()) / name;
     {
       cv::FileStorage out(p.string(), cv::FileStorage::WRITE);
-      out << "format" << "test" << "m" << cv::Mat::eye(3, 3, CV_64F);
+      out << "format"
+          << "test"
+          << "m" << cv::Mat::eye(3, 3, CV_64F);
     }
     EXPECT_TRUE(check_file_storage_input(p)) << name;
     fs::remove(p);
