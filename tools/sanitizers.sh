@@ -9,6 +9,22 @@
 # code) are suppressed in tools/sanitizers/*.supp, each entry with its reason.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
+# Skipped (exit 0, one line on stderr) where clang or its ASan/UBSan/libFuzzer runtimes are missing
+# (tools/setup.sh installs clang and libclang-rt-14-dev): a check that cannot run is said so.
+probe_dir=$(mktemp -d)
+trap 'rm -rf "$probe_dir"' EXIT
+if ! command -v clang++ >/dev/null 2>&1; then
+  echo "sanitizers: skipped (no clang++; tools/setup.sh installs it)" >&2
+  exit 0
+fi
+printf 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }\n' \
+  >"$probe_dir/probe.cpp"
+if ! clang++ -fsanitize=address,undefined,fuzzer "$probe_dir/probe.cpp" -o "$probe_dir/probe" \
+  >"$probe_dir/log" 2>&1; then
+  echo "sanitizers: skipped (clang++ cannot link ASan/UBSan/libFuzzer: $(head -n 1 "$probe_dir/log");" \
+    "install libclang-rt-14-dev)" >&2
+  exit 0
+fi
 launcher=()
 command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 start=$SECONDS
