@@ -86,7 +86,7 @@ Status PipelineOptions::check() const {
 
 Pipeline::Pipeline(PipelineOptions options, SourceInfo info,
                    std::vector<std::unique_ptr<Analyzer>> analyzers)
-    : options_(std::move(options)),
+    : options_(options),
       info_(std::move(info)),
       analyzers_(std::move(analyzers)),
       blackboard_(options_.blackboard) {
@@ -122,7 +122,7 @@ Result<std::unique_ptr<Pipeline>> Pipeline::build(
                           name);
   }
   return std::unique_ptr<Pipeline>(
-      new Pipeline(std::move(options), std::move(source_info), std::move(analyzers)));
+      new Pipeline(options, std::move(source_info), std::move(analyzers)));
 }
 
 void Pipeline::finish_stats(const Synchronizer& sync, Timestamp first, Timestamp last) {
