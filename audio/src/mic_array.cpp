@@ -1,5 +1,7 @@
 #include "dreamsense/audio/mic_array.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
+
 #include <cmath>
 #include <exception>
 
@@ -69,6 +71,7 @@ Result<MicArrayGeometry> read_mic_array(const std::filesystem::path& path) {
   MicArrayGeometry g;
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing mic array calibration", path.string());
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   try {
     cv::FileStorage fs(path.string(), cv::FileStorage::READ);
     if (!fs.isOpened())

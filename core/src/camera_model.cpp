@@ -1,5 +1,6 @@
 #include "dreamsense/core/camera_model.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/core/opencv_error.hpp"
 
 #include <fmt/format.h>
@@ -88,6 +89,7 @@ Status read_key(const cv::FileStorage& fs, const char* key, T& out,
 Result<CameraModel> read_camera_model(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing calibration file", path.string());
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   cv::FileStorage fs;
   try {
     if (!fs.open(path.string(), cv::FileStorage::READ))

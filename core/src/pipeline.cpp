@@ -86,7 +86,7 @@ Status PipelineOptions::check() const {
 
 Pipeline::Pipeline(PipelineOptions options, SourceInfo info,
                    std::vector<std::unique_ptr<Analyzer>> analyzers)
-    : options_(std::move(options)),
+    : options_(options),
       info_(std::move(info)),
       analyzers_(std::move(analyzers)),
       blackboard_(options_.blackboard) {
@@ -122,7 +122,7 @@ Result<std::unique_ptr<Pipeline>> Pipeline::build(
                           name);
   }
   return std::unique_ptr<Pipeline>(
-      new Pipeline(std::move(options), std::move(source_info), std::move(analyzers)));
+      new Pipeline(options, std::move(source_info), std::move(analyzers)));
 }
 
 void Pipeline::finish_stats(const Synchronizer& sync, Timestamp first, Timestamp last) {
@@ -207,6 +207,15 @@ Status Pipeline::run_settled(Source& source, const TickCallback& on_tick,
     }
     return ok_status();
   };
+  // Streams the source has not yet said are over (Source::stream_ended).
+  std::vector<SensorId> open_streams(used.begin(), used.end());
+  auto end_finished_streams = [&] {
+    std::erase_if(open_streams, [&](const SensorId& id) {
+      if (!source.stream_ended(id)) return false;
+      sync.end_stream(id);
+      return true;
+    });
+  };
   while (true) {
     Result<FramePtr> r = source.next();
     if (!r) {
@@ -216,6 +225,7 @@ Status Pipeline::run_settled(Source& source, const TickCallback& on_tick,
     if (used.count((*r)->sensor) == 0) continue;
     stats_.frames++;
     if (auto st = sync.push(*r); !st) return st;
+    end_finished_streams();
     if (auto st = drain(); !st) return st;
   }
   sync.end_all();

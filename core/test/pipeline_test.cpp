@@ -167,5 +167,73 @@ TEST(Pipeline, LivePolicyUnpacedTakesOnlyTheNewestFrames) {
   EXPECT_EQ(skel.delivered + skel.dropped + skel.unmatched, 30u - 0u) << "every frame accounted";
 }
 
+// Two skeleton streams at 30 Hz: "short" ends after 1 s, "long" goes on for 10 s.
+class EarlyEndSource : public Source {
+ public:
+  explicit EarlyEndSource(bool reports_ends) : reports_ends_(reports_ends) {
+    for (int i = 0; i < 300; ++i) {
+      const auto t = Timestamp::from_ns(i * 1'000'000'000LL / 30);
+      if (i < 30) frames_.push_back(make_frame("short", t, static_cast<uint64_t>(i), Skeleton{}));
+      frames_.push_back(make_frame("long", t, static_cast<uint64_t>(i), Skeleton{}));
+    }
+  }
+  Result<FramePtr> next() override {
+    if (pos_ >= frames_.size()) return make_error(ErrorCode::kEndOfStream, "end");
+    return frames_[pos_++];
+  }
+  SourceInfo info() const override {
+    SourceInfo i;
+    i.sensors.push_back(SensorDescription{"short", SensorKind::kSkeleton, 30});
+    i.sensors.push_back(SensorDescription{"long", SensorKind::kSkeleton, 30});
+    return i;
+  }
+  bool stream_ended(const SensorId& id) const override {
+    if (!reports_ends_) return false;
+    for (size_t k = pos_; k < frames_.size(); ++k)
+      if (frames_[k]->sensor == id) return false;
+    return true;
+  }
+  size_t position() const { return pos_; }
+  size_t size() const { return frames_.size(); }
+
+ private:
+  bool reports_ends_;
+  std::vector<FramePtr> frames_;
+  size_t pos_ = 0;
+};
+
+class BothStreamsAnalyzer : public Analyzer {
+ public:
+  std::string_view name() const override { return "both"; }
+  AnalyzerContract contract() const override { return {{"short", "long"}, {}, {}, {}}; }
+  Status process(const MultiFrame&, const BlackboardView&, BlackboardWriter&) override {
+    return ok_status();
+  }
+};
+
+// Issue 18 (soak): a stream that ends early must not make settled replay hold every later frame
+// of the other streams until the source ends. With Source::stream_ended the tick at 5 s is
+// processed while the source is half read; without it (the default), only at the very end.
+TEST(Pipeline, SettledReplayDoesNotWaitForAStreamThatEnded) {
+  for (const bool reports_ends : {true, false}) {
+    EarlyEndSource src(reports_ends);
+    std::vector<std::unique_ptr<Analyzer>> a;
+    a.push_back(std::make_unique<BothStreamsAnalyzer>());
+    auto p = Pipeline::build({}, src.info(), std::move(a));
+    ASSERT_TRUE(p);
+    size_t read_at_5s = 0;
+    const auto on_tick = [&](const MultiFrame& tick, const BlackboardView&) {
+      if (tick.stamp == Timestamp::from_ns(5'000'000'000LL)) read_at_5s = src.position();
+      return ok_status();
+    };
+    ASSERT_TRUE((*p)->run(src, on_tick));
+    EXPECT_EQ((*p)->stats().ticks, 250u) << reports_ends;
+    if (reports_ends)
+      EXPECT_LT(read_at_5s, src.size() * 2 / 3) << "frames kept until the end";
+    else
+      EXPECT_EQ(read_at_5s, src.size());
+  }
+}
+
 }  // namespace
 }  // namespace dreamsense

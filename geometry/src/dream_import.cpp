@@ -1,5 +1,6 @@
 #include "dreamsense/geometry/dream_import.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/core/opencv_error.hpp"
 
@@ -49,6 +50,7 @@ cv::Mat matrix(const cv::FileNode& node) {
 Result<cv::FileStorage> open(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing DREAM calibration file", path.string());
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   try {
     cv::FileStorage fs(path.string(), cv::FileStorage::READ);
     if (!fs.isOpened())

@@ -1,5 +1,6 @@
 #include "dreamsense/geometry/plane.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/core/opencv_error.hpp"
 #include "dreamsense/geometry/calibration_io.hpp"
 
@@ -127,6 +128,7 @@ Status write_table_frame(const std::filesystem::path& path, const TableFrame& ta
 Result<TableFrame> read_table_frame(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing table file", path.string());
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   try {
     cv::FileStorage fs(path.string(), cv::FileStorage::READ);
     if (!fs.isOpened())

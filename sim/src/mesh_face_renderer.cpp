@@ -1,6 +1,8 @@
 // MeshFaceRenderer: the portrait as a textured 3-D triangle mesh with ray-cast eyeballs.
 // Method and numbers: sim/README.md ("The face").
 
+#include "dreamsense/core/file_storage_check.hpp"
+#include "dreamsense/core/opencv_error.hpp"
 #include "dreamsense/sim/face_renderer.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -91,14 +93,15 @@ Result<std::vector<cv::Point2d>> read_portrait_landmarks(const std::filesystem::
                       "{}: portrait landmarks not found (data/demo/astronaut_landmarks.yaml of the "
                       "dreamsense source tree)",
                       path.string());
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   cv::Mat m;
   try {
     cv::FileStorage fs(path.string(), cv::FileStorage::READ);
     if (!fs.isOpened())
       return make_error(ErrorCode::kIoError, "{}: cannot open the landmark file", path.string());
     fs["landmarks_px"] >> m;
-  } catch (const cv::Exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.msg);
+  } catch (const std::exception& e) {
+    return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }
   if (m.rows != kLandmarks || m.cols != 2)
     return make_error(ErrorCode::kCorruptData, "{}: landmarks_px is {}x{}, expected 68x2",

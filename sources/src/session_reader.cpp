@@ -1168,6 +1168,12 @@ std::vector<StreamDamage> SessionReader::damage() const {
   return out;
 }
 
+bool SessionReader::stream_ended(const SensorId& id) const {
+  for (const auto& r : impl_->streams)
+    if (r->entry().id == id) return !r->peek().has_value();
+  return true;
+}
+
 Result<FramePtr> SessionReader::next() {
   for (;;) {
     StreamReader* best = nullptr;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -145,6 +146,33 @@ TEST(SessionReadAhead, SameFramesInSameOrderForEveryThreadCount) {
         ASSERT_TRUE(got[i] == expected[i])
             << threads << " threads, window " << window << ": result " << i << " differs";
     }
+}
+
+// Source::stream_ended (issue 18): true exactly once the stream's last frame has been returned, so
+// settled replay stops waiting for a stream that ends before the others.
+TEST(SessionReadAhead, StreamEndedExactlyAfterEachStreamsLastFrame) {
+  TempDir tmp;
+  const auto dir = tmp.path() / "s";
+  write_mixed_session(dir, 12);
+  std::vector<SensorId> order;
+  {
+    auto reader = SessionReader::open(dir);
+    ASSERT_TRUE(reader) << reader.error().message;
+    for (auto f = (*reader)->next(); f; f = (*reader)->next()) order.push_back((*f)->sensor);
+  }
+  auto reader = SessionReader::open(dir);
+  ASSERT_TRUE(reader) << reader.error().message;
+  const SourceInfo info = (*reader)->info();
+  ASSERT_GE(info.sensors.size(), 4u);
+  for (size_t i = 0; i <= order.size(); ++i) {
+    for (const auto& s : info.sensors) {
+      const bool more = std::find(order.begin() + static_cast<std::ptrdiff_t>(i), order.end(),
+                                  s.id) != order.end();
+      ASSERT_EQ((*reader)->stream_ended(s.id), !more) << s.id << " after " << i << " frames";
+    }
+    if (i < order.size()) ASSERT_TRUE((*reader)->next());
+  }
+  EXPECT_TRUE((*reader)->stream_ended("no_such_stream"));
 }
 
 TEST(SessionReadAhead, OnlyStreamsAndDefaultOptions) {

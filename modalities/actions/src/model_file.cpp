@@ -1,5 +1,7 @@
 #include "model_file.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -19,6 +21,7 @@ Result<cv::FileStorage> open_model_file(const ModelFileKind& kind, const fs::pat
   if (!fs::is_regular_file(path, ec))
     return make_error(ErrorCode::kNotFound, "{}: {} missing (write one with `{}`)", path.string(),
                       kind.what, kind.train_command);
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   cv::FileStorage f(path.string(), cv::FileStorage::READ);
   if (!f.isOpened()) return tl::unexpected(model_corrupt(kind, path, "unreadable"));
   std::string format;

@@ -1,5 +1,7 @@
 #include "dreamsense/expression/expression_model.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
+
 #include <opencv2/core.hpp>
 
 #include <exception>
@@ -197,6 +199,7 @@ Result<ExpressionModel> ExpressionModel::load(const std::filesystem::path& path)
   const std::string where = path.string();
   if (!std::filesystem::is_regular_file(path))
     return make_error(ErrorCode::kNotFound, "{}: no such expression model", where);
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   ExpressionModel m;
   try {
     cv::FileStorage fs(where, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);

@@ -1,5 +1,6 @@
 #include "dreamsense/face_detection/face_detector.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/perception/face_detection.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -169,10 +170,11 @@ Result<FaceDetector> FaceDetector::create(const FaceDetectorOptions& options) {
                         "face detector: cascade '{}' not found (install the Debian package "
                         "opencv-data)",
                         p.string());
+    DS_RETURN_IF_ERROR(check_file_storage_input(p));
     bool loaded = false;
     try {
       loaded = c.load(p.string());
-    } catch (const cv::Exception&) {
+    } catch (const std::exception&) {
       loaded = false;
     }
     if (!loaded || c.empty())

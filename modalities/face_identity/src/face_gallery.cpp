@@ -1,5 +1,6 @@
 #include "dreamsense/face_identity/face_gallery.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/vision/face_api_net.hpp"
 #include "dreamsense/vision/lbp.hpp"
 
@@ -243,6 +244,7 @@ Result<FaceGallery> FaceGallery::load(const std::filesystem::path& path) {
   const std::string where = path.string();
   if (!std::filesystem::is_regular_file(path))
     return make_error(ErrorCode::kNotFound, "{}: no such face gallery", where);
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   try {
     cv::FileStorage fs(where, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
     if (!fs.isOpened() || static_cast<std::string>(fs["format"]) != kFormat)

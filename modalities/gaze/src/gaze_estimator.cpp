@@ -1,5 +1,6 @@
 #include "dreamsense/gaze/gaze_estimator.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/core/opencv_error.hpp"
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
@@ -181,6 +182,7 @@ Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& 
 Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
   if (!std::ifstream(path))
     return make_error(ErrorCode::kNotFound, "{}: gaze model not found", path.string());
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   GazeModelFile m;
   try {
     cv::FileStorage fs(path.string(), cv::FileStorage::READ);

@@ -149,6 +149,11 @@ TEST(FuzzRegression, GazeModelOpenCvCannotParseIsAnError) {
   const std::filesystem::path p = std::filesystem::path(::testing::TempDir()) / "ds_fuzz_gaze.yaml";
   std::ofstream(p) << "%YAML:1.\n{ :";
   EXPECT_FALSE(read_gaze_model(p));
+  // fuzz/findings/opencv_xml_segv.calibration without its selector byte (finding 4): OpenCV's XML
+  // reader dereferenced null on it; check_file_storage_input makes it an error.
+  constexpr char kXmlSegv[] = "<?xml?>\n<open-----------------------ml ve=\0%";
+  std::ofstream(p, std::ios::binary).write(kXmlSegv, sizeof kXmlSegv - 1);
+  EXPECT_FALSE(read_gaze_model(p));
   std::filesystem::remove(p);
 }
 

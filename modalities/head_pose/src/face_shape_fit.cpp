@@ -1,5 +1,6 @@
 #include "dreamsense/head_pose/face_shape_fit.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/core/opencv_error.hpp"
 
 #include <opencv2/calib3d.hpp>
@@ -163,6 +164,7 @@ Status write_face_model(const std::string& path, const FaceModel3d& model,
 Result<FaceModel3d> read_face_model(const std::string& path) {
   if (!std::ifstream(path))
     return make_error(ErrorCode::kNotFound, "{}: face model not found", path);
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   FaceModel3d m;
   try {
     cv::FileStorage fs(path, cv::FileStorage::READ);
@@ -194,6 +196,7 @@ Result<FaceModel3d> read_face_model(const std::string& path) {
 Result<cv::Matx33d> read_model_from_head(const std::filesystem::path& gaze_yaml) {
   if (!std::ifstream(gaze_yaml))
     return make_error(ErrorCode::kNotFound, "{}: gaze calibration not found", gaze_yaml.string());
+  DS_RETURN_IF_ERROR(check_file_storage_input(gaze_yaml));
   try {
     cv::FileStorage fs(gaze_yaml.string(), cv::FileStorage::READ);
     if (fs["model_from_head"].empty()) return cv::Matx33d::eye();

@@ -3,6 +3,7 @@
 
 #include "dreamsense/objects/identification.hpp"
 
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/objects/fhog.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -409,6 +410,7 @@ Result<ObjectGallery> ObjectGallery::load(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     return make_error(ErrorCode::kNotFound, "{}: no such object gallery", p);
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   try {
     cv::FileStorage fs(p, cv::FileStorage::READ);
     if (!fs.isOpened()) return make_error(ErrorCode::kCorruptData, "{}: not readable YAML", p);

@@ -1,6 +1,7 @@
 #include "dreamsense/voice_id/voice_model.hpp"
 
 #include "dreamsense/audio/noise_suppressor.hpp"
+#include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/core/opencv_error.hpp"
 
 #include <opencv2/core/persistence.hpp>
@@ -122,6 +123,7 @@ Result<VoiceModel> VoiceModel::load(const fs::path& path) {
     return make_error(ErrorCode::kNotFound,
                       "{}: voice model missing (write one with `dreamsense train voices`)",
                       path.string());
+  DS_RETURN_IF_ERROR(check_file_storage_input(path));
   VoiceModel m;
   try {
     cv::FileStorage f(path.string(), cv::FileStorage::READ);

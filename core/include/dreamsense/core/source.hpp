@@ -40,6 +40,11 @@ class Source {
   // ErrorCode::kEndOfStream. Any other error is real (corrupt or missing data).
   virtual Result<FramePtr> next() = 0;
   virtual SourceInfo info() const = 0;
+  // True once next() will return no more frames of stream `id` (a recording's stream that ends
+  // before the others, or has none). Settled replay then stops waiting for that stream, instead
+  // of holding every later frame of the other streams until the whole source ends (issue 18).
+  // The default, false until the end, is always correct.
+  virtual bool stream_ended(const SensorId& /*id*/) const { return false; }
 };
 
 inline bool is_end_of_stream(const Error& e) { return e.code == ErrorCode::kEndOfStream; }

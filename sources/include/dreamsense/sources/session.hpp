@@ -187,6 +187,8 @@ class SessionReader : public Source {
   ~SessionReader() override;
   Result<FramePtr> next() override;
   SourceInfo info() const override;
+  // True once stream `id` has no frame left (or is not read: options.only).
+  bool stream_ended(const SensorId& id) const override;
   const SessionManifest& manifest() const;
   const std::filesystem::path& dir() const;
   // Per stream read (manifest order): what the damage policy skipped so far (complete after the
