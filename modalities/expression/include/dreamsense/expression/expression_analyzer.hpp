@@ -9,9 +9,9 @@
 //    read as feedback, or -1 without face tracks), confidence = the smoothed probability times
 //    the landmarks' confidence.
 // The classifier runs at most every recognize_interval_s of stream time per face track; between
-// runs the track's last prediction feeds the smoother again (the smoothing time constant, 0.4 s,
-// is longer than the interval, so the answer lags by at most one interval). A new track, or the
-// stream going backwards, runs it at once.
+// runs the track's last prediction feeds the smoother again (the answer lags by at most one
+// interval more; the default interval equals the smoothing time constant, 0.4 s). A new track,
+// or the stream going backwards, runs it at once.
 
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/expression/expression_model.hpp"
