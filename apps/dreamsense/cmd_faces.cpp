@@ -2,12 +2,15 @@
 //   dreamsense train expression --dataset ckplus48|fer2013 DIR --out MODEL.yaml [--method M]
 //   dreamsense eval expression [--model MODEL.yaml] --dataset ckplus48|fer2013 DIR
 //                              [--methods a,b] [--folds K] [--json FILE|-]
+//     fer2013 without --model/--methods/--folds: the model the pipeline ships (issue 20);
+//     ckplus48 without them: cross-validation (spec/cli.md).
 //   dreamsense enroll faces --person ID IMAGES... --gallery FILE [--name NAME] [--method M]
 //   dreamsense eval faces --dataset att|yale DIR --enroll K [--unknown U] [--methods a,b]
 // Thin: flags -> options -> eval_faces / face_identity -> report.
 
 #include "dreamsense/eval/faces/expression_eval.hpp"
 #include "dreamsense/eval/faces/identity_eval.hpp"
+#include "dreamsense/expression/expression_analyzer.hpp"
 #include "dreamsense/face_identity/face_gallery.hpp"
 #include "dreamsense/sources/session.hpp"
 #include "dreamsense/vision/face_locator.hpp"
@@ -295,7 +298,8 @@ void add_eval_expression(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
       "Facial expression: accuracy, per-class recall, confusion (subject-disjoint CV, or a model)");
   cmd->add_option("--dataset", flags->dataset, kExpressionDatasetHelp)->expected(2)->required();
   cmd->add_option("--model", flags->model,
-                  "Test this model (train expression) on every image (default: cross-validation)");
+                  "Test this model (train expression) on every image (default: fer2013 tests the "
+                  "model the pipeline ships; ckplus48, or --methods/--folds: cross-validation)");
   cmd->add_option("--methods", o.methods,
                   "Cross-validation: methods compared on the same folds, the first one reported "
                   "at the top level")
@@ -305,11 +309,16 @@ void add_eval_expression(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
       ->default_val(o.folds);
   cmd->add_option("--seed", o.seed, "Seed of the fold assignment")->default_val(o.seed);
   cmd->add_option("--json", flags->json, "Write the evaluation JSON to FILE (- for stdout)");
-  cmd->callback([flags, &g, &exit_code] {
+  cmd->callback([flags, cmd, &g, &exit_code] {
     auto& o = flags->options;
     o.dataset = flags->dataset[0];
     o.dir = flags->dataset[1];
     o.model = flags->model;
+    // Faces in the wild check what the pipeline answers: its shipped model, through the same
+    // alignment; cross-validation of methods stays available with --methods/--folds.
+    const bool cross_validation = cmd->count("--methods") > 0 || cmd->count("--folds") > 0;
+    if (o.model.empty() && o.dataset == "fer2013" && !cross_validation)
+      o.model = expression::default_expression_model();
     auto r = with_progress("eval expression", g.quiet, [&](const auto& progress) {
       return eval::faces::run_expression_eval(o, progress);
     });
@@ -328,6 +337,15 @@ void add_eval_expression(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                      get_or(mm, "accuracy"), get_or(mm, "balanced_accuracy"),
                      get_or(tt, "ms_per_face_median"));
       }
+      std::string recalls;
+      for (const auto& [label, c] : r->per_class.items())
+        if (c.contains("recall") && c["recall"].is_number())
+          recalls += fmt::format(" {} {:.2f}", label, c["recall"].get<double>());
+      std::fprintf(stderr, "  recall:%s\n", recalls.c_str());
+      if (r->extra.contains("classes_missing_from_model"))
+        for (const auto& l : r->extra.at("classes_missing_from_model"))
+          std::fprintf(stderr, "  class %s: the model has no such label (counted wrong)\n",
+                       l.get<std::string>().c_str());
     }
     if (auto s = eval::write_report(*r, flags->json); !s) exit_code = fail(s.error());
   });

@@ -135,6 +135,26 @@ Status ExpressionEvalOptions::check() const {
 
 Status ExpressionTrainOptions::check() const { return crop.check(); }
 
+std::vector<std::string> classes_missing_from_model(const std::vector<std::string>& dataset_labels,
+                                                    const std::vector<std::string>& model_labels) {
+  std::vector<std::string> out;
+  for (const std::string& l : dataset_labels)
+    if (std::find(model_labels.begin(), model_labels.end(), l) == model_labels.end() &&
+        std::find(out.begin(), out.end(), l) == out.end())
+      out.push_back(l);
+  return out;
+}
+
+std::map<std::string, std::string> dataset_class_names(const std::string& dataset) {
+  if (dataset == "fer2013")
+    return {{"anger", "angry"},      {"disgust", "disgust"}, {"fear", "fear"},
+            {"happy", "happy"},      {"neutral", "neutral"}, {"sadness", "sad"},
+            {"surprise", "surprise"}};
+  std::map<std::string, std::string> same;
+  for (const char* l : expression::kExpressionLabels) same[l] = l;
+  return same;
+}
+
 Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Progress& progress) {
   if (auto s = o.check(); !s) return tl::unexpected(s.error());
   auto items = read_expression_dataset(o.dataset, o.dir);
@@ -150,6 +170,8 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
   if (!o.model.empty()) {  // train elsewhere, test here
     auto model = ExpressionModel::load(o.model);
     if (!model) return tl::unexpected(model.error());
+    const std::vector<std::string> missing =
+        classes_missing_from_model(ordered_labels(present), model->labels());
     for (const auto& l : model->labels()) present.insert(l);
     auto faces = prepare(*items, o.crop, model->method().features.alignment, progress, 0.0, 0.6);
     if (!faces) return tl::unexpected(faces.error());
@@ -166,11 +188,16 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
     const auto ms = time_recognizer(*recognizer, *faces, all, 300);
     std::vector<double> align_ms;
     for (const auto& f : *faces) align_ms.push_back(f.align_ms);
+    std::string missing_note;
+    for (const auto& l : missing) missing_note += (missing_note.empty() ? "" : ", ") + l;
     report.protocol = fmt::format(
         "model {} (method {}, trained on {} {} images) tested on every image of {}; faces "
-        "aligned by cascade + dlib landmarks with crop fallbacks",
+        "aligned by cascade + dlib landmarks with crop fallbacks{}",
         o.model.string(), model->method().name, model->training().items, model->training().dataset,
-        o.dir.string());
+        o.dir.string(),
+        missing.empty()
+            ? std::string()
+            : fmt::format("; classes the model lacks (counted wrong): {}", missing_note));
     report.metrics = {
         {"accuracy", opt(cm.accuracy())},
         {"balanced_accuracy", opt(cm.balanced_accuracy())},
@@ -182,7 +209,10 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
                      {"ms_alignment_median", opt(median(align_ms))}};
     report.extra = {{"alignment", alignment_counts(*faces)},
                     {"methods", {model->method().name}},
-                    {"model", o.model.string()}};
+                    {"model", o.model.string()},
+                    {"model_labels", model->labels()},
+                    {"classes_missing_from_model", missing},
+                    {"dataset_class_names", dataset_class_names(o.dataset)}};
     if (progress) progress(1.0);
     return report;
   }

@@ -16,7 +16,12 @@ class ExpressionAnalyzer : public Analyzer {
   ExpressionAnalyzer(ExpressionAnalyzerOptions o, ExpressionRecognizer r)
       : options_(std::move(o)),
         recognizer_(std::move(r)),
-        smoother_(recognizer_.model().labels(), options_.smoothing) {}
+        smoother_(recognizer_.model().labels(), options_.smoothing) {
+    const double interval = options_.recognize_interval_s < 0
+                                ? auto_recognize_interval_s(recognizer_.model())
+                                : options_.recognize_interval_s;
+    interval_ns_ = static_cast<int64_t>(interval * 1e9);
+  }
 
   std::string_view name() const override { return "expression"; }
   AnalyzerContract contract() const override {
@@ -42,24 +47,32 @@ class ExpressionAnalyzer : public Analyzer {
       out.set_absent(keys::kFaceExpression, in.stamp);
       return ok_status();
     }
-    DS_ASSIGN_OR_RETURN(vision::FaceRegion region, vision::face_region(img->image, l.points_px));
-    const cv::Mat& grey = region.grey;
-    std::optional<vision::AlignedFace> face;
-    if (!grey.empty()) {
-      DS_ASSIGN_OR_RETURN(face,
-                          vision::align_face(grey, region.landmarks,
-                                             recognizer_.model().method().features.alignment));
-    }
-    if (!face) {
-      out.set_absent(keys::kFaceExpression, in.stamp);
-      return ok_status();
-    }
-    const ExpressionPrediction raw = recognizer_.recognize(grey, *face);
-
     int track = -1;
     if (const auto tracks = prior.get(keys::kFaceTracks);
         tracks && tracks->present() && !tracks->value->tracks.empty())
       track = tracks->value->tracks.front().id;
+    const int64_t now = f->stamp.ns();
+    const bool due = !last_raw_ || track != last_track_ || now < last_recognized_ns_ ||
+                     now - last_recognized_ns_ >= interval_ns_;
+    if (due) {
+      DS_ASSIGN_OR_RETURN(vision::FaceRegion region, vision::face_region(img->image, l.points_px));
+      const cv::Mat& grey = region.grey;
+      std::optional<vision::AlignedFace> face;
+      if (!grey.empty()) {
+        DS_ASSIGN_OR_RETURN(face,
+                            vision::align_face(grey, region.landmarks,
+                                               recognizer_.model().method().features.alignment));
+      }
+      if (!face) {
+        last_raw_.reset();
+        out.set_absent(keys::kFaceExpression, in.stamp);
+        return ok_status();
+      }
+      last_raw_ = recognizer_.recognize(grey, *face);
+      last_recognized_ns_ = now;
+    }
+    const ExpressionPrediction raw = *last_raw_;
+
     if (track != last_track_) smoother_.forget(last_track_);
     last_track_ = track;
     const ExpressionPrediction s = smoother_.update(track, f->stamp.ns(), raw);
@@ -82,6 +95,8 @@ class ExpressionAnalyzer : public Analyzer {
   void reset() override {
     smoother_.reset();
     last_track_ = -1;
+    last_raw_.reset();
+    last_recognized_ns_ = 0;
   }
 
  private:
@@ -89,15 +104,25 @@ class ExpressionAnalyzer : public Analyzer {
   ExpressionRecognizer recognizer_;
   ExpressionSmoother smoother_;
   int last_track_ = -1;
+  int64_t interval_ns_ = 0;
+  std::optional<ExpressionPrediction> last_raw_;  // of last_track_, computed at last_recognized_ns_
+  int64_t last_recognized_ns_ = 0;
 };
 
 }  // namespace
 
 std::filesystem::path default_expression_model() {
-  return std::filesystem::path(DREAMSENSE_EXPRESSION_MODEL_DIR) / "expression_ckplus48.yaml";
+  return std::filesystem::path(DREAMSENSE_EXPRESSION_MODEL_DIR) / "expression_fer2013.yaml";
+}
+
+double auto_recognize_interval_s(const ExpressionModel& model) {
+  return model.method().features.uses("face_api") ? kNetworkRecognizeIntervalS : 0.0;
 }
 
 Status ExpressionAnalyzerOptions::check() const {
+  if (!(recognize_interval_s < 1e6))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "ExpressionAnalyzerOptions: recognize_interval_s must be a number < 1e6");
   std::set<SensorId> seen;
   for (const SensorId& c : cameras)
     if (c.empty() || !seen.insert(c).second)

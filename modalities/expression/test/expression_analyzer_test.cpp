@@ -11,8 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <unistd.h>
 
@@ -84,11 +86,12 @@ class ExpressionAnalyzerTest : public ::testing::Test {
     fs::remove(*model_);
     delete model_;
   }
-  testing::AnalyzerRunner runner(ExpressionSmoothingOptions s = {}) {
+  testing::AnalyzerRunner runner(ExpressionSmoothingOptions s = {}, double interval_s = -1) {
     ExpressionAnalyzerOptions o;
     o.cameras = {kCam};
     o.model = *model_;
     o.smoothing = s;
+    o.recognize_interval_s = interval_s;
     auto a = make_expression_analyzer(o);
     EXPECT_TRUE(a) << a.error().message;
     return testing::AnalyzerRunner(std::move(*a));
@@ -152,6 +155,36 @@ TEST_F(ExpressionAnalyzerTest, LabelsAFaceAndSmoothsPerTrack) {
   EXPECT_EQ(e.label, "sadness");
 }
 
+TEST_F(ExpressionAnalyzerTest, ReducedRateReusesTheTracksLastPrediction) {
+  // A classical model runs every tick by default; with an interval of 0.2 s the classifier runs
+  // again only 0.2 s of stream time after its last run (40 ms ticks: every fifth tick).
+  auto m = ExpressionModel::load(*model_);
+  ASSERT_TRUE(m);
+  EXPECT_EQ(auto_recognize_interval_s(*m), 0.0);
+  auto r = runner({}, 0.2);
+  Timestamp t = Timestamp::from_seconds(2);
+  auto tick = [&](int level) {
+    r.preset(keys::kFaceLandmarks, face_landmarks(t), t, 0.8f);
+    EXPECT_TRUE(r.run(t, {make_frame(kCam, t, 1, ColorImage{face_image(level)})}));
+    auto e = r.output(keys::kFaceExpression);
+    EXPECT_TRUE(e && e->present());
+    t = t + Duration::from_ms(40);
+    return *e->value;
+  };
+  EXPECT_EQ(tick(40).raw_label, "happy");  // t = 2.00: runs
+  for (int i = 1; i < 5; ++i)              // t = 2.04 .. 2.16: the last prediction again
+    EXPECT_EQ(tick(200).raw_label, "happy") << "tick " << i;
+  EXPECT_EQ(tick(200).raw_label, "sadness");  // t = 2.20: runs again
+  // The stream going backwards (a new replay) runs it at once.
+  t = Timestamp::from_seconds(1);
+  EXPECT_EQ(tick(40).raw_label, "happy");
+  ExpressionAnalyzerOptions bad;
+  bad.cameras = {kCam};
+  bad.model = *model_;
+  bad.recognize_interval_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(make_expression_analyzer(bad)) << "NaN interval";
+}
+
 TEST(ExpressionAnalyzer, BadOptionsAndModelFiles) {
   ExpressionAnalyzerOptions o;
   o.cameras = {kCam, kCam};
@@ -173,8 +206,15 @@ TEST(ExpressionAnalyzer, ShippedModelLoads) {
   if (!fs::exists(default_expression_model())) GTEST_SKIP() << "no shipped model";
   auto m = ExpressionModel::load(default_expression_model());
   ASSERT_TRUE(m) << m.error().message;
+  // Seven FER2013 classes, neutral included (DREAM's legacy id 4).
   EXPECT_EQ(m->labels().size(), 7u);
-  EXPECT_EQ(m->method().name, "lbp_hog");
+  EXPECT_NE(std::find(m->labels().begin(), m->labels().end(), "neutral"), m->labels().end());
+  EXPECT_EQ(m->training().dataset, "fer2013");
+  // The CK+ model stays beside it (posed expressions, contempt, no neutral).
+  auto ck =
+      ExpressionModel::load(default_expression_model().parent_path() / "expression_ckplus48.yaml");
+  ASSERT_TRUE(ck) << ck.error().message;
+  EXPECT_EQ(ck->method().name, "lbp_hog");
 }
 
 }  // namespace

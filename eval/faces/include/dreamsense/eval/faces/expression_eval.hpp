@@ -26,6 +26,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,15 @@ struct ExpressionEvalOptions {
   vision::FaceCropOptions crop;  // its alignment is replaced by each method's
   Status check() const;
 };
+
+// Dataset classes (canonical labels, expression::canonical_label of the folder names) that the
+// model's labels lack, in dataset order: the classes a model-only evaluation counts as wrong.
+std::vector<std::string> classes_missing_from_model(const std::vector<std::string>& dataset_labels,
+                                                    const std::vector<std::string>& model_labels);
+
+// The dataset's own spelling of each canonical label it uses ({"anger": "angry", ...} for
+// fer2013; the identity for ckplus48): reported beside per_class so that both names are found.
+std::map<std::string, std::string> dataset_class_names(const std::string& dataset);
 
 Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& options,
                                        const Progress& progress = {});
