@@ -39,9 +39,14 @@ void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                   "Detector chains compared on the same images, the first one reported at the "
                   "top level: haar (the pipeline's, baseline), hog (dlib HOG), hog_haar (HOG, a "
                   "wider Haar search when HOG finds no face), union (HOG and the wider Haar "
-                  "search); a +tta suffix: landmarks with test-time augmentation")
+                  "search), tiny (face-api's tiny face detector), union_tiny (union + tiny); a "
+                  "suffix: +tta landmarks with test-time augmentation, +cnn face-api's 68-point "
+                  "CNN, +mean the mean of +tta and +cnn, +cnn_dlib +tta from the CNN's points, "
+                  "+switch +tta where the dlib passes agree (confident), else +cnn")
       ->delimiter(',')
-      ->default_str("union+tta,union,hog_haar,hog,haar");
+      ->default_str(
+          "union_tiny+switch,union_tiny+tta,union_tiny,tiny,union+switch,union+tta,union+cnn,"
+          "union+mean,union+cnn_dlib,union,hog_haar,hog,haar");
   cmd->add_option("--hog-min-face", o.hog_min_face_px,
                   "Smallest face the HOG detector searches (px)")
       ->default_val(o.hog_min_face_px);
@@ -82,6 +87,9 @@ void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
         line(name, r->metrics[name], r->timing[name]);
       }
       line("from_box", r->metrics["from_box"], r->timing["from_box"]);
+      line("from_box_plain", r->metrics["from_box_plain"], r->timing["from_box_plain"]);
+      if (r->metrics.contains("from_box_cnn"))
+        line("from_box_cnn", r->metrics["from_box_cnn"], r->timing["from_box_cnn"]);
     }
     if (auto s = eval::write_report(*r, flags->json); !s) exit_code = fail(s.error());
   });

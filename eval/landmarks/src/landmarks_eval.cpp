@@ -5,6 +5,7 @@
 #include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/face_detection/hog_face_detector.hpp"
 #include "dreamsense/face_landmarks/landmarker.hpp"
+#include "dreamsense/vision/face_api_net.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -20,7 +21,7 @@ namespace {
 namespace fd = dreamsense::face_detection;
 namespace fl = dreamsense::face_landmarks;
 
-const std::set<std::string> kDetectors{"haar", "hog", "hog_haar", "union"};
+const std::set<std::string> kDetectors{"haar", "hog", "hog_haar", "union", "tiny", "union_tiny"};
 using LandmarkFitResult = face_landmarks::LandmarkFit;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -129,14 +130,22 @@ struct ChainScores {
 struct Chain {
   std::string name, detector;
   bool tta = false;
+  // 0 dlib (pipeline), 1 dlib+tta, 2 face-api CNN, 3 mean of 1 and 2, 4 dlib+tta from the CNN,
+  // 5 dlib+tta when the pipeline dlib's spread is confident, else the CNN.
+  int landmarker = 0;
 };
 
+const std::map<std::string, int> kLandmarkerSuffixes{
+    {"+tta", 1}, {"+cnn", 2}, {"+mean", 3}, {"+cnn_dlib", 4}, {"+switch", 5}};
+
 std::optional<Chain> parse_chain(const std::string& name) {
-  Chain c{name, name, false};
+  Chain c{name, name, false, 0};
   if (const auto plus = name.find('+'); plus != std::string::npos) {
-    if (name.substr(plus) != "+tta") return std::nullopt;
+    const auto s = kLandmarkerSuffixes.find(name.substr(plus));
+    if (s == kLandmarkerSuffixes.end()) return std::nullopt;
     c.detector = name.substr(0, plus);
-    c.tta = true;
+    c.landmarker = s->second;
+    c.tta = c.landmarker == 1;
   }
   if (!kDetectors.count(c.detector)) return std::nullopt;
   return c;
@@ -210,10 +219,10 @@ Status LandmarksEvalOptions::check() const {
   if (detectors.empty()) add("no detector chain");
   for (const std::string& d : detectors)
     if (!parse_chain(d))
-      add(
-          fmt::format("unknown detector chain '{}' (known: haar, hog, hog_haar, union, each "
-                      "optionally with +tta)",
-                      d));
+      add(fmt::format(
+          "unknown detector chain '{}' (known: haar, hog, hog_haar, union, tiny, union_tiny, each "
+          "optionally with +tta, +cnn, +mean or +cnn_dlib)",
+          d));
   if (!(min_iou > 0 && min_iou <= 1)) add("min_iou must be in (0, 1]");
   if (!(failure_nme > 0)) add("failure_nme must be > 0");
   if (stride < 1) add("stride must be >= 1");
@@ -258,11 +267,23 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   auto tta = fl::make_dlib_landmarker(lo);
   if (!tta) return tl::unexpected(tta.error());
   const fl::Landmarker* landmarkers[2] = {plain->get(), tta->get()};
+  // face-api's CNN (a pretrained alternative, compared in the same run).
+  std::unique_ptr<fl::Landmarker> cnn;
+  if (o.with_cnn ||
+      std::any_of(chains.begin(), chains.end(), [](const Chain& c) { return c.landmarker >= 2; })) {
+    fl::FaceApiLandmarkerOptions co;
+    co.model_dir = o.face_api_model_dir;
+    auto c = fl::make_face_api_landmarker(co);
+    if (!c) return tl::unexpected(c.error());
+    cnn = std::move(*c);
+  }
 
   auto uses = [&](const std::string& detector) {
     return std::any_of(chains.begin(), chains.end(), [&](const Chain& c) {
       return c.detector == detector ||
-             (detector == "hog" && (c.detector == "hog_haar" || c.detector == "union"));
+             (detector == "hog" &&
+              (c.detector == "hog_haar" || c.detector == "union" || c.detector == "union_tiny")) ||
+             (detector == "tiny" && c.detector == "union_tiny");
     });
   };
   std::optional<fd::FaceDetector> haar;
@@ -274,7 +295,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   // The Haar search of hog_haar and union: also smaller faces and the profile cascades.
   std::optional<fd::FaceDetector> haar_wide;
   if (std::any_of(chains.begin(), chains.end(), [](const Chain& c) {
-        return c.detector == "hog_haar" || c.detector == "union";
+        return c.detector == "hog_haar" || c.detector == "union" || c.detector == "union_tiny";
       })) {
     fd::FaceDetectorOptions w;
     w.min_face_px = o.wide_haar_min_face_px;
@@ -293,10 +314,20 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     hog.emplace(std::move(*h));
   }
 
+  std::optional<vision::FaceApiTinyFaceDetector> tiny;
+  if (uses("tiny")) {
+    auto t = vision::FaceApiTinyFaceDetector::load(
+        o.face_api_model_dir.empty() ? vision::default_face_api_model_dir() : o.face_api_model_dir);
+    if (!t) return tl::unexpected(t.error());
+    tiny.emplace(std::move(*t));
+  }
+
   std::map<std::string, ChainScores> scores;
-  ChainScores from_box, from_box_plain;
+  ChainScores from_box, from_box_plain, from_box_cnn;
   nlohmann::json per_face = nlohmann::json::array();
-  cv::Point2d bias_sum(0, 0);
+  cv::Point2d bias[2] = {{0, 0}, {0, 0}};
+  double width_ratio[2] = {0, 0}, height_ratio[2] = {0, 0};
+  size_t fitted[2] = {0, 0};
   for (size_t i = 0; i < items.size(); ++i) {
     const LandmarkItem& it = items[i];
     const std::vector<cv::Point2d>& truth = truths[i];
@@ -309,7 +340,16 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     const cv::Rect2d truth_box = points_box(truth);
     nlohmann::json face = {{"name", it.name}};
 
-    DetectorOutput haar_out, hog_out, wide_out;
+    DetectorOutput haar_out, hog_out, wide_out, tiny_out;
+    if (tiny) {
+      const auto t0 = std::chrono::steady_clock::now();
+      // About the image's own resolution (the package's default 416 loses small faces).
+      const int side = std::max(image.cols, image.rows);
+      const int input_px = std::clamp((side + 31) / 32 * 32, 32, o.tiny_max_input_px);
+      for (const auto& d : tiny->detect(image, input_px, o.tiny_min_score))
+        tiny_out.boxes.push_back(d.box);
+      tiny_out.ms = ms_since(t0);
+    }
     if (haar) {
       const auto t0 = std::chrono::steady_clock::now();
       haar_out.boxes = boxes_of(haar->detect(image));
@@ -326,13 +366,68 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
       hog_out.ms = ms_since(t0);
     }
     std::map<std::tuple<int, double, double, double, double>, Fit> cache;
-    auto fit = [&](int which, const cv::Rect2d& b) -> Result<const Fit*> {
+    std::function<Result<const Fit*>(int, const cv::Rect2d&)> fit;
+    fit = [&](int which, const cv::Rect2d& b) -> Result<const Fit*> {
       const auto key = std::make_tuple(which, b.x, b.y, b.width, b.height);
       if (auto f = cache.find(key); f != cache.end()) return &f->second;
       const auto t0 = std::chrono::steady_clock::now();
-      auto p = landmarkers[which]->fit_with_spread(image, b);
-      if (!p) return tl::unexpected(p.error());
-      Fit f{std::move(*p), ms_since(t0)};
+      Fit f;
+      if (which <= 2) {
+        auto p = (which == 2 ? cnn.get() : landmarkers[which])->fit_with_spread(image, b);
+        if (!p) return tl::unexpected(p.error());
+        f.fit = std::move(*p);
+        f.ms = ms_since(t0);
+      } else {
+        auto c = fit(2, b);
+        if (!c) return tl::unexpected(c.error());
+        f.ms = (*c)->ms;
+        if (which == 5) {
+          auto plain_fit = fit(0, b);
+          if (!plain_fit) return tl::unexpected(plain_fit.error());
+          auto d = fit(1, b);
+          if (!d) return tl::unexpected(d.error());
+          f.ms += (*plain_fit)->ms + (*d)->ms;
+          const bool confident =
+              (*plain_fit)->fit && (*d)->fit &&
+              fl::spread_confidence((*plain_fit)->fit->spread) >= o.switch_min_confidence;
+          f.fit = confident ? (*d)->fit : (*c)->fit;
+          if (confident || !f.fit) {
+          } else if ((*plain_fit)->fit) {  // the CNN's points; spread = its distance from dlib's
+            const auto& a = f.fit->points;
+            const auto& e = (*plain_fit)->fit->points;
+            double sum = 0;
+            for (size_t k = 0; k < a.size(); ++k) sum += cv::norm(a[k] - e[k]);
+            const double dist = cv::norm(a[36] - a[45]);
+            f.fit->spread = dist > 0 ? sum / static_cast<double>(a.size()) / dist : f.fit->spread;
+          }
+        } else if (which == 3) {  // mean of dlib+tta and the CNN; spread = their disagreement
+          auto d = fit(1, b);
+          if (!d) return tl::unexpected(d.error());
+          f.ms += (*d)->ms;
+          if ((*c)->fit && (*d)->fit) {
+            LandmarkFitResult m;
+            const auto& a = (*c)->fit->points;
+            const auto& e = (*d)->fit->points;
+            double sum = 0;
+            for (size_t k = 0; k < a.size(); ++k) {
+              m.points.push_back(0.5 * (a[k] + e[k]));
+              sum += 0.5 * cv::norm(a[k] - e[k]);
+            }
+            const double dist = cv::norm(m.points[36] - m.points[45]);
+            if (dist > 0) m.spread = sum / static_cast<double>(a.size()) / dist;
+            f.fit = std::move(m);
+          } else {
+            f.fit = (*d)->fit ? (*d)->fit : (*c)->fit;
+          }
+        } else if ((*c)->fit) {  // 4: dlib+tta started from the CNN's points
+          const auto t1 = std::chrono::steady_clock::now();
+          auto p = landmarkers[1]->fit_with_spread(
+              image, landmarkers[1]->box_for_extent(points_box((*c)->fit->points)));
+          if (!p) return tl::unexpected(p.error());
+          f.fit = std::move(*p);
+          f.ms += ms_since(t1);
+        }
+      }
       return &cache.emplace(key, std::move(f)).first->second;
     };
     for (const Chain& c : chains) {
@@ -348,9 +443,14 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         boxes = merge(hog_out.boxes, wide_out.boxes);
         detect_ms = hog_out.ms + wide_out.ms;
       }
+      if (c.detector == "tiny") boxes = tiny_out.boxes, detect_ms = tiny_out.ms;
+      if (c.detector == "union_tiny") {
+        boxes = merge(merge(hog_out.boxes, wide_out.boxes), tiny_out.boxes);
+        detect_ms = hog_out.ms + wide_out.ms + tiny_out.ms;
+      }
       std::vector<const Fit*> fits;
       for (const cv::Rect2d& b : boxes) {
-        auto f = fit(c.tta ? 1 : 0, b);
+        auto f = fit(c.landmarker, b);
         if (!f) return tl::unexpected(f.error());
         fits.push_back(*f);
       }
@@ -365,9 +465,9 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     }
     // The landmarker alone, started from the annotated points' box in its own convention: the
     // top chain's landmarker (from_box) and the pipeline's (from_box_plain).
-    for (int pass = 0; pass < 2; ++pass) {
+    for (int pass = 0; pass < (cnn ? 3 : 2); ++pass) {
       const int which = pass == 0 ? (top_chain.tta ? 1 : 0) : 0;
-      const fl::Landmarker& lm = *landmarkers[which];
+      const fl::Landmarker& lm = pass == 2 ? *cnn : *landmarkers[which];
       const auto t0 = std::chrono::steady_clock::now();
       auto p = lm.fit_with_spread(image, lm.box_for_extent(truth_box));
       if (!p) return tl::unexpected(p.error());
@@ -378,14 +478,20 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         r.nme = nme_outer_corners((*p)->points, truth);
         r.eye_error = eye_center_error((*p)->points, truth);
         r.spread = (*p)->spread;
-        if (pass == 1)
-          for (size_t k = 0; k < truth.size(); ++k) bias_sum += (*p)->points[k] - truth[k];
+        if (pass >= 1) {  // systematic offset and scale of the landmarker vs the annotations
+          const size_t b = pass - 1;
+          for (size_t k = 0; k < truth.size(); ++k) bias[b] += (*p)->points[k] - truth[k];
+          const cv::Rect2d e = points_box((*p)->points);
+          width_ratio[b] += e.width / truth_box.width;
+          height_ratio[b] += e.height / truth_box.height;
+          ++fitted[b];
+        }
       } else {
         r.nme = r.eye_error = std::numeric_limits<double>::infinity();
       }
-      const char* key = pass == 0 ? "from_box" : "from_box_plain";
+      const char* key = pass == 0 ? "from_box" : pass == 1 ? "from_box_plain" : "from_box_cnn";
       face[key] = r.nme && std::isfinite(*r.nme) ? nlohmann::json(*r.nme) : nlohmann::json(nullptr);
-      (pass == 0 ? from_box : from_box_plain).faces.push_back(r);
+      (pass == 0 ? from_box : pass == 1 ? from_box_plain : from_box_cnn).faces.push_back(r);
     }
     per_face.push_back(std::move(face));
     if (progress) progress(static_cast<double>(i + 1) / static_cast<double>(items.size()));
@@ -410,11 +516,18 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   report.metrics = top.metrics(o.failure_nme, true);
   report.metrics["from_box"] = from_box.metrics(o.failure_nme, false);
   report.metrics["from_box_plain"] = from_box_plain.metrics(o.failure_nme, false);
-  const double n_pts = static_cast<double>(items.size() * 68);
-  report.metrics["from_box_plain"]["mean_offset_px"] = {bias_sum.x / n_pts, bias_sum.y / n_pts};
+  if (cnn) report.metrics["from_box_cnn"] = from_box_cnn.metrics(o.failure_nme, false);
+  for (size_t b = 0; b < 2; ++b) {
+    if (fitted[b] == 0) continue;
+    const double n = static_cast<double>(fitted[b]), n_pts = n * 68;
+    nlohmann::json& m = report.metrics[b == 0 ? "from_box_plain" : "from_box_cnn"];
+    m["mean_offset_px"] = {bias[b].x / n_pts, bias[b].y / n_pts};
+    m["extent_ratio"] = {width_ratio[b] / n, height_ratio[b] / n};  // fitted / annotated
+  }
   report.timing["ms_per_face_median"] = opt(top.ms_median());
   report.timing["from_box"] = {{"ms_per_face_median", opt(from_box.ms_median())}};
   report.timing["from_box_plain"] = {{"ms_per_face_median", opt(from_box_plain.ms_median())}};
+  if (cnn) report.timing["from_box_cnn"] = {{"ms_per_face_median", opt(from_box_cnn.ms_median())}};
   nlohmann::json chain_names = nlohmann::json::array();
   for (const Chain& c : chains) {
     chain_names.push_back(c.name);

@@ -7,6 +7,7 @@
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/sim/face_renderer.hpp"
+#include "dreamsense/vision/face_api_net.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -225,6 +226,47 @@ TEST(DlibLandmarker, SpreadConfidenceAndAugmentation) {
   EXPECT_GT((*n)->spread, (*r)->spread);
   o.box_scales = {3.0};
   EXPECT_FALSE(o.check());
+}
+
+// face-api's CNN landmarker and tiny face detector (npm @vladmandic/face-api, compared with dlib
+// in `eval landmarks`): the portrait's face found once, eyes near the hand-measured irises.
+TEST(FaceApiLandmarker, PortraitTinyDetectorAndEyes) {
+  auto l = make_face_api_landmarker();
+  if (!l && l.error().code == ErrorCode::kNotFound)
+    GTEST_SKIP() << "npm @vladmandic/face-api not installed: " << l.error().message;
+  ASSERT_TRUE(l) << l.error().message;
+  auto det = vision::FaceApiTinyFaceDetector::load(vision::default_face_api_model_dir());
+  ASSERT_TRUE(det) << det.error().message;
+  const cv::Mat img = portrait();
+  const auto faces = det->detect(img, 512);
+  ASSERT_EQ(faces.size(), 1u);
+  EXPECT_TRUE(faces[0].box.contains(kPortrait.right_eye_px));
+  EXPECT_TRUE(faces[0].box.contains(kPortrait.left_eye_px));
+  auto r = (*l)->fit_with_spread(img, faces[0].box);
+  ASSERT_TRUE(r);
+  ASSERT_TRUE(r->has_value());
+  const auto& p = (*r)->points;
+  ASSERT_EQ(p.size(), 68u);
+  cv::Point2d right(0, 0), left(0, 0);
+  for (int k = 36; k < 42; ++k) right += p[k] / 6.0;
+  for (int k = 42; k < 48; ++k) left += p[k] / 6.0;
+  std::printf("cnn eyes (%.1f, %.1f) (%.1f, %.1f), spread %.4f\n", right.x, right.y, left.x, left.y,
+              (*r)->spread);
+  EXPECT_LT(cv::norm(right - kPortrait.right_eye_px), 5.0);
+  EXPECT_LT(cv::norm(left - kPortrait.left_eye_px), 5.0);
+  EXPECT_LT((*r)->spread, 0.03);
+  // Negatives: no face in a uniform grey image; a uniform or tiny box gives no landmarks.
+  const cv::Mat grey_image(480, 640, CV_8UC3, cv::Scalar(128, 128, 128));
+  EXPECT_TRUE(det->detect(grey_image).empty());
+  auto g = (*l)->fit(grey_image, cv::Rect2d(200, 150, 120, 120));
+  ASSERT_TRUE(g);
+  EXPECT_FALSE(g->has_value());
+  g = (*l)->fit(img, cv::Rect2d(200, 100, 10, 10));
+  ASSERT_TRUE(g);
+  EXPECT_FALSE(g->has_value());
+  FaceApiLandmarkerOptions bad;
+  bad.margin = -0.1;
+  EXPECT_FALSE(make_face_api_landmarker(bad));
 }
 
 TEST(DlibLandmarker, NegativeCases) {

@@ -76,4 +76,22 @@ struct DlibLandmarkerOptions {
 // error naming the file and the Debian package.
 Result<std::unique_ptr<Landmarker>> make_dlib_landmarker(const DlibLandmarkerOptions& options = {});
 
+// The 68-point CNN of the npm package @vladmandic/face-api (MIT; vision/face_api_net.hpp), as a
+// Landmarker: the box is cropped (clipped to the image), padded to a square, run at 112x112; then
+// the crop is re-derived from the fitted points (their extent grown by `margin` of its size on
+// each side) and the net run again `refit_passes` times. spread = mean distance of the last two
+// passes' points / outer-corner distance. Measured against dlib in `eval landmarks` (README "Real
+// faces"); not used by the pipeline. fit() serialises calls (one cv::dnn::Net).
+struct FaceApiLandmarkerOptions {
+  std::filesystem::path model_dir;  // empty = vision::default_face_api_model_dir()
+  double margin = 0.1;              // the package's own FaceLandmarks.align() crop margin
+  int refit_passes = 1;
+  double min_box_px = 20;     // crops narrower or lower than this: nullopt
+  double min_contrast = 4.0;  // grey-level s.d. in the first crop below this: nullopt
+  Status check() const;
+};
+// The package's weights missing: kNotFound naming the manifest and the npm package.
+Result<std::unique_ptr<Landmarker>> make_face_api_landmarker(
+    const FaceApiLandmarkerOptions& options = {});
+
 }  // namespace dreamsense::face_landmarks

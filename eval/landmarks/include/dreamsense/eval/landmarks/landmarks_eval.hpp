@@ -69,8 +69,27 @@ struct LandmarksEvalOptions {
   //  hog_haar - hog, and a wider Haar search (wide_haar_*) when HOG finds no face in the image;
   //  union    - hog and the wider Haar search both, Haar boxes overlapping no HOG box (IoU <
   //             0.3) added;
+  //  tiny / union_tiny - face-api's tiny face detector alone / added to union (see below);
   //  a "+tta" suffix: the landmarker with test-time augmentation (tta_box_scales, tta_mirror).
-  std::vector<std::string> detectors{"union+tta", "union", "hog_haar", "hog", "haar"};
+  //  "+cnn": face-api's 68-point CNN (npm @vladmandic/face-api, MIT) instead of dlib, from the
+  //  detector box; "+mean": the per-point mean of dlib+tta and the CNN (spread = half their
+  //  distance); "+cnn_dlib": dlib+tta started from the box of the CNN's points; "+switch":
+  //  dlib+tta when the pipeline landmarker's spread_confidence (its two box passes) is >=
+  //  switch_min_confidence (the analyser's "confident" threshold), else the CNN (spread = the
+  //  CNN's mean distance from dlib's points).
+  std::vector<std::string> detectors{"union_tiny+switch",
+                                     "union_tiny+tta",
+                                     "union_tiny",
+                                     "tiny",
+                                     "union+switch",
+                                     "union+tta",
+                                     "union+cnn",
+                                     "union+mean",
+                                     "union+cnn_dlib",
+                                     "union",
+                                     "hog_haar",
+                                     "hog",
+                                     "haar"};
   std::vector<double> tta_box_scales{0.9, 1.1};
   bool tta_mirror = true;
   double min_iou = 0.5;       // detection rule (box of the fitted points vs annotated points)
@@ -85,6 +104,15 @@ struct LandmarksEvalOptions {
   int landmark_refit_passes = 1;  // DlibLandmarkerOptions::refit_passes (all chains)
   // iBUG .pts coordinates are 1-based (Matlab): subtract 1 to compare with 0-based pixels.
   bool one_based_annotations = true;
+  // from_box_cnn (the CNN from the annotated box) also when no chain uses the CNN.
+  bool with_cnn = false;
+  double switch_min_confidence = 0.5;
+  // "tiny": face-api's tiny face detector (vision::FaceApiTinyFaceDetector) at about the image's
+  // resolution (longest side rounded up to 32, at most tiny_max_input_px), the package's default
+  // score threshold; "union_tiny": union, and tiny boxes overlapping no union box (IoU < 0.3).
+  int tiny_max_input_px = 1024;
+  double tiny_min_score = 0.5;
+  std::filesystem::path face_api_model_dir;  // empty = the npm package's model folder
   std::filesystem::path landmark_model = "/usr/share/dlib/shape_predictor_68_face_landmarks.dat";
   size_t stride = 1;     // every stride-th item (by name), a subset for quick runs and tests
   size_t max_items = 0;  // 0 = all
