@@ -21,7 +21,8 @@ namespace {
 namespace fd = dreamsense::face_detection;
 namespace fl = dreamsense::face_landmarks;
 
-const std::set<std::string> kDetectors{"haar", "hog", "hog_haar", "union", "tiny", "union_tiny"};
+const std::set<std::string> kDetectors{"haar", "hog",        "hog_haar",  "union",
+                                       "tiny", "union_tiny", "tiny_union"};
 using LandmarkFitResult = face_landmarks::LandmarkFit;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -219,10 +220,12 @@ Status LandmarksEvalOptions::check() const {
   if (detectors.empty()) add("no detector chain");
   for (const std::string& d : detectors)
     if (!parse_chain(d))
-      add(fmt::format(
-          "unknown detector chain '{}' (known: haar, hog, hog_haar, union, tiny, union_tiny, each "
-          "optionally with +tta, +cnn, +mean or +cnn_dlib)",
-          d));
+      add(
+          fmt::format("unknown detector chain '{}' (known: haar, hog, hog_haar, union, tiny, "
+                      "union_tiny, tiny_union, "
+                      "each "
+                      "optionally with +tta, +cnn, +mean or +cnn_dlib)",
+                      d));
   if (!(min_iou > 0 && min_iou <= 1)) add("min_iou must be in (0, 1]");
   if (!(failure_nme > 0)) add("failure_nme must be > 0");
   if (stride < 1) add("stride must be >= 1");
@@ -281,9 +284,9 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   auto uses = [&](const std::string& detector) {
     return std::any_of(chains.begin(), chains.end(), [&](const Chain& c) {
       return c.detector == detector ||
-             (detector == "hog" &&
-              (c.detector == "hog_haar" || c.detector == "union" || c.detector == "union_tiny")) ||
-             (detector == "tiny" && c.detector == "union_tiny");
+             (detector == "hog" && (c.detector == "hog_haar" || c.detector == "union" ||
+                                    c.detector == "union_tiny" || c.detector == "tiny_union")) ||
+             (detector == "tiny" && (c.detector == "union_tiny" || c.detector == "tiny_union"));
     });
   };
   std::optional<fd::FaceDetector> haar;
@@ -295,7 +298,8 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   // The Haar search of hog_haar and union: also smaller faces and the profile cascades.
   std::optional<fd::FaceDetector> haar_wide;
   if (std::any_of(chains.begin(), chains.end(), [](const Chain& c) {
-        return c.detector == "hog_haar" || c.detector == "union" || c.detector == "union_tiny";
+        return c.detector == "hog_haar" || c.detector == "union" || c.detector == "union_tiny" ||
+               c.detector == "tiny_union";
       })) {
     fd::FaceDetectorOptions w;
     w.min_face_px = o.wide_haar_min_face_px;
@@ -444,6 +448,10 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         detect_ms = hog_out.ms + wide_out.ms;
       }
       if (c.detector == "tiny") boxes = tiny_out.boxes, detect_ms = tiny_out.ms;
+      if (c.detector == "tiny_union") {  // the same boxes, tiny's kept where they overlap
+        boxes = merge(tiny_out.boxes, merge(hog_out.boxes, wide_out.boxes));
+        detect_ms = hog_out.ms + wide_out.ms + tiny_out.ms;
+      }
       if (c.detector == "union_tiny") {
         boxes = merge(merge(hog_out.boxes, wide_out.boxes), tiny_out.boxes);
         detect_ms = hog_out.ms + wide_out.ms + tiny_out.ms;

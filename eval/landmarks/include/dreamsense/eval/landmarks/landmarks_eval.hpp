@@ -109,7 +109,9 @@ struct LandmarksEvalOptions {
   double switch_min_confidence = 0.5;
   // "tiny": face-api's tiny face detector (vision::FaceApiTinyFaceDetector) at about the image's
   // resolution (longest side rounded up to 32, at most tiny_max_input_px), the package's default
-  // score threshold; "union_tiny": union, and tiny boxes overlapping no union box (IoU < 0.3).
+  // score threshold; "union_tiny": union, and tiny boxes overlapping no union box (IoU < 0.3);
+  // "tiny_union": the same detectors, tiny's box kept where boxes overlap (added after seeing
+  // that union_tiny's merge dropped tiny boxes that matched better; README "Real faces").
   int tiny_max_input_px = 1024;
   double tiny_min_score = 0.5;
   std::filesystem::path face_api_model_dir;  // empty = the npm package's model folder
