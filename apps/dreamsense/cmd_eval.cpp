@@ -64,6 +64,7 @@ void add_eval(CLI::App& app, const GlobalFlags& g, int& exit_code) {
 
   add_eval_expression(*eval, g, exit_code);  // cmd_faces.cpp
   add_eval_faces(*eval, g, exit_code);       // cmd_faces.cpp
+  add_eval_landmarks(*eval, g, exit_code);   // cmd_landmarks.cpp
 
   auto flags = std::make_shared<EvalSessionFlags>();
   CLI::App* cmd = eval->add_subcommand(

@@ -70,6 +70,9 @@ void add_eval_expression(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 void add_eval_faces(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 void add_enroll_faces(CLI::App& enroll, const GlobalFlags& g, int& exit_code);
 
+// cmd_landmarks.cpp: `eval landmarks` (issue 20: face detection + 68 landmarks on 300-W faces).
+void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code);
+
 // The child's calibration for analyses (cmd_analyze.cpp): --subject DIR|none, --face-model,
 // --gaze-model, --speech-model.
 struct SubjectFlags {

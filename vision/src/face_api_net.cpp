@@ -446,3 +446,175 @@ std::vector<float> FaceApiRecognitionNet::describe(const cv::Mat& face) {
 }
 
 }  // namespace dreamsense::vision
+
+namespace dreamsense::vision {
+
+struct FaceApiLandmarkNet::Impl : NetBuilder {};
+
+FaceApiLandmarkNet::FaceApiLandmarkNet(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+FaceApiLandmarkNet::FaceApiLandmarkNet(FaceApiLandmarkNet&&) noexcept = default;
+FaceApiLandmarkNet& FaceApiLandmarkNet::operator=(FaceApiLandmarkNet&&) noexcept = default;
+FaceApiLandmarkNet::~FaceApiLandmarkNet() = default;
+const std::string& FaceApiLandmarkNet::weights_hash() const { return impl_->hash; }
+
+Result<FaceApiLandmarkNet> FaceApiLandmarkNet::load(const std::filesystem::path& model_dir) {
+  const auto manifest = model_dir / "face_landmark_68_model-weights_manifest.json";
+  constexpr int kOut = 2 * kFaceApiLandmarkPoints;
+  auto impl = std::make_unique<Impl>();
+  auto weights = load_weights(manifest, impl->hash);
+  if (!weights) return tl::unexpected(weights.error());
+  impl->weights = std::move(*weights);
+  impl->net.setInputsNames({"input"});
+  int x = 0;
+  const int channels[5] = {3, 32, 64, 128, 256};
+  for (int b = 0; b < 4 && x >= 0; ++b)
+    x = impl->dense_block("dense" + std::to_string(b), x, channels[b], channels[b + 1], b == 0);
+  const Tensor* fc_w = x >= 0 ? impl->get("fc/weights", {kFaceApiFeatures, kOut}) : nullptr;
+  const Tensor* fc_b = fc_w ? impl->get("fc/bias", {kOut}) : nullptr;
+  if (x < 0 || !fc_w || !fc_b)
+    return make_error(ErrorCode::kCorruptData, "{}: {}", manifest.string(), impl->error);
+  cv::dnn::LayerParams pool;
+  pool.set("pool", "ave");
+  pool.set("global_pooling", true);
+  impl->add("pool", "Pooling", pool, {x});
+  impl->fc_weights =
+      cv::Mat(kFaceApiFeatures, kOut, CV_32F, const_cast<float*>(fc_w->values.data())).clone();
+  impl->fc_bias = fc_b->values;
+  impl->weights.clear();
+  impl->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  impl->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return FaceApiLandmarkNet(std::move(impl));
+}
+
+std::vector<cv::Point2d> FaceApiLandmarkNet::fit(const cv::Mat& face) {
+  impl_->net.setInput(input_blob(face, kFaceApiInputPx), "input");
+  const cv::Mat pooled = impl_->net.forward("pool");
+  const cv::Mat v = pooled.reshape(1, 1) * impl_->fc_weights;  // 1 x 136
+  // Relative to the padded square (input_blob's centred padding) -> crop pixels.
+  const int square = std::max(face.rows, face.cols);
+  const double left = (square - face.cols) / 2, top = (square - face.rows) / 2;
+  std::vector<cv::Point2d> pts(kFaceApiLandmarkPoints);
+  for (int k = 0; k < kFaceApiLandmarkPoints; ++k)
+    pts[static_cast<size_t>(k)] = {
+        (v.at<float>(2 * k) + impl_->fc_bias[2 * k]) * square - left,
+        (v.at<float>(2 * k + 1) + impl_->fc_bias[2 * k + 1]) * square - top};
+  return pts;
+}
+
+}  // namespace dreamsense::vision
+
+namespace dreamsense::vision {
+
+struct FaceApiTinyFaceDetector::Impl : NetBuilder {
+  int leaky(const std::string& name, int input) {
+    cv::dnn::LayerParams lp;
+    lp.set("negative_slope", 0.1f);
+    return add(name, "ReLU", lp, {input});
+  }
+  int maxpool(const std::string& name, int input, int stride) {
+    cv::dnn::LayerParams lp;
+    lp.set("pool", "max");
+    lp.set("kernel_h", 2);
+    lp.set("kernel_w", 2);
+    lp.set("stride_h", stride);
+    lp.set("stride_w", stride);
+    lp.set("pad_mode", "SAME");
+    return add(name, "Pooling", lp, {input});
+  }
+  int separable_leaky(const std::string& p, int input, int cin, int cout) {
+    const int s = separable(p, input, cin, cout, 1);  // pad 1 + valid = SAME for 3x3 stride 1
+    return s < 0 ? -1 : leaky(p + "/leaky", s);
+  }
+};
+
+FaceApiTinyFaceDetector::FaceApiTinyFaceDetector(std::unique_ptr<Impl> impl)
+    : impl_(std::move(impl)) {}
+FaceApiTinyFaceDetector::FaceApiTinyFaceDetector(FaceApiTinyFaceDetector&&) noexcept = default;
+FaceApiTinyFaceDetector& FaceApiTinyFaceDetector::operator=(FaceApiTinyFaceDetector&&) noexcept =
+    default;
+FaceApiTinyFaceDetector::~FaceApiTinyFaceDetector() = default;
+
+Result<FaceApiTinyFaceDetector> FaceApiTinyFaceDetector::load(
+    const std::filesystem::path& model_dir) {
+  const auto manifest = model_dir / "tiny_face_detector_model-weights_manifest.json";
+  auto impl = std::make_unique<Impl>();
+  auto weights = load_weights(manifest, impl->hash);
+  if (!weights) return tl::unexpected(weights.error());
+  impl->weights = std::move(*weights);
+  impl->net.setInputsNames({"input"});
+  Impl& n = *impl;
+  int x = -1;
+  {
+    const Tensor* f = n.get("conv0/filters", {3, 3, 3, 16});
+    const Tensor* b = n.get("conv0/bias", {16});
+    if (f && b) x = n.leaky("conv0/leaky", n.conv("conv0", 0, *f, b, 1, false, "VALID"));
+  }
+  const int ch[7] = {3, 16, 32, 64, 128, 256, 512};
+  if (x >= 0) x = n.maxpool("pool0", x, 2);
+  for (int i = 1; i <= 5 && x >= 0; ++i) {
+    x = n.separable_leaky("conv" + std::to_string(i), x, ch[i], ch[i + 1]);
+    if (x >= 0) x = n.maxpool("pool" + std::to_string(i), x, i < 5 ? 2 : 1);
+  }
+  const Tensor* f8 = x >= 0 ? n.get("conv8/filters", {1, 1, 512, 25}) : nullptr;
+  const Tensor* b8 = f8 ? n.get("conv8/bias", {25}) : nullptr;
+  if (x < 0 || !f8 || !b8)
+    return make_error(ErrorCode::kCorruptData, "{}: {}", manifest.string(), n.error);
+  n.conv("conv8", x, *f8, b8, 1, false, "VALID");
+  n.weights.clear();
+  n.net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  n.net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return FaceApiTinyFaceDetector(std::move(impl));
+}
+
+std::vector<FaceApiDetection> FaceApiTinyFaceDetector::detect(const cv::Mat& image, int input_px,
+                                                              double score_threshold) {
+  DS_CHECK(!image.empty() && (image.type() == CV_8UC1 || image.type() == CV_8UC3));
+  DS_CHECK(input_px >= 32 && input_px % 32 == 0);
+  cv::Mat rgb;
+  cv::cvtColor(image, rgb, image.type() == CV_8UC1 ? cv::COLOR_GRAY2RGB : cv::COLOR_BGR2RGB);
+  const int square = std::max(rgb.rows, rgb.cols);
+  cv::copyMakeBorder(rgb, rgb, 0, square - rgb.rows, 0, square - rgb.cols, cv::BORDER_CONSTANT,
+                     cv::Scalar::all(0));
+  cv::resize(rgb, rgb, cv::Size(input_px, input_px), 0, 0, cv::INTER_LINEAR);
+  cv::Mat blob({1, 3, input_px, input_px}, CV_32F);
+  const float mean[3] = {117.001f, 114.697f, 97.404f};
+  for (int c = 0; c < 3; ++c) {
+    float* dst = blob.ptr<float>(0, c);
+    for (int y = 0; y < input_px; ++y) {
+      const uint8_t* src = rgb.ptr<uint8_t>(y);
+      for (int xx = 0; xx < input_px; ++xx) *dst++ = (src[3 * xx + c] - mean[c]) / 255.f;
+    }
+  }
+  impl_->net.setInput(blob, "input");
+  const cv::Mat out = impl_->net.forward("conv8");  // 1 x 25 x cells x cells
+  const int cells = out.size[2];
+  static constexpr double kAnchors[5][2] = {{1.603231, 2.094468},
+                                            {6.041143, 7.080126},
+                                            {2.882459, 3.518061},
+                                            {4.266906, 5.178857},
+                                            {9.041765, 10.66308}};
+  auto sigmoid = [](double v) { return 1.0 / (1.0 + std::exp(-v)); };
+  std::vector<cv::Rect2d> boxes;
+  std::vector<float> scores;
+  for (int row = 0; row < cells; ++row)
+    for (int col = 0; col < cells; ++col)
+      for (int a = 0; a < 5; ++a) {
+        auto v = [&](int k) { return static_cast<double>(out.ptr<float>(0, a * 5 + k, row)[col]); };
+        const double score = sigmoid(v(4));
+        if (score <= score_threshold) continue;
+        const double cx = (col + sigmoid(v(0))) / cells, cy = (row + sigmoid(v(1))) / cells;
+        const double w = std::exp(v(2)) * kAnchors[a][0] / cells;
+        const double h = std::exp(v(3)) * kAnchors[a][1] / cells;
+        boxes.emplace_back((cx - w / 2) * square, (cy - h / 2) * square, w * square, h * square);
+        scores.push_back(static_cast<float>(score));
+      }
+  std::vector<cv::Rect2d> nms_boxes = boxes;
+  std::vector<int> keep;
+  cv::dnn::NMSBoxes(nms_boxes, scores, static_cast<float>(score_threshold), 0.4f, keep);
+  std::vector<FaceApiDetection> result;
+  for (int k : keep)
+    result.push_back({boxes[static_cast<size_t>(k)], scores[static_cast<size_t>(k)]});
+  return result;
+}
+
+}  // namespace dreamsense::vision

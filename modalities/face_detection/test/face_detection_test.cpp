@@ -4,6 +4,7 @@
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
 #include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/face_detection/face_tracker.hpp"
+#include "dreamsense/face_detection/hog_face_detector.hpp"
 #include "dreamsense/perception/head_pose.hpp"
 
 #include <gtest/gtest.h>
@@ -145,6 +146,34 @@ TEST(FaceDetector, FindsTheDemoFaceWhereTheTruthIs) {
     EXPECT_GE(faces[0].frontalness, 0.f);
     EXPECT_LE(faces[0].frontalness, 1.f);
   }
+}
+
+TEST(HogFaceDetector, FindsTheDemoFaceAndNothingInBlankImages) {
+  EXPECT_FALSE(HogFaceDetector::create({.min_face_px = 5}));
+  auto d = HogFaceDetector::create();
+  ASSERT_TRUE(d) << d.error().message;
+  const MultiFrame& mf = demo().ticks[0];
+  const auto& truth = demo().truth.at(mf.stamp.ns());
+  int checked = 0;
+  for (const SensorId& cam : kCameras) {
+    const auto& t = truth.cameras.at(cam);
+    if (!t.visible || std::abs(t.yaw_deg) > 30) continue;
+    const cv::Mat& colour = image_of(mf, cam);
+    auto faces = d->detect(colour);
+    ASSERT_GE(faces.size(), 1u) << cam;
+    EXPECT_TRUE(testing::matches(faces[0], t)) << cam;
+    cv::Mat grey;
+    cv::cvtColor(colour, grey, cv::COLOR_BGR2GRAY);
+    EXPECT_GE(d->detect(grey).size(), 1u) << cam;
+    ++checked;
+  }
+  EXPECT_GE(checked, 1);
+  EXPECT_TRUE(d->detect(cv::Mat()).empty());
+  EXPECT_TRUE(d->detect(cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(128))).empty());
+  EXPECT_TRUE(d->detect(cv::Mat(100, 100, CV_16UC1, cv::Scalar(0))).empty());
+  EXPECT_TRUE(d->detect(cv::Mat(7, 3001, CV_8UC1, cv::Scalar(0))).empty());
+  // A huge image is searched shrunk to max_work_side_px (no crash, no face in a blank one).
+  EXPECT_TRUE(d->detect(cv::Mat(6000, 8000, CV_8UC1, cv::Scalar(0))).empty());
 }
 
 TEST(FaceDetector, FrontalnessFallsWithYaw) {

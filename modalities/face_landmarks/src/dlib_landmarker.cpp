@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <dlib/image_processing/shape_predictor.h>
@@ -89,6 +90,22 @@ dlib::rectangle to_dlib(const cv::Rect2d& b) {
                          std::lround(b.y + b.height - 1));
 }
 
+// iBUG 68-point index of each point's mirror image (left/right swapped).
+constexpr std::array<int, 68> kMirror68{
+    16, 15, 14, 13, 12, 11, 10, 9,  8,  7,  6,  5,  4, 3, 2, 1, 0,  // jaw
+    26, 25, 24, 23, 22, 21, 20, 19, 18, 17,                         // brows
+    27, 28, 29, 30, 35, 34, 33, 32, 31,                             // nose
+    45, 44, 43, 42, 47, 46, 39, 38, 37, 36, 41, 40,                 // eyes
+    54, 53, 52, 51, 50, 49, 48, 59, 58, 57, 56, 55,                 // outer lips
+    64, 63, 62, 61, 60, 67, 66, 65};                                // inner lips
+
+double median_of(std::vector<double>& v) {
+  const size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(m), v.end());
+  if (v.size() % 2 == 1) return v[m];
+  return 0.5 * (v[m] + *std::max_element(v.begin(), v.begin() + static_cast<long>(m)));
+}
+
 class DlibLandmarker final : public Landmarker {
  public:
   DlibLandmarker(DlibLandmarkerOptions o, ShapeModel m)
@@ -98,11 +115,25 @@ class DlibLandmarker final : public Landmarker {
 
   Result<std::optional<std::vector<cv::Point2d>>> fit(const cv::Mat& image,
                                                       const cv::Rect2d& box) const override {
+    auto f = fit_with_spread(image, box);
+    if (!f) return tl::unexpected(f.error());
+    if (!*f) return std::optional<std::vector<cv::Point2d>>{};
+    return std::optional<std::vector<cv::Point2d>>{std::move((*f)->points)};
+  }
+
+  cv::Rect2d box_for_extent(const cv::Rect2d& e) const override {
+    const cv::Rect2d& m = model_.mean_extent;
+    const double w = e.width / m.width, h = e.height / m.height;
+    return {e.x - m.x * w, e.y - m.y * h, w, h};
+  }
+
+  Result<std::optional<LandmarkFit>> fit_with_spread(const cv::Mat& image,
+                                                     const cv::Rect2d& box) const override {
     if (image.type() != CV_8UC3 && image.type() != CV_8UC1)
       return make_error(ErrorCode::kInvalidArgument,
                         "DlibLandmarker: image type {} (need CV_8UC3 BGR or CV_8UC1)",
                         image.type());
-    using Out = std::optional<std::vector<cv::Point2d>>;
+    using Out = std::optional<LandmarkFit>;
     if (image.empty() || !(box.width >= options_.min_box_px) || !(box.height > 0)) return Out{};
     const cv::Rect2d inside = box & cv::Rect2d(0, 0, image.cols, image.rows);
     if (inside.area() < options_.min_box_inside * box.area()) return Out{};
@@ -118,15 +149,72 @@ class DlibLandmarker final : public Landmarker {
       cv::meanStdDev(grey, mean, sd);
       if (sd[0] < options_.min_contrast) return Out{};
     }
-    // No copy: dlib views the cv::Mat buffer (const use only).
-    if (image.type() == CV_8UC3) return Out{run(dlib::cv_image<dlib::bgr_pixel>(image), box)};
-    return Out{run(dlib::cv_image<unsigned char>(image), box)};
+    std::vector<std::vector<cv::Point2d>> fits;
+    std::vector<cv::Point2d> previous_pass;
+    auto run_on = [&](const cv::Mat& m, const cv::Rect2d& b) {
+      // No copy: dlib views the cv::Mat buffer (const use only).
+      if (m.type() == CV_8UC3) return run(dlib::cv_image<dlib::bgr_pixel>(m), b, &previous_pass);
+      return run(dlib::cv_image<unsigned char>(m), b, &previous_pass);
+    };
+    std::vector<cv::Rect2d> boxes{box};
+    for (double s : options_.box_scales)
+      if (s != 1.0) {
+        const cv::Point2d c(box.x + box.width / 2, box.y + box.height / 2);
+        boxes.emplace_back(c.x - box.width * s / 2, c.y - box.height * s / 2, box.width * s,
+                           box.height * s);
+      }
+    for (const cv::Rect2d& b : boxes) fits.push_back(run_on(image, b));
+    const bool mirrored = options_.mirror && point_count() == 68;
+    if (mirrored) {
+      // Mirror a region around the box only (not the whole frame).
+      const cv::Rect roi = cv::Rect(cv::Rect2d(box.x - box.width, box.y - box.height, 3 * box.width,
+                                               3 * box.height)) &
+                           cv::Rect(0, 0, image.cols, image.rows);
+      cv::Mat flipped;
+      cv::flip(image(roi), flipped, 1);
+      const double right = roi.x + roi.width - 1;  // x -> right - x maps pixel columns
+      for (const cv::Rect2d& b : boxes) {
+        const cv::Rect2d fb(right - (b.x + b.width - 1), b.y - roi.y, b.width, b.height);
+        std::vector<cv::Point2d> p = run_on(flipped, fb);
+        std::vector<cv::Point2d> back(p.size());
+        for (size_t i = 0; i < p.size(); ++i)
+          back[static_cast<size_t>(kMirror68[i])] = {right - p[i].x, p[i].y + roi.y};
+        fits.push_back(std::move(back));
+      }
+    }
+    LandmarkFit out;
+    if (fits.size() == 1) {
+      out.points = std::move(fits.front());
+    } else {
+      out.points.resize(fits.front().size());
+      std::vector<double> xs(fits.size()), ys(fits.size());
+      for (size_t i = 0; i < out.points.size(); ++i) {
+        for (size_t k = 0; k < fits.size(); ++k) xs[k] = fits[k][i].x, ys[k] = fits[k][i].y;
+        out.points[i] = {median_of(xs), median_of(ys)};
+      }
+    }
+    // Spread: the fits against the result; one initialisation: its last two passes.
+    std::vector<std::vector<cv::Point2d>> others =
+        fits.size() > 1 ? fits : std::vector<std::vector<cv::Point2d>>{};
+    if (fits.size() == 1 && !previous_pass.empty()) others.push_back(previous_pass);
+    if (!others.empty() && out.points.size() == 68) {
+      const double d = cv::norm(out.points[36] - out.points[45]);
+      double sum = 0;
+      for (const auto& f : others)
+        for (size_t i = 0; i < f.size(); ++i) sum += cv::norm(f[i] - out.points[i]);
+      if (d > 0) out.spread = sum / static_cast<double>(others.size() * 68) / d;
+    }
+    return Out{std::move(out)};
   }
 
  private:
+  // One initialisation: the cascade from `box`, then refit_passes re-derived boxes. The points of
+  // the pass before the last are left in *before_last (empty without re-derivation).
   template <typename Image>
-  std::vector<cv::Point2d> run(const Image& img, cv::Rect2d box) const {
+  std::vector<cv::Point2d> run(const Image& img, cv::Rect2d box,
+                               std::vector<cv::Point2d>* before_last) const {
     std::vector<cv::Point2d> pts = model_.predict(img, to_dlib(box));
+    before_last->clear();
     for (int pass = 0; pass < options_.refit_passes; ++pass) {
       // The box that maps the mean shape's extent onto the fitted points' extent.
       double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
@@ -138,6 +226,7 @@ class DlibLandmarker final : public Landmarker {
       const double w = (x1 - x0) / m.width, h = (y1 - y0) / m.height;
       if (!(w >= options_.min_box_px) || !(h > 0)) break;
       box = cv::Rect2d(x0 - m.x * w, y0 - m.y * h, w, h);
+      *before_last = std::move(pts);
       pts = model_.predict(img, to_dlib(box));
     }
     return pts;
@@ -149,6 +238,22 @@ class DlibLandmarker final : public Landmarker {
 
 }  // namespace
 
+double spread_confidence(double spread, double spread_ok, double spread_bad) {
+  if (std::isnan(spread)) return 1.0;
+  if (!(spread_bad > spread_ok)) return spread <= spread_ok ? 1.0 : 0.0;
+  return std::clamp((spread_bad - spread) / (spread_bad - spread_ok), 0.0, 1.0);
+}
+
+Result<std::optional<LandmarkFit>> Landmarker::fit_with_spread(const cv::Mat& image,
+                                                               const cv::Rect2d& box_px) const {
+  auto p = fit(image, box_px);
+  if (!p) return tl::unexpected(p.error());
+  if (!*p) return std::optional<LandmarkFit>{};
+  LandmarkFit f;
+  f.points = std::move(**p);
+  return std::optional<LandmarkFit>{std::move(f)};
+}
+
 Status DlibLandmarkerOptions::check() const {
   std::string bad;
   if (model.empty()) bad += " model path empty;";
@@ -156,6 +261,8 @@ Status DlibLandmarkerOptions::check() const {
   if (!(min_box_px >= 8)) bad += " min_box_px must be >= 8;";
   if (!(min_contrast >= 0)) bad += " min_contrast must be >= 0;";
   if (!(min_box_inside > 0 && min_box_inside <= 1)) bad += " min_box_inside must be in (0, 1];";
+  for (double s : box_scales)
+    if (!(s >= 0.5 && s <= 2)) bad += " box_scales must be in [0.5, 2];";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "DlibLandmarkerOptions:{}", bad);
   return ok_status();
 }

@@ -36,9 +36,9 @@ class FaceLandmarksAnalyzer : public Analyzer {
       out.set_absent(keys::kFaceLandmarks, in.stamp);
       return ok_status();
     }
-    auto pts = landmarker_->fit(img->image, s.face.box_px);
-    if (!pts) return tl::unexpected(pts.error());
-    if (!*pts) {
+    auto fit = landmarker_->fit_with_spread(img->image, s.face.box_px);
+    if (!fit) return tl::unexpected(fit.error());
+    if (!*fit) {
       out.set_absent(keys::kFaceLandmarks, in.stamp);
       return ok_status();
     }
@@ -48,8 +48,11 @@ class FaceLandmarksAnalyzer : public Analyzer {
     lm.frame_sequence = f->sequence;
     lm.image_size = img->image.size();
     lm.box_px = s.face.box_px;
-    lm.points_px = std::move(**pts);
-    out.set(keys::kFaceLandmarks, std::move(lm), in.stamp, sel->confidence);
+    lm.points_px = std::move((*fit)->points);
+    const double fit_confidence =
+        spread_confidence((*fit)->spread, options_.spread_ok, options_.spread_bad);
+    out.set(keys::kFaceLandmarks, std::move(lm), in.stamp,
+            static_cast<float>(sel->confidence * fit_confidence));
     return ok_status();
   }
 
@@ -66,6 +69,9 @@ Status FaceLandmarksAnalyzerOptions::check() const {
     if (c.empty() || !seen.insert(c).second)
       return make_error(ErrorCode::kInvalidArgument,
                         "FaceLandmarksAnalyzerOptions: empty or repeated camera id '{}'", c);
+  if (!(spread_ok >= 0 && spread_bad > spread_ok))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "FaceLandmarksAnalyzerOptions: need 0 <= spread_ok < spread_bad");
   return dlib.check();
 }
 

@@ -7,6 +7,7 @@
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/sim/face_renderer.hpp"
+#include "dreamsense/vision/face_api_net.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -179,6 +180,93 @@ TEST(DlibLandmarker, BoxConventionDoesNotMatterMuch) {
   auto a = l->fit(img, b), c = l->fit(img, big);
   ASSERT_TRUE(a && *a && c && *c);
   for (int i : {36, 39, 42, 45, 30}) EXPECT_LT(cv::norm((**a)[i] - (**c)[i]), 2.5) << i;
+}
+
+TEST(DlibLandmarker, SpreadConfidenceAndAugmentation) {
+  // spread_confidence: 1 up to spread_ok, 0 from spread_bad, linear between; NaN = 1.
+  EXPECT_DOUBLE_EQ(spread_confidence(0.01), 1.0);
+  EXPECT_DOUBLE_EQ(spread_confidence(0.065), 0.5);
+  EXPECT_DOUBLE_EQ(spread_confidence(0.2), 0.0);
+  EXPECT_DOUBLE_EQ(spread_confidence(std::nan("")), 1.0);
+
+  auto l = shared_landmarker();
+  const cv::Mat img = portrait();
+  const cv::Rect2d b = kPortrait.face_region_px;
+  auto plain = l->fit_with_spread(img, b);
+  ASSERT_TRUE(plain && *plain);
+  // A clear frontal face: the two passes agree (small spread, full confidence).
+  EXPECT_LT((*plain)->spread, 0.03);
+  // box_for_extent maps the fitted points' extent to a box that gives the same points back.
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  for (const auto& p : (*plain)->points)
+    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+  auto again = l->fit(img, l->box_for_extent(cv::Rect2d(x0, y0, x1 - x0, y1 - y0)));
+  ASSERT_TRUE(again && *again);
+  for (int i : {36, 45, 30, 48, 54}) EXPECT_LT(cv::norm((**again)[i] - (*plain)->points[i]), 2.0);
+
+  // Mirrored + scaled fits: left/right mapped back correctly (eyes stay at the irises).
+  DlibLandmarkerOptions o;
+  o.mirror = true;
+  o.box_scales = {0.9, 1.1};
+  auto tta = make_dlib_landmarker(o);
+  ASSERT_TRUE(tta) << tta.error().message;
+  auto r = (*tta)->fit_with_spread(img, b);
+  ASSERT_TRUE(r && *r);
+  FaceLandmarks lm;
+  lm.points_px = (*r)->points;
+  EXPECT_LT(cv::norm(lm.right_eye_px() - kPortrait.right_eye_px), 3.0);
+  EXPECT_LT(cv::norm(lm.left_eye_px() - kPortrait.left_eye_px), 3.0);
+  EXPECT_LT(lm.points_px[36].x, lm.points_px[45].x);  // subject's right eye on the image left
+  EXPECT_LT((*r)->spread, 0.03);
+  // A face-sized box on a face-free textured patch: the fits disagree.
+  cv::Mat noise(img.size(), CV_8UC3);
+  cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(255));
+  auto n = (*tta)->fit_with_spread(noise, b);
+  ASSERT_TRUE(n && *n);
+  EXPECT_GT((*n)->spread, (*r)->spread);
+  o.box_scales = {3.0};
+  EXPECT_FALSE(o.check());
+}
+
+// face-api's CNN landmarker and tiny face detector (npm @vladmandic/face-api, compared with dlib
+// in `eval landmarks`): the portrait's face found once, eyes near the hand-measured irises.
+TEST(FaceApiLandmarker, PortraitTinyDetectorAndEyes) {
+  auto l = make_face_api_landmarker();
+  if (!l && l.error().code == ErrorCode::kNotFound)
+    GTEST_SKIP() << "npm @vladmandic/face-api not installed: " << l.error().message;
+  ASSERT_TRUE(l) << l.error().message;
+  auto det = vision::FaceApiTinyFaceDetector::load(vision::default_face_api_model_dir());
+  ASSERT_TRUE(det) << det.error().message;
+  const cv::Mat img = portrait();
+  const auto faces = det->detect(img, 512);
+  ASSERT_EQ(faces.size(), 1u);
+  EXPECT_TRUE(faces[0].box.contains(kPortrait.right_eye_px));
+  EXPECT_TRUE(faces[0].box.contains(kPortrait.left_eye_px));
+  auto r = (*l)->fit_with_spread(img, faces[0].box);
+  ASSERT_TRUE(r);
+  ASSERT_TRUE(r->has_value());
+  const auto& p = (*r)->points;
+  ASSERT_EQ(p.size(), 68u);
+  cv::Point2d right(0, 0), left(0, 0);
+  for (int k = 36; k < 42; ++k) right += p[k] / 6.0;
+  for (int k = 42; k < 48; ++k) left += p[k] / 6.0;
+  std::printf("cnn eyes (%.1f, %.1f) (%.1f, %.1f), spread %.4f\n", right.x, right.y, left.x, left.y,
+              (*r)->spread);
+  EXPECT_LT(cv::norm(right - kPortrait.right_eye_px), 5.0);
+  EXPECT_LT(cv::norm(left - kPortrait.left_eye_px), 5.0);
+  EXPECT_LT((*r)->spread, 0.03);
+  // Negatives: no face in a uniform grey image; a uniform or tiny box gives no landmarks.
+  const cv::Mat grey_image(480, 640, CV_8UC3, cv::Scalar(128, 128, 128));
+  EXPECT_TRUE(det->detect(grey_image).empty());
+  auto g = (*l)->fit(grey_image, cv::Rect2d(200, 150, 120, 120));
+  ASSERT_TRUE(g);
+  EXPECT_FALSE(g->has_value());
+  g = (*l)->fit(img, cv::Rect2d(200, 100, 10, 10));
+  ASSERT_TRUE(g);
+  EXPECT_FALSE(g->has_value());
+  FaceApiLandmarkerOptions bad;
+  bad.margin = -0.1;
+  EXPECT_FALSE(make_face_api_landmarker(bad));
 }
 
 TEST(DlibLandmarker, NegativeCases) {

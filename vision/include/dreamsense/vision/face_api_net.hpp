@@ -85,6 +85,59 @@ class FaceApiRecognitionNet {
   std::unique_ptr<Impl> impl_;
 };
 
+// The 68-point landmark network of the same package (src/faceLandmarkNet/FaceLandmark68Net): the
+// backbone of the expression network (four dense blocks, average pooling to 256 features) and a
+// 256x136 fully connected layer giving (x, y) of the 68 iBUG 300-W points relative to the padded
+// square input (0..1). The package runs it on the detector's face crop (extractFaces: the box
+// clipped to the image, no margin) padded to a square (black, centred) and resized to 112x112.
+inline constexpr int kFaceApiLandmarkPoints = 68;
+
+class FaceApiLandmarkNet {
+ public:
+  // Loads <model_dir>/face_landmark_68_model-weights_manifest.json and its binary shard(s).
+  static Result<FaceApiLandmarkNet> load(const std::filesystem::path& model_dir);
+  FaceApiLandmarkNet(FaceApiLandmarkNet&&) noexcept;
+  FaceApiLandmarkNet& operator=(FaceApiLandmarkNet&&) noexcept;
+  ~FaceApiLandmarkNet();
+  // `face`: CV_8UC1 or CV_8UC3 BGR face crop; returns 68 points in the crop's pixels.
+  std::vector<cv::Point2d> fit(const cv::Mat& face);
+  const std::string& weights_hash() const;
+
+ private:
+  struct Impl;
+  explicit FaceApiLandmarkNet(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// The tiny face detector of the same package (src/tinyFaceDetector: a Tiny-YOLOv2-style network
+// with depthwise-separable convolutions): the image padded to a square (bottom/right, black),
+// resized to input_px x input_px (a multiple of 32), minus the mean (117.001, 114.697, 97.404),
+// / 255; 3x3 conv (valid) and five depthwise-separable 3x3 convs with leaky ReLU (0.1) and 2x2
+// max pools; a 1x1 conv to (input_px/32)^2 cells x 5 anchors x (x, y, w, h, score); boxes decoded
+// as YOLOv2 (sigmoid offsets, exp sizes x anchors), score = sigmoid, non-maximum suppression at
+// IoU 0.4.
+struct FaceApiDetection {
+  cv::Rect2d box;  // image pixels
+  double score = 0;
+};
+
+class FaceApiTinyFaceDetector {
+ public:
+  // Loads <model_dir>/tiny_face_detector_model-weights_manifest.json and its binary shard(s).
+  static Result<FaceApiTinyFaceDetector> load(const std::filesystem::path& model_dir);
+  FaceApiTinyFaceDetector(FaceApiTinyFaceDetector&&) noexcept;
+  FaceApiTinyFaceDetector& operator=(FaceApiTinyFaceDetector&&) noexcept;
+  ~FaceApiTinyFaceDetector();
+  // `image`: CV_8UC1 or CV_8UC3 BGR. input_px: multiple of 32 (the package's default 416).
+  std::vector<FaceApiDetection> detect(const cv::Mat& image, int input_px = 416,
+                                       double score_threshold = 0.5);
+
+ private:
+  struct Impl;
+  explicit FaceApiTinyFaceDetector(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
 // The package's face crop from 68 landmarks (FaceLandmarks.align(): the landmarks' bounding box
 // grown by 10 % of its size on each side), clipped to the image. Empty rect for < 68 points.
 cv::Rect face_api_crop(const std::vector<cv::Point2d>& landmarks, cv::Size image_size);

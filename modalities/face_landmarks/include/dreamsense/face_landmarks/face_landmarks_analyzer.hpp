@@ -6,7 +6,10 @@
 //  - absent selection (no face anywhere): absent kFaceLandmarks;
 //  - the selected camera has no frame in this MultiFrame: absent;
 //  - otherwise the landmarker runs on that frame and the face box: kFaceLandmarks, confidence =
-//    the selected face's detection score, or absent when the landmarker rejects the face.
+//    the selected face's detection score x spread_confidence(fit spread) (a fit whose box
+//    re-derivation passes disagree, e.g. an occluded or strongly turned face, is reported with
+//    low confidence instead of as a confident wrong shape), or absent when the landmarker
+//    rejects the face.
 
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/face_landmarks/landmarker.hpp"
@@ -20,6 +23,8 @@ struct FaceLandmarksAnalyzerOptions {
   // Colour streams the selected camera may be (optional inputs of the contract).
   std::vector<SensorId> cameras{"camera_left", "camera_middle", "camera_right"};
   DlibLandmarkerOptions dlib;  // used by the factory that builds its own landmarker
+  // spread_confidence(spread, spread_ok, spread_bad) multiplies the confidence (landmarker.hpp).
+  double spread_ok = 0.03, spread_bad = 0.10;
   Status check() const;
 };
 

@@ -1,0 +1,127 @@
+#pragma once
+// `eval landmarks` (spec/cli.md task "landmarks"): face detection + 68 landmarks on real faces in
+// the 300-W layout (NAME.jpg + NAME.pts), run as the pipeline runs them, per detector chain, and
+// the landmarker alone from the annotated box. Method and numbers: modalities/face_landmarks/
+// README.md ("Real faces").
+
+#include "dreamsense/core/status.hpp"
+#include "dreamsense/eval/report.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dreamsense::eval::landmarks {
+
+// ---- 300-W annotations -------------------------------------------------------------------------
+
+// Reads a 300-W .pts file: either the iBUG layout (`version: 1`, `n_points: 68`, `{`, 68 lines
+// `x y`, `}`) or bare `x y` lines. Errors (one line naming the file and line): missing or
+// unreadable file, a non-number, a line without two values, a point count other than
+// `expected_points` (or than the header's n_points), a missing `}`. iBUG coordinates are 1-based
+// (Matlab); they are returned as read.
+Result<std::vector<cv::Point2d>> read_pts(const std::filesystem::path& file,
+                                          int expected_points = 68);
+
+struct LandmarkItem {
+  std::string name;             // file stem, e.g. "111076519_1"
+  std::filesystem::path image;  // NAME.jpg (or .png/.jpeg)
+  std::filesystem::path pts;    // NAME.pts
+};
+
+// The items of a 300-W folder, sorted by name. An image without its .pts (or a .pts without its
+// image) is an error naming the file; an empty folder or a missing one too.
+Result<std::vector<LandmarkItem>> list_300w(const std::filesystem::path& dir);
+
+// ---- metrics -----------------------------------------------------------------------------------
+
+// Bounding box of points (the "box of the annotated points" of the detection rule).
+cv::Rect2d points_box(const std::vector<cv::Point2d>& points);
+// Distance of the outer eye corners, points 37 and 46 (1-based; indices 36 and 45): the 300-W
+// normaliser. Needs 68 points.
+double outer_corner_distance(const std::vector<cv::Point2d>& truth);
+// Mean point-to-point error over the 68 points / outer_corner_distance(truth).
+double nme_outer_corners(const std::vector<cv::Point2d>& predicted,
+                         const std::vector<cv::Point2d>& truth);
+// Eye-contour centroids (points 37-42 and 43-48, 1-based) of prediction vs truth: the mean of the
+// two eyes' centroid distances / outer_corner_distance(truth).
+double eye_center_error(const std::vector<cv::Point2d>& predicted,
+                        const std::vector<cv::Point2d>& truth);
+// Index of the box with the highest IoU with `truth_box` when that IoU >= min_iou, else -1.
+int match_detection(const std::vector<cv::Rect2d>& boxes, const cv::Rect2d& truth_box,
+                    double min_iou = 0.5);
+
+// ---- the protocol ------------------------------------------------------------------------------
+
+using Progress = std::function<void(double)>;
+
+struct LandmarksEvalOptions {
+  std::string dataset = "300w";
+  std::filesystem::path dir;
+  // Detector chains, measured on the same images; the first one is reported at the top level.
+  //  haar     - the pipeline's face detector (Haar alt2, FaceDetectorOptions defaults) and the
+  //             dlib landmarker with its box re-derivation (the pipeline's chain, baseline);
+  //  hog      - dlib's HOG detector (faces down to hog_min_face_px), dlib landmarker;
+  //  hog_haar - hog, and a wider Haar search (wide_haar_*) when HOG finds no face in the image;
+  //  union    - hog and the wider Haar search both, Haar boxes overlapping no HOG box (IoU <
+  //             0.3) added;
+  //  tiny / union_tiny - face-api's tiny face detector alone / added to union (see below);
+  //  a "+tta" suffix: the landmarker with test-time augmentation (tta_box_scales, tta_mirror).
+  //  "+cnn": face-api's 68-point CNN (npm @vladmandic/face-api, MIT) instead of dlib, from the
+  //  detector box; "+mean": the per-point mean of dlib+tta and the CNN (spread = half their
+  //  distance); "+cnn_dlib": dlib+tta started from the box of the CNN's points; "+switch":
+  //  dlib+tta when the pipeline landmarker's spread_confidence (its two box passes) is >=
+  //  switch_min_confidence (the analyser's "confident" threshold), else the CNN (spread = the
+  //  CNN's mean distance from dlib's points).
+  std::vector<std::string> detectors{"union_tiny+switch",
+                                     "union_tiny+tta",
+                                     "union_tiny",
+                                     "tiny",
+                                     "union+switch",
+                                     "union+tta",
+                                     "union+cnn",
+                                     "union+mean",
+                                     "union+cnn_dlib",
+                                     "union",
+                                     "hog_haar",
+                                     "hog",
+                                     "haar"};
+  std::vector<double> tta_box_scales{0.9, 1.1};
+  bool tta_mirror = true;
+  double min_iou = 0.5;       // detection rule (box of the fitted points vs annotated points)
+  double failure_nme = 0.08;  // failure_rate_08
+  // HogFaceDetectorOptions::min_face_px and max_work_side_px: smaller faces than the library's
+  // defaults (40, 1600), at about twice the time (an 800 px image is searched at 2133 px).
+  double hog_min_face_px = 30;
+  int hog_max_work_side_px = 2800;
+  // The Haar search of hog_haar and union (the haar chain keeps the pipeline's defaults).
+  double wide_haar_min_face_px = 40;
+  bool wide_haar_profile = true;
+  int landmark_refit_passes = 1;  // DlibLandmarkerOptions::refit_passes (all chains)
+  // iBUG .pts coordinates are 1-based (Matlab): subtract 1 to compare with 0-based pixels.
+  bool one_based_annotations = true;
+  // from_box_cnn (the CNN from the annotated box) also when no chain uses the CNN.
+  bool with_cnn = false;
+  double switch_min_confidence = 0.5;
+  // "tiny": face-api's tiny face detector (vision::FaceApiTinyFaceDetector) at about the image's
+  // resolution (longest side rounded up to 32, at most tiny_max_input_px), the package's default
+  // score threshold; "union_tiny": union, and tiny boxes overlapping no union box (IoU < 0.3);
+  // "tiny_union": the same detectors, tiny's box kept where boxes overlap (added after seeing
+  // that union_tiny's merge dropped tiny boxes that matched better; README "Real faces").
+  int tiny_max_input_px = 1024;
+  double tiny_min_score = 0.5;
+  std::filesystem::path face_api_model_dir;  // empty = the npm package's model folder
+  std::filesystem::path landmark_model = "/usr/share/dlib/shape_predictor_68_face_landmarks.dat";
+  size_t stride = 1;     // every stride-th item (by name), a subset for quick runs and tests
+  size_t max_items = 0;  // 0 = all
+  Status check() const;
+};
+
+Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& options,
+                                      const Progress& progress = {});
+
+}  // namespace dreamsense::eval::landmarks

@@ -1,0 +1,64 @@
+// Dataset check (label dataset) on AFW with 300-W annotations (../shared/data/afw_68 or
+// $DREAMSENSE_DATA/afw_68); skips when absent. A subset (every 6th face by name, 57 faces) keeps
+// the runtime near a minute. dlib's 68-point model was trained on 300-W training images, which
+// include AFW: the landmark numbers are optimistic (README "Real faces"). The thresholds are what
+// the full set achieved (modalities/face_landmarks/README.md), with a margin for the subset; the
+// issue-20 targets (detection >= 0.95, mean NME <= 0.045) are not reached on AFW.
+
+#include "dreamsense/eval/landmarks/landmarks_eval.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+using namespace dreamsense::eval::landmarks;
+
+namespace {
+fs::path data_dir(const std::string& set) {
+  if (const char* d = std::getenv("DREAMSENSE_DATA")) return fs::path(d) / set;
+  return fs::path(DREAMSENSE_SOURCE_DIR) / "../shared/data" / set;
+}
+double at(const nlohmann::json& j, const char* key) {
+  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : -1.0;
+}
+}  // namespace
+
+TEST(LandmarksDataset, AfwSubsetDetectorsLandmarksAndConfidence) {
+  LandmarksEvalOptions o;
+  o.dir = data_dir("afw_68");
+  if (!fs::exists(o.dir)) GTEST_SKIP() << "AFW (300-W annotations) absent (" << o.dir << ")";
+  o.stride = 6;
+  o.detectors = {"union_tiny+switch", "union+tta", "union", "haar"};
+  auto r = run_landmarks_eval(o);
+  ASSERT_TRUE(r) << r.error().message;
+  const auto& m = r->metrics;
+  for (const char* c :
+       {"union_tiny+switch", "union+tta", "union", "haar", "from_box", "from_box_cnn"})
+    std::printf("%-10s %s\n", c, m[c].dump().c_str());
+  ASSERT_GE(r->items, 50u);
+  // Detection: HOG + the wider Haar search (+ face-api's tiny detector) find far more annotated
+  // faces than the pipeline's Haar search (full set: README "Real faces").
+  EXPECT_GE(at(m, "detection_rate"), 0.92);
+  EXPECT_GE(at(m["union"], "detection_rate"), 0.85);
+  EXPECT_GE(at(m, "detection_rate"), at(m["haar"], "detection_rate") + 0.2);
+  // Landmarks on detected faces: half of them within 0.035 (full set: median 0.030).
+  EXPECT_LE(at(m, "nme_outer_corners_median"), 0.035);
+  EXPECT_LE(at(m, "nme_outer_corners"), 0.055);
+  // dlib where its own passes agree, else face-api's CNN: fewer failures than dlib alone (subset
+  // measured: mean 0.048 vs 0.066).
+  EXPECT_LT(at(m, "nme_outer_corners"), at(m["union+tta"], "nme_outer_corners") - 0.01);
+  // The CNN alone from the annotated box: less precise than dlib (median) but fails less.
+  EXPECT_LE(at(m["from_box_cnn"], "nme_outer_corners"), 0.065);
+  EXPECT_LT(at(m["from_box_cnn"], "failure_rate_08"), at(m["from_box"], "failure_rate_08"));
+  // Occlusion-aware confidence: the spread of the fits ranks failures first (full set: AUC
+  // 0.989), and the fits it calls confident are good (full set: NME 0.033, 1.2 % failures).
+  EXPECT_GE(at(m["union"], "spread_failure_auc"), 0.9);
+  EXPECT_LE(at(m["union"], "nme_confident"), 0.045);
+  EXPECT_LE(at(m["union"], "confident_failure_rate"), 0.05);
+  EXPECT_GE(at(m["union"], "confident_fraction"), 0.7);
+  // The landmarker alone from the annotated box (full set: median 0.032).
+  EXPECT_LE(at(m["from_box"], "nme_outer_corners_median"), 0.04);
+}
