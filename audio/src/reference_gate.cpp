@@ -164,6 +164,8 @@ void ReferenceGate::try_align() {
 }
 
 double ReferenceGate::active_fraction(Timestamp a, Timestamp b) const {
+  if (!a.is_set() || !b.is_set())
+    return 0.0;  // unset bounds: nothing to measure (and b - a overflows)
   if (!(b > a)) return active(a) ? 1.0 : 0.0;
   int64_t covered = 0;
   for (const auto& [s, e] : intervals_) {

@@ -43,6 +43,8 @@ TEST(ReferenceGate, MarksTheReferenceWithLeadAndTailAtAnyRate) {
 TEST(ReferenceGate, SilenceGatesNothing) {
   ReferenceGate g;
   ASSERT_TRUE(g.push_reference(std::vector<float>(16000 * 3, 0.0f), 1, 16000, Timestamp()));
+  EXPECT_EQ(g.active_fraction(Timestamp::from_seconds(0), Timestamp::from_seconds(3)), 0.0);
+  // Unset bounds (found by UBSan: b - a overflowed) are nothing to measure.
   EXPECT_EQ(g.active_fraction(Timestamp(), Timestamp::from_seconds(3)), 0.0);
   EXPECT_TRUE(g.intervals().empty());
   EXPECT_FALSE(g.push_reference(std::vector<float>(10, 0.0f), 0, 16000, Timestamp()));

@@ -128,10 +128,10 @@ class OpenNi2Device : public DepthDevice {
         color_.create(device_, openni::SENSOR_COLOR) == openni::STATUS_OK &&
         color_.start() == openni::STATUS_OK) {
       have_color_ = true;
-      registered_ = device_.isImageRegistrationModeSupported(
-                        openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) &&
-                    device_.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) ==
-                        openni::STATUS_OK;
+      registered_ =
+          device_.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) &&
+          device_.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) ==
+              openni::STATUS_OK;
     }
     fps_ = depth_.getVideoMode().getFps();
     return ok_status();
@@ -212,7 +212,8 @@ Result<std::unique_ptr<DepthSensorSource>> DepthSensorSource::open(
                       options.id, options.driver);
   auto m = std::make_unique<Impl>();
   m->options = options;
-  if (options.driver == "fake") m->device = std::make_unique<FakeDevice>(options.fps, options.color);
+  if (options.driver == "fake")
+    m->device = std::make_unique<FakeDevice>(options.fps, options.color);
 #ifdef DREAMSENSE_HAVE_FREENECT
   if (options.driver == "freenect")
     m->device = std::make_unique<FreenectDevice>(
@@ -248,10 +249,10 @@ Result<FramePtr> DepthSensorSource::next() {
     return make_error(ErrorCode::kEndOfStream, "depth sensor '{}' stopped", m.options.id);
   auto g = m.device->grab();
   if (!g) return tl::unexpected(g.error());
-  const auto stamp = Timestamp::from_ns(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                            std::chrono::steady_clock::now() -
-                                            m.options.clock_origin)
-                                            .count());
+  const auto stamp =
+      Timestamp::from_ns(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                             std::chrono::steady_clock::now() - m.options.clock_origin)
+                             .count());
   const uint64_t seq = m.sequence++;
   if (m.options.color && !g->color.empty())
     m.pending.push_back(make_frame(m.options.id + ".color", stamp, seq, ColorImage{g->color}));

@@ -37,7 +37,8 @@ class Builder {
   Status parse_repeat(const std::string& r, int line, SrgsNode& n) const {
     const std::string v = trim(r);
     auto number = [&](const std::string& s, int& out) {
-      if (s.empty() || !std::all_of(s.begin(), s.end(), [](char c) {
+      // At most 6 digits: std::stoi throws on numbers beyond int (found by fuzz_grammar).
+      if (s.empty() || s.size() > 6 || !std::all_of(s.begin(), s.end(), [](char c) {
             return std::isdigit(static_cast<unsigned char>(c));
           }))
         return false;

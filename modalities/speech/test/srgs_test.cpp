@@ -52,6 +52,15 @@ TEST(Srgs, RepeatForms) {
   EXPECT_FALSE(g->tag_for(split_words("c c d d")).has_value());
 }
 
+// fuzz_grammar found repeat counts beyond int throwing out of std::stoi: now a clear error.
+TEST(Srgs, HugeRepeatCountIsAnErrorNotACrash) {
+  auto g =
+      SrgsGrammar::parse(wrap("<rule id=\"r\" scope=\"public\"><item repeat=\"1-"
+                              "99999999999999999999\">a</item></rule>"));
+  ASSERT_FALSE(g);
+  EXPECT_NE(g.error().to_string().find("bad repeat"), std::string::npos) << g.error().to_string();
+}
+
 TEST(Srgs, EntitiesTokensAndUntaggedPaths) {
   auto g =
       SrgsGrammar::parse(wrap("<rule id=\"r\"><token>Rock&amp;Roll</token> <!-- c --> it"

@@ -22,7 +22,7 @@
 namespace dreamsense::sources {
 
 struct DepthSensorOptions {
-  std::string id = "front";  // streams <id>.depth and <id>.color
+  std::string id = "front";     // streams <id>.depth and <id>.color
   std::string driver = "fake";  // freenect | openni2 | fake
   std::string device;           // see above
   double fps = 30;              // fake: its rate; the real drivers deliver at the device's
