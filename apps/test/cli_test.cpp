@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "cli_support.hpp"
+#include "demo_video.hpp"
 
 namespace {
 namespace fs = std::filesystem;
@@ -310,22 +311,10 @@ TEST_F(Cli, RecordWritesASessionThatAnalyzeReads) {
 TEST_F(Cli, LiveAnalysesACameraAsItDeliversAndRecordsIt) {
   const fs::path dir = root() / "live";
   fs::create_directories(dir);
-  {
-    dreamsense::sources::SessionReaderOptions ro;
-    ro.only = {"camera_middle"};
-    auto reader = dreamsense::sources::SessionReader::open(demo(), ro);
-    ASSERT_TRUE(reader) << reader.error().message;
-    cv::VideoWriter w((dir / "middle.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
-                      25, cv::Size(1280, 960));
-    ASSERT_TRUE(w.isOpened());
-    std::vector<cv::Mat> frames;
-    for (auto f = (*reader)->next(); f; f = (*reader)->next())
-      frames.push_back(std::get<dreamsense::ColorImage>((*f)->payload).image);
-    // Played three times (12 s): the models may take seconds to load on a loaded machine while
-    // the "device" already plays; --duration 3 counts from when they are ready and ends the run.
-    for (int k = 0; k < 3; ++k)
-      for (const cv::Mat& f : frames) w.write(f);
-  }
+  // Played three times (12 s): the models may take seconds to load on a loaded machine while
+  // the "device" already plays; --duration 3 counts from when they are ready and ends the run.
+  dreamsense::cli_support::write_video(demo(), "camera_middle", 3, dir / "middle.avi");
+  if (HasFatalFailure()) return;
   std::ofstream(dir / "live.yaml")
       << "session: {name: live-test, metadata: {subject: demo_child}}\n"
          "cameras:\n  - {id: camera_middle, device: middle.avi, "

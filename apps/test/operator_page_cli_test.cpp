@@ -28,33 +28,15 @@
 #include <unistd.h>
 #include <vector>
 
+#include "cli_support.hpp"
+#include "demo_video.hpp"
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// The demo's camera `id` as an MJPG video of `repeats` x its frames (25 fps).
-void write_video(const fs::path& demo, const std::string& id, int repeats, const fs::path& out) {
-  dreamsense::sources::SessionReaderOptions ro;
-  ro.only = {id};
-  auto reader = dreamsense::sources::SessionReader::open(demo, ro);
-  ASSERT_TRUE(reader) << reader.error().message;
-  std::vector<cv::Mat> frames;
-  for (auto f = (*reader)->next(); f; f = (*reader)->next())
-    frames.push_back(std::get<dreamsense::ColorImage>((*f)->payload).image);
-  ASSERT_FALSE(frames.empty());
-  cv::VideoWriter w(out.string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
-                    frames.front().size());
-  ASSERT_TRUE(w.isOpened());
-  for (int k = 0; k < repeats; ++k)
-    for (const auto& f : frames) w.write(f);
-}
+using dreamsense::cli_support::slurp;
+using dreamsense::cli_support::write_video;
 
 bool wait_for(const std::function<bool()>& done, double seconds) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
