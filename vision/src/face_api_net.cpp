@@ -4,6 +4,8 @@
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -614,6 +616,188 @@ std::vector<FaceApiDetection> FaceApiTinyFaceDetector::detect(const cv::Mat& ima
   std::vector<FaceApiDetection> result;
   for (int k : keep)
     result.push_back({boxes[static_cast<size_t>(k)], scores[static_cast<size_t>(k)]});
+  return result;
+}
+
+}  // namespace dreamsense::vision
+
+namespace dreamsense::vision {
+
+struct FaceApiSsdDetector::Impl : NetBuilder {
+  std::vector<std::array<float, 4>> anchors;  // Output/extra_dim: y0, x0, y1, x1 (0..1)
+  std::vector<std::string> outputs;           // box and class predictor names, predictor order
+  std::vector<int> anchors_per_cell;
+
+  int relu6(const std::string& name, int input) {
+    cv::dnn::LayerParams lp;
+    lp.set("min_value", 0.f);
+    lp.set("max_value", 6.f);
+    return add(name, "ReLU6", lp, {input});
+  }
+  // conv (TF "same") + batch-norm offset, ReLU6 (the package's pointwiseConvLayer, any kernel).
+  int conv_offset(const std::string& p, int input, int k, int cin, int cout, int stride) {
+    const Tensor* f = get(p + "/weights", {k, k, cin, cout});
+    const Tensor* b = get(p + "/convolution_bn_offset", {cout});
+    if (!f || !b) return -1;
+    return relu6(p + "/relu6", conv(p, input, *f, b, stride, false));
+  }
+  // Depthwise 3x3 conv, batch norm (folded: scale gamma / sqrt(var + eps), offset beta - mean *
+  // scale), ReLU6.
+  int depthwise_bn(const std::string& p, int input, int ch, int stride) {
+    const Tensor* f = get(p + "/depthwise_weights", {3, 3, ch, 1});
+    const Tensor* gamma = get(p + "/BatchNorm/gamma", {ch});
+    const Tensor* beta = get(p + "/BatchNorm/beta", {ch});
+    const Tensor* mean = get(p + "/BatchNorm/moving_mean", {ch});
+    const Tensor* var = get(p + "/BatchNorm/moving_variance", {ch});
+    if (!f || !gamma || !beta || !mean || !var) return -1;
+    constexpr double kEpsilon = 0.0010000000474974513;  // the package's
+    Tensor scale{{ch}, std::vector<float>(static_cast<size_t>(ch))};
+    Tensor minus_mean{{ch}, std::vector<float>(static_cast<size_t>(ch))};
+    for (size_t c = 0; c < static_cast<size_t>(ch); ++c) {
+      scale.values[c] = static_cast<float>(gamma->values[c] / std::sqrt(var->values[c] + kEpsilon));
+      minus_mean.values[c] = -mean->values[c];
+    }
+    return relu6(p + "/relu6", conv(p, input, *f, &minus_mean, stride, true, "SAME", &scale, beta));
+  }
+  bool predictor(int idx, int input, int cin, int anchors_here) {
+    for (const char* kind : {"BoxEncodingPredictor", "ClassPredictor"}) {
+      const std::string p = fmt::format("Prediction/BoxPredictor_{}/{}", idx, kind);
+      const int cout = anchors_here * (kind[0] == 'B' ? 4 : 3);
+      const Tensor* f = get(p + "/weights", {1, 1, cin, cout});
+      const Tensor* b = get(p + "/biases", {cout});
+      if (!f || !b) return false;
+      conv(p, input, *f, b, 1, false);
+      outputs.push_back(p);
+    }
+    anchors_per_cell.push_back(anchors_here);
+    return true;
+  }
+};
+
+FaceApiSsdDetector::FaceApiSsdDetector(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+FaceApiSsdDetector::FaceApiSsdDetector(FaceApiSsdDetector&&) noexcept = default;
+FaceApiSsdDetector& FaceApiSsdDetector::operator=(FaceApiSsdDetector&&) noexcept = default;
+FaceApiSsdDetector::~FaceApiSsdDetector() = default;
+
+Result<FaceApiSsdDetector> FaceApiSsdDetector::load(const std::filesystem::path& model_dir) {
+  const auto manifest = model_dir / "ssd_mobilenetv1_model-weights_manifest.json";
+  auto impl = std::make_unique<Impl>();
+  auto weights = load_weights(manifest, impl->hash);
+  if (!weights) return tl::unexpected(weights.error());
+  impl->weights = std::move(*weights);
+  impl->net.setInputsNames({"input"});
+  Impl& n = *impl;
+  // MobileNet v1: channels after each pair, stride 2 at pairs 2, 4, 6 and 12.
+  int x = n.conv_offset("MobilenetV1/Conv2d_0_pointwise", 0, 3, 3, 32, 2);
+  const int ch[14] = {32, 64, 128, 128, 256, 256, 512, 512, 512, 512, 512, 512, 1024, 1024};
+  int conv11 = -1;
+  for (int i = 1; i <= 13 && x >= 0; ++i) {
+    const int stride = (i == 2 || i == 4 || i == 6 || i == 12) ? 2 : 1;
+    x = n.depthwise_bn(fmt::format("MobilenetV1/Conv2d_{}_depthwise", i), x, ch[i - 1], stride);
+    if (x >= 0)
+      x = n.conv_offset(fmt::format("MobilenetV1/Conv2d_{}_pointwise", i), x, 1, ch[i - 1], ch[i],
+                        1);
+    if (i == 11) conv11 = x;
+  }
+  // Extra feature maps: 1x1 reduce, 3x3 stride 2 (8x8, 4x4, 2x2, 1x1 at 512 px).
+  const int extra[9] = {1024, 256, 512, 128, 256, 128, 256, 64, 128};
+  std::vector<int> maps;
+  int y = x;
+  for (int i = 0; i < 8 && y >= 0; ++i) {
+    const bool down = i % 2 == 1;
+    y = n.conv_offset(fmt::format("Prediction/Conv2d_{}_pointwise", i), y, down ? 3 : 1, extra[i],
+                      extra[i + 1], down ? 2 : 1);
+    if (down) maps.push_back(y);
+  }
+  bool ok = x >= 0 && y >= 0 && conv11 >= 0 && n.predictor(0, conv11, 512, 3) &&
+            n.predictor(1, x, 1024, 6);
+  const int map_ch[4] = {512, 256, 256, 128};
+  for (int i = 0; i < 4 && ok; ++i) ok = n.predictor(i + 2, maps[i], map_ch[i], 6);
+  // Anchors: 32x32x3 + 16x16x6 + 8x8x6 + 4x4x6 + 2x2x6 + 1x1x6 = 5118.
+  constexpr int kAnchors = 5118;
+  const Tensor* anchors = ok ? n.get("Output/extra_dim", {1, kAnchors, 4}) : nullptr;
+  if (!ok || !anchors)
+    return make_error(ErrorCode::kCorruptData, "{}: {}", manifest.string(), n.error);
+  for (int i = 0; i < kAnchors; ++i) {
+    const float* a = anchors->values.data() + 4 * static_cast<size_t>(i);
+    n.anchors.push_back({a[0], a[1], a[2], a[3]});
+  }
+  n.weights.clear();
+  n.net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  n.net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return FaceApiSsdDetector(std::move(impl));
+}
+
+std::vector<FaceApiDetection> FaceApiSsdDetector::detect(const cv::Mat& image,
+                                                         double min_confidence, int max_results) {
+  DS_CHECK(!image.empty() && (image.type() == CV_8UC1 || image.type() == CV_8UC3));
+  constexpr int side = kFaceApiSsdInputPx;
+  cv::Mat rgb;
+  cv::cvtColor(image, rgb, image.type() == CV_8UC1 ? cv::COLOR_GRAY2RGB : cv::COLOR_BGR2RGB);
+  const int square = std::max(rgb.rows, rgb.cols);
+  cv::copyMakeBorder(rgb, rgb, 0, square - rgb.rows, 0, square - rgb.cols, cv::BORDER_CONSTANT,
+                     cv::Scalar::all(0));
+  if (square != side) cv::resize(rgb, rgb, cv::Size(side, side), 0, 0, cv::INTER_LINEAR);
+  cv::Mat blob({1, 3, side, side}, CV_32F);
+  for (int c = 0; c < 3; ++c) {
+    float* dst = blob.ptr<float>(0, c);
+    for (int yy = 0; yy < side; ++yy) {
+      const uint8_t* src = rgb.ptr<uint8_t>(yy);
+      for (int xx = 0; xx < side; ++xx) *dst++ = src[3 * xx + c] / 127.5f - 1.f;
+    }
+  }
+  impl_->net.setInput(blob, "input");
+  std::vector<cv::Mat> outs;
+  impl_->net.forward(outs, impl_->outputs);
+
+  // Decode every anchor whose score passes; anchors run over (row, col, anchor) per predictor.
+  struct Candidate {
+    double score, y0, x0, y1, x1;
+  };
+  std::vector<Candidate> candidates;
+  size_t anchor = 0;
+  for (size_t p = 0; p < impl_->anchors_per_cell.size(); ++p) {
+    const cv::Mat& enc = outs[2 * p];
+    const cv::Mat& cls = outs[2 * p + 1];
+    const int rows = enc.size[2], cols = enc.size[3], per_cell = impl_->anchors_per_cell[p];
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c)
+        for (int a = 0; a < per_cell; ++a, ++anchor) {
+          if (anchor >= impl_->anchors.size()) break;
+          const double logit = cls.ptr<float>(0, a * 3 + 1, r)[c];
+          const double score = 1.0 / (1.0 + std::exp(-logit));
+          if (!(score > min_confidence)) continue;
+          auto e = [&](int k) { return static_cast<double>(enc.ptr<float>(0, a * 4 + k, r)[c]); };
+          const auto& an = impl_->anchors[anchor];
+          const double h = an[2] - an[0], w = an[3] - an[1];
+          const double cy = an[0] + h / 2 + e(0) / 10 * h, cx = an[1] + w / 2 + e(1) / 10 * w;
+          const double half_h = std::exp(e(2) / 5) * h / 2, half_w = std::exp(e(3) / 5) * w / 2;
+          candidates.push_back({score, cy - half_h, cx - half_w, cy + half_h, cx + half_w});
+        }
+  }
+  DS_CHECK(anchor == impl_->anchors.size());
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+  // Greedy suppression (IoU > 0.5 with a kept box) on the unclipped boxes, as the package.
+  auto iou = [](const Candidate& a, const Candidate& b) {
+    const double area_a = (a.y1 - a.y0) * (a.x1 - a.x0), area_b = (b.y1 - b.y0) * (b.x1 - b.x0);
+    if (area_a <= 0 || area_b <= 0) return 0.0;
+    const double ih = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
+    const double iw = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
+    return ih * iw / (area_a + area_b - ih * iw);
+  };
+  std::vector<Candidate> kept;
+  for (const Candidate& c : candidates) {
+    if (static_cast<int>(kept.size()) >= max_results) break;
+    if (std::none_of(kept.begin(), kept.end(), [&](const Candidate& k) { return iou(c, k) > 0.5; }))
+      kept.push_back(c);
+  }
+  std::vector<FaceApiDetection> result;
+  for (const Candidate& c : kept) {
+    const double y0 = std::max(0.0, c.y0) * square, y1 = std::min(1.0, c.y1) * square;
+    const double x0 = std::max(0.0, c.x0) * square, x1 = std::min(1.0, c.x1) * square;
+    result.push_back({cv::Rect2d(x0, y0, x1 - x0, y1 - y0), c.score});
+  }
   return result;
 }
 

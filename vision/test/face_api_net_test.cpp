@@ -4,6 +4,8 @@
 #include "dreamsense/vision/face_api_net.hpp"
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -67,6 +69,75 @@ TEST(FaceApiNet, MissingOrCorruptWeightsAreErrorsNamingTheFile) {
   auto truncated = FaceApiExpressionNet::load(dir);
   ASSERT_FALSE(truncated.has_value());
   EXPECT_NE(truncated.error().message.find("too short"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+// The SSD MobileNet v1 detector against the package itself (face-api.esm.js 1.7 on tfjs's CPU
+// backend, SsdMobilenetv1.locateFaces, minConfidence 0.3; script in modalities/face_landmarks/
+// README.md) on scikit-image's astronaut portrait (512x512: no resize) and on the portrait padded
+// to 640x600 (black; resized: tfjs's and OpenCV's bilinear resize differ a little).
+TEST(FaceApiSsd, PortraitMatchesThePackageAndBlankImagesHaveNoFace) {
+  const std::filesystem::path astronaut =
+      "/usr/lib/python3/dist-packages/skimage/data/astronaut.png";
+  if (!std::filesystem::exists(default_face_api_model_dir() /
+                               "ssd_mobilenetv1_model-weights_manifest.json"))
+    GTEST_SKIP() << "npm @vladmandic/face-api not installed (tools/setup.sh)";
+  if (!std::filesystem::exists(astronaut))
+    GTEST_SKIP() << astronaut << " missing (python3-skimage)";
+  auto det = FaceApiSsdDetector::load(default_face_api_model_dir());
+  ASSERT_TRUE(det.has_value()) << det.error().message;
+  const cv::Mat img = cv::imread(astronaut.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty());
+  auto faces = det->detect(img, 0.3);
+  ASSERT_EQ(faces.size(), 1u);
+  EXPECT_NEAR(faces[0].score, 0.96484, 2e-3);
+  EXPECT_NEAR(faces[0].box.x, 181.12, 0.5);
+  EXPECT_NEAR(faces[0].box.y, 72.86, 0.5);
+  EXPECT_NEAR(faces[0].box.width, 83.28, 0.5);
+  EXPECT_NEAR(faces[0].box.height, 101.72, 0.5);
+  cv::Mat padded;
+  cv::copyMakeBorder(img, padded, 40, 48, 100, 28, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+  faces = det->detect(padded, 0.3);
+  ASSERT_EQ(faces.size(), 1u);
+  EXPECT_NEAR(faces[0].score, 0.71981, 0.1);
+  EXPECT_NEAR(faces[0].box.x, 282.61, 3.0);
+  EXPECT_NEAR(faces[0].box.y, 106.92, 3.0);
+  EXPECT_NEAR(faces[0].box.width, 83.70, 3.0);
+  EXPECT_NEAR(faces[0].box.height, 102.44, 3.0);
+  // Grey: only the package's default confidence, 0.5; no face in a blank or uniform image.
+  cv::Mat grey;
+  cv::cvtColor(img, grey, cv::COLOR_BGR2GRAY);
+  EXPECT_EQ(det->detect(grey).size(), 1u);
+  EXPECT_TRUE(det->detect(cv::Mat(480, 640, CV_8UC3, cv::Scalar(128, 128, 128))).empty());
+  EXPECT_TRUE(det->detect(cv::Mat(300, 200, CV_8UC1, cv::Scalar(0))).empty());
+}
+
+TEST(FaceApiSsd, MissingOrWrongWeightsAreOneLineErrorsNamingTheFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "ds_face_api_ssd_bad";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  auto missing = FaceApiSsdDetector::load(dir);
+  ASSERT_FALSE(missing.has_value());
+  EXPECT_NE(missing.error().message.find("ssd_mobilenetv1_model-weights_manifest.json"),
+            std::string::npos);
+  EXPECT_EQ(missing.error().message.find('\n'), std::string::npos);
+  // Another network's weights under the SSD's name: a missing tensor, named.
+  if (std::filesystem::exists(default_face_api_model_dir() / "tiny_face_detector_model.bin")) {
+    std::filesystem::copy_file(
+        default_face_api_model_dir() / "tiny_face_detector_model-weights_manifest.json",
+        dir / "ssd_mobilenetv1_model-weights_manifest.json");
+    std::filesystem::copy_file(default_face_api_model_dir() / "tiny_face_detector_model.bin",
+                               dir / "tiny_face_detector_model.bin");
+    auto wrong = FaceApiSsdDetector::load(dir);
+    ASSERT_FALSE(wrong.has_value());
+    EXPECT_EQ(wrong.error().code, ErrorCode::kCorruptData);
+    EXPECT_NE(wrong.error().message.find("ssd_mobilenetv1_model-weights_manifest.json"),
+              std::string::npos);
+    EXPECT_NE(wrong.error().message.find("missing tensor MobilenetV1/Conv2d_0_pointwise"),
+              std::string::npos)
+        << wrong.error().message;
+    EXPECT_EQ(wrong.error().message.find('\n'), std::string::npos);
+  }
   std::filesystem::remove_all(dir);
 }
 

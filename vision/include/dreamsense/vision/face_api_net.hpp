@@ -138,6 +138,33 @@ class FaceApiTinyFaceDetector {
   std::unique_ptr<Impl> impl_;
 };
 
+// The SSD MobileNet v1 face detector of the same package (src/ssdMobilenetv1; the package's most
+// accurate detector): the image padded to a square (bottom/right, black), resized to 512x512,
+// scaled to -1..1; MobileNet v1 (a 3x3/2 conv and 13 depthwise-separable pairs, batch norm folded,
+// ReLU6); four more 1x1 + 3x3/2 conv pairs; six box predictors (1x1 convs on the 32x32 map of
+// pair 11, the 16x16 map of pair 13 and the 8, 4, 2, 1 maps; 3 or 6 anchors per cell, 5118 in
+// all) giving box offsets and class scores; boxes decoded against the anchors of the weight file
+// (Output/extra_dim; centre offsets / 10, log sizes / 5), score = sigmoid of the face class,
+// greedy non-maximum suppression at IoU 0.5, at most max_results boxes.
+inline constexpr int kFaceApiSsdInputPx = 512;
+
+class FaceApiSsdDetector {
+ public:
+  // Loads <model_dir>/ssd_mobilenetv1_model-weights_manifest.json and its binary shard(s).
+  static Result<FaceApiSsdDetector> load(const std::filesystem::path& model_dir);
+  FaceApiSsdDetector(FaceApiSsdDetector&&) noexcept;
+  FaceApiSsdDetector& operator=(FaceApiSsdDetector&&) noexcept;
+  ~FaceApiSsdDetector();
+  // `image`: CV_8UC1 or CV_8UC3 BGR. Defaults: the package's (SsdMobilenetv1Options).
+  std::vector<FaceApiDetection> detect(const cv::Mat& image, double min_confidence = 0.5,
+                                       int max_results = 100);
+
+ private:
+  struct Impl;
+  explicit FaceApiSsdDetector(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
 // The package's face crop from 68 landmarks (FaceLandmarks.align(): the landmarks' bounding box
 // grown by 10 % of its size on each side), clipped to the image. Empty rect for < 68 points.
 cv::Rect face_api_crop(const std::vector<cv::Point2d>& landmarks, cv::Size image_size);
