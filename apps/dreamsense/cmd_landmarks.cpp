@@ -39,14 +39,23 @@ void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                   "Detector chains compared on the same images, the first one reported at the "
                   "top level: haar (the pipeline's, baseline), hog (dlib HOG), hog_haar (HOG, a "
                   "wider Haar search when HOG finds no face), union (HOG and the wider Haar "
-                  "search), tiny (face-api's tiny face detector), union_tiny (union + tiny); a "
+                  "search), tiny (face-api's tiny face detector), union_tiny (union + tiny), "
+                  "ssd (face-api's SSD MobileNet v1), union_ssd (union + ssd), union_tiny_ssd "
+                  "(union_tiny + ssd), ssd_union (the boxes of union_ssd, SSD's kept where "
+                  "boxes overlap), ssd_hybrid (ssd_union's boxes, landmarks started from the "
+                  "overlapping union box); a "
                   "suffix: +tta landmarks with test-time augmentation, +cnn face-api's 68-point "
                   "CNN, +mean the mean of +tta and +cnn, +cnn_dlib +tta from the CNN's points, "
-                  "+switch +tta where the dlib passes agree (confident), else +cnn")
+                  "+switch +tta where the dlib passes agree (confident), else +cnn, "
+                  "+cnn_switch +switch with dlib started from the box of the CNN's points on "
+                  "face-api's (tiny, ssd) boxes")
       ->delimiter(',')
       ->default_str(
-          "union_tiny+switch,union_tiny+tta,union_tiny,tiny,union+switch,union+tta,union+cnn,"
-          "union+mean,union+cnn_dlib,union,hog_haar,hog,haar");
+          "union_ssd+switch,ssd_hybrid+switch,ssd_hybrid+cnn_switch,ssd_hybrid,"
+          "ssd_union+cnn_switch,ssd_union+switch,union_tiny_ssd+switch,"
+          "union_ssd+cnn_switch,union_ssd,ssd+cnn_switch,ssd+switch,ssd+cnn,ssd,"
+          "union_tiny+switch,union_tiny+tta,union_tiny,tiny,union+switch,union+tta,"
+          "union+cnn,union+mean,union+cnn_dlib,union,hog_haar,hog,haar");
   cmd->add_option("--hog-min-face", o.hog_min_face_px,
                   "Smallest face the HOG detector searches (px)")
       ->default_val(o.hog_min_face_px);
@@ -56,6 +65,9 @@ void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--refit-passes", o.landmark_refit_passes,
                   "Landmarker box re-derivations after the first fit (all chains)")
       ->default_val(o.landmark_refit_passes);
+  cmd->add_option("--ssd-min-score", o.ssd_min_score,
+                  "Minimum confidence of the SSD detector (the package's default 0.5)")
+      ->default_val(o.ssd_min_score);
   cmd->add_option("--stride", o.stride, "Every K-th face (by name) only")->default_val(o.stride);
   cmd->add_option("--max-items", o.max_items, "At most N faces (0 = all)")
       ->default_val(o.max_items);

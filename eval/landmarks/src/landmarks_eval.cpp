@@ -21,8 +21,9 @@ namespace {
 namespace fd = dreamsense::face_detection;
 namespace fl = dreamsense::face_landmarks;
 
-const std::set<std::string> kDetectors{"haar", "hog",        "hog_haar",  "union",
-                                       "tiny", "union_tiny", "tiny_union"};
+const std::set<std::string> kDetectors{
+    "haar",       "hog", "hog_haar",  "union",          "tiny",      "union_tiny",
+    "tiny_union", "ssd", "union_ssd", "union_tiny_ssd", "ssd_union", "ssd_hybrid"};
 using LandmarkFitResult = face_landmarks::LandmarkFit;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -132,12 +133,13 @@ struct Chain {
   std::string name, detector;
   bool tta = false;
   // 0 dlib (pipeline), 1 dlib+tta, 2 face-api CNN, 3 mean of 1 and 2, 4 dlib+tta from the CNN,
-  // 5 dlib+tta when the pipeline dlib's spread is confident, else the CNN.
+  // 5 dlib+tta when the pipeline dlib's spread is confident, else the CNN; 6 the same with dlib
+  // started from the box of the CNN's points.
   int landmarker = 0;
 };
 
 const std::map<std::string, int> kLandmarkerSuffixes{
-    {"+tta", 1}, {"+cnn", 2}, {"+mean", 3}, {"+cnn_dlib", 4}, {"+switch", 5}};
+    {"+tta", 1}, {"+cnn", 2}, {"+mean", 3}, {"+cnn_dlib", 4}, {"+switch", 5}, {"+cnn_switch", 6}};
 
 std::optional<Chain> parse_chain(const std::string& name) {
   Chain c{name, name, false, 0};
@@ -222,13 +224,14 @@ Status LandmarksEvalOptions::check() const {
     if (!parse_chain(d))
       add(
           fmt::format("unknown detector chain '{}' (known: haar, hog, hog_haar, union, tiny, "
-                      "union_tiny, tiny_union, "
-                      "each "
-                      "optionally with +tta, +cnn, +mean or +cnn_dlib)",
+                      "union_tiny, tiny_union, ssd, union_ssd, union_tiny_ssd, ssd_union, "
+                      "ssd_hybrid, each optionally "
+                      "with +tta, +cnn, +mean, +cnn_dlib, +switch or +cnn_switch)",
                       d));
   if (!(min_iou > 0 && min_iou <= 1)) add("min_iou must be in (0, 1]");
   if (!(failure_nme > 0)) add("failure_nme must be > 0");
   if (stride < 1) add("stride must be >= 1");
+  if (!(ssd_min_score > 0 && ssd_min_score < 1)) add("ssd_min_score must be in (0, 1)");
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "eval landmarks: " + bad);
   return ok_status();
 }
@@ -281,12 +284,19 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     cnn = std::move(*c);
   }
 
+  // Chains built on union (HOG + the wider Haar search).
+  auto on_union = [](const std::string& d) {
+    return d == "union" || d == "union_tiny" || d == "tiny_union" || d == "union_ssd" ||
+           d == "union_tiny_ssd" || d == "ssd_union" || d == "ssd_hybrid";
+  };
   auto uses = [&](const std::string& detector) {
     return std::any_of(chains.begin(), chains.end(), [&](const Chain& c) {
       return c.detector == detector ||
-             (detector == "hog" && (c.detector == "hog_haar" || c.detector == "union" ||
-                                    c.detector == "union_tiny" || c.detector == "tiny_union")) ||
-             (detector == "tiny" && (c.detector == "union_tiny" || c.detector == "tiny_union"));
+             (detector == "hog" && (c.detector == "hog_haar" || on_union(c.detector))) ||
+             (detector == "tiny" && (c.detector == "union_tiny" || c.detector == "tiny_union" ||
+                                     c.detector == "union_tiny_ssd")) ||
+             (detector == "ssd" && (c.detector == "union_ssd" || c.detector == "union_tiny_ssd" ||
+                                    c.detector == "ssd_union" || c.detector == "ssd_hybrid"));
     });
   };
   std::optional<fd::FaceDetector> haar;
@@ -297,9 +307,8 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   }
   // The Haar search of hog_haar and union: also smaller faces and the profile cascades.
   std::optional<fd::FaceDetector> haar_wide;
-  if (std::any_of(chains.begin(), chains.end(), [](const Chain& c) {
-        return c.detector == "hog_haar" || c.detector == "union" || c.detector == "union_tiny" ||
-               c.detector == "tiny_union";
+  if (std::any_of(chains.begin(), chains.end(), [&](const Chain& c) {
+        return c.detector == "hog_haar" || on_union(c.detector);
       })) {
     fd::FaceDetectorOptions w;
     w.min_face_px = o.wide_haar_min_face_px;
@@ -325,6 +334,13 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     if (!t) return tl::unexpected(t.error());
     tiny.emplace(std::move(*t));
   }
+  std::optional<vision::FaceApiSsdDetector> ssd;
+  if (uses("ssd")) {
+    auto t = vision::FaceApiSsdDetector::load(
+        o.face_api_model_dir.empty() ? vision::default_face_api_model_dir() : o.face_api_model_dir);
+    if (!t) return tl::unexpected(t.error());
+    ssd.emplace(std::move(*t));
+  }
 
   std::map<std::string, ChainScores> scores;
   ChainScores from_box, from_box_plain, from_box_cnn;
@@ -344,7 +360,12 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     const cv::Rect2d truth_box = points_box(truth);
     nlohmann::json face = {{"name", it.name}};
 
-    DetectorOutput haar_out, hog_out, wide_out, tiny_out;
+    DetectorOutput haar_out, hog_out, wide_out, tiny_out, ssd_out;
+    if (ssd) {
+      const auto t0 = std::chrono::steady_clock::now();
+      for (const auto& d : ssd->detect(image, o.ssd_min_score)) ssd_out.boxes.push_back(d.box);
+      ssd_out.ms = ms_since(t0);
+    }
     if (tiny) {
       const auto t0 = std::chrono::steady_clock::now();
       // About the image's own resolution (the package's default 416 loses small faces).
@@ -385,10 +406,15 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         auto c = fit(2, b);
         if (!c) return tl::unexpected(c.error());
         f.ms = (*c)->ms;
-        if (which == 5) {
-          auto plain_fit = fit(0, b);
+        if (which == 5 || which == 6) {
+          // 6: dlib's box from the CNN's points (the detector's box in dlib's convention).
+          const cv::Rect2d dlib_box =
+              which == 6 && (*c)->fit
+                  ? landmarkers[0]->box_for_extent(points_box((*c)->fit->points))
+                  : b;
+          auto plain_fit = fit(0, dlib_box);
           if (!plain_fit) return tl::unexpected(plain_fit.error());
-          auto d = fit(1, b);
+          auto d = fit(1, dlib_box);
           if (!d) return tl::unexpected(d.error());
           f.ms += (*plain_fit)->ms + (*d)->ms;
           const bool confident =
@@ -456,9 +482,40 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         boxes = merge(merge(hog_out.boxes, wide_out.boxes), tiny_out.boxes);
         detect_ms = hog_out.ms + wide_out.ms + tiny_out.ms;
       }
+      if (c.detector == "ssd") boxes = ssd_out.boxes, detect_ms = ssd_out.ms;
+      if (c.detector == "union_ssd") {
+        boxes = merge(merge(hog_out.boxes, wide_out.boxes), ssd_out.boxes);
+        detect_ms = hog_out.ms + wide_out.ms + ssd_out.ms;
+      }
+      if (c.detector == "ssd_union") {  // the same boxes, SSD's kept where they overlap
+        boxes = merge(ssd_out.boxes, merge(hog_out.boxes, wide_out.boxes));
+        detect_ms = hog_out.ms + wide_out.ms + ssd_out.ms;
+      }
+      if (c.detector == "union_tiny_ssd") {
+        boxes = merge(merge(merge(hog_out.boxes, wide_out.boxes), tiny_out.boxes), ssd_out.boxes);
+        detect_ms = hog_out.ms + wide_out.ms + tiny_out.ms + ssd_out.ms;
+      }
+      // Where the landmarker starts: the reported box, except in ssd_hybrid (below).
+      std::vector<cv::Rect2d> starts = boxes;
+      if (c.detector == "ssd_hybrid") {  // ssd_union's boxes; dlib starts from a union box
+        const std::vector<cv::Rect2d> union_boxes = merge(hog_out.boxes, wide_out.boxes);
+        boxes = merge(ssd_out.boxes, union_boxes);
+        detect_ms = hog_out.ms + wide_out.ms + ssd_out.ms;
+        starts = boxes;
+        for (size_t k = 0; k < ssd_out.boxes.size(); ++k) {
+          double best = 0.3;  // the merge's overlap rule
+          for (const cv::Rect2d& u : union_boxes)
+            if (const double v = iou(boxes[k], u); v >= best) best = v, starts[k] = u;
+        }
+      }
       std::vector<const Fit*> fits;
-      for (const cv::Rect2d& b : boxes) {
-        auto f = fit(c.landmarker, b);
+      for (const cv::Rect2d& b : starts) {
+        // +cnn_switch: only face-api's boxes reach dlib through the CNN; HOG/Haar boxes are
+        // dlib's convention (or near it) and go to it directly, as +switch.
+        const bool face_api_box =
+            std::find(tiny_out.boxes.begin(), tiny_out.boxes.end(), b) != tiny_out.boxes.end() ||
+            std::find(ssd_out.boxes.begin(), ssd_out.boxes.end(), b) != ssd_out.boxes.end();
+        auto f = fit(c.landmarker == 6 && !face_api_box ? 5 : c.landmarker, b);
         if (!f) return tl::unexpected(f.error());
         fits.push_back(*f);
       }

@@ -155,6 +155,22 @@ TEST(Dataset, ListingErrorsNameTheFile) {
   EXPECT_EQ(ok->size(), 1u);
 }
 
+TEST(Options, SsdChainsAndScoreAreChecked) {
+  LandmarksEvalOptions o;
+  o.detectors = {"ssd",     "union_ssd+switch",     "ssd_union+cnn_switch", "union_tiny_ssd",
+                 "ssd+cnn", "union_tiny+cnn_switch"};
+  EXPECT_TRUE(o.check());
+  o.detectors = {"ssd+bogus"};
+  auto bad = o.check();
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("ssd+bogus"), std::string::npos);
+  o.detectors = {"ssd"};
+  o.ssd_min_score = 1.0;
+  bad = o.check();
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("ssd_min_score"), std::string::npos);
+}
+
 TEST(Run, GreyFacelessImageIsNotDetectedAndBadFilesAreErrors) {
   if (!fs::exists("/usr/share/dlib/shape_predictor_68_face_landmarks.dat"))
     GTEST_SKIP() << "libdlib-data absent";

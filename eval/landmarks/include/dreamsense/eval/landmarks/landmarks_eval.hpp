@@ -76,8 +76,23 @@ struct LandmarksEvalOptions {
   //  distance); "+cnn_dlib": dlib+tta started from the box of the CNN's points; "+switch":
   //  dlib+tta when the pipeline landmarker's spread_confidence (its two box passes) is >=
   //  switch_min_confidence (the analyser's "confident" threshold), else the CNN (spread = the
-  //  CNN's mean distance from dlib's points).
-  std::vector<std::string> detectors{"union_tiny+switch",
+  //  CNN's mean distance from dlib's points); "+cnn_switch": as +switch, except that on the boxes
+  //  of face-api's detectors (tiny, ssd) both dlib fits start from the box of the CNN's points
+  //  (dlib's box convention derived through the CNN; the CNN's own points from the detector box).
+  std::vector<std::string> detectors{"union_ssd+switch",
+                                     "ssd_hybrid+switch",
+                                     "ssd_hybrid+cnn_switch",
+                                     "ssd_hybrid",
+                                     "ssd_union+cnn_switch",
+                                     "ssd_union+switch",
+                                     "union_tiny_ssd+switch",
+                                     "union_ssd+cnn_switch",
+                                     "union_ssd",
+                                     "ssd+cnn_switch",
+                                     "ssd+switch",
+                                     "ssd+cnn",
+                                     "ssd",
+                                     "union_tiny+switch",
                                      "union_tiny+tta",
                                      "union_tiny",
                                      "tiny",
@@ -114,6 +129,14 @@ struct LandmarksEvalOptions {
   // that union_tiny's merge dropped tiny boxes that matched better; README "Real faces").
   int tiny_max_input_px = 1024;
   double tiny_min_score = 0.5;
+  // "ssd": face-api's SSD MobileNet v1 detector (vision::FaceApiSsdDetector; fixed 512 px input)
+  // with the package's default minimum confidence; "union_ssd": union, and SSD boxes overlapping
+  // no union box (IoU < 0.3); "union_tiny_ssd": union_tiny, and SSD boxes overlapping none;
+  // "ssd_union": the boxes of union_ssd, SSD's kept where boxes overlap (SSD's boxes match the
+  // annotated points' box best of all detectors: README "Real faces"); "ssd_hybrid": the boxes
+  // of ssd_union, but the landmarker starts from the union box that overlaps an SSD box most
+  // (IoU >= 0.3: dlib's own detector's box convention), from the SSD box where none does.
+  double ssd_min_score = 0.5;
   std::filesystem::path face_api_model_dir;  // empty = the npm package's model folder
   std::filesystem::path landmark_model = "/usr/share/dlib/shape_predictor_68_face_landmarks.dat";
   size_t stride = 1;     // every stride-th item (by name), a subset for quick runs and tests
