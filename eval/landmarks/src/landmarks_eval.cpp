@@ -134,7 +134,7 @@ struct Chain {
   bool tta = false;
   // 0 dlib (pipeline), 1 dlib+tta, 2 face-api CNN, 3 mean of 1 and 2, 4 dlib+tta from the CNN,
   // 5 dlib+tta when the pipeline dlib's spread is confident, else the CNN; 6 the same with dlib
-  // started from the box of the CNN's points.
+  // started from the box of the CNN's points (used on face-api's boxes only, 5 on the others).
   int landmarker = 0;
 };
 
