@@ -8,6 +8,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 packages=(
   # toolchain
   build-essential cmake ninja-build pkg-config clang-format git
+  ccache  # compiler cache: a rebuild of unchanged files costs nothing (CMakeLists.txt uses it)
   # libraries
   libopencv-dev libopencv-contrib-dev libdlib-dev libpocketsphinx-dev libsphinxbase-dev
   libsndfile1-dev libfftw3-dev libeigen3-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
@@ -73,5 +74,7 @@ if [[ ! -f $npm_root/@vladmandic/face-api/model/face_recognition_model.bin ]]; t
   "${npm_sudo[@]}" npm install -g --no-fund --no-audit @vladmandic/face-api@1.7.15 >/dev/null
 fi
 
+build_start=$SECONDS
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$(nproc)"
+echo "setup: release build $((SECONDS - build_start)) s" >&2

@@ -20,7 +20,7 @@ namespace {
 
 namespace ea = dreamsense::eval::actions;
 
-const char* kDatasetHelp =
+const char* kActionsDatasetHelp =
     "NAME DIR: utkinect (joints_sSS_eEE.txt + actionLabel.txt), msr-action3d "
     "(aXX_sYY_eZZ_skeleton3D.txt), or demo-gestures SEEDS (the demo generator's DREAM gesture "
     "set, e.g. 300-399)";
@@ -58,7 +58,7 @@ void add_train_actions(CLI::App& train, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<TrainActionsFlags>();
   CLI::App* cmd = train.add_subcommand(
       "actions", "Skeleton action classifier (identifyTrajectory) from a dataset or demo seeds");
-  cmd->add_option("--dataset", flags->dataset, kDatasetHelp)->expected(2)->required();
+  cmd->add_option("--dataset", flags->dataset, kActionsDatasetHelp)->expected(2)->required();
   cmd->add_option("--out", flags->out, "Model file to write (YAML)")->required();
   cmd->add_option("--method", flags->method,
                   "pyramid (ours: body-frame joints, temporal pyramid, linear SVM) or baseline "
@@ -122,7 +122,7 @@ void add_eval_actions(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<EvalActionsFlags>();
   CLI::App* cmd = eval.add_subcommand(
       "actions", "Skeleton actions: accuracy, per-class recall, ms_per_window_median");
-  cmd->add_option("--dataset", flags->dataset, kDatasetHelp)->expected(2)->required();
+  cmd->add_option("--dataset", flags->dataset, kActionsDatasetHelp)->expected(2)->required();
   cmd->add_option("--model", flags->model,
                   "Evaluate this model (train actions) on every item instead of the dataset's "
                   "cross-validation");

@@ -13,7 +13,7 @@
 namespace dreamsense::app {
 namespace {
 
-const char* kDatasetHelp =
+const char* kVoicesDatasetHelp =
     "NAME DIR; NAME: fsdd (digit_speaker_index.wav, 8 kHz) or folders (DIR/<speaker>/*.wav)";
 
 // Model flags shared by train and eval.
@@ -48,7 +48,7 @@ void add_train_voices(CLI::App& train, const GlobalFlags& g, int& exit_code) {
   auto& o = flags->options;
   CLI::App* cmd = train.add_subcommand(
       "voices", "Speaker models (MFCC, GMM-UBM, MAP adaptation) for identifyVoice");
-  cmd->add_option("--dataset", flags->dataset, kDatasetHelp)->expected(2)->required();
+  cmd->add_option("--dataset", flags->dataset, kVoicesDatasetHelp)->expected(2)->required();
   cmd->add_option("--out", flags->out, "Model file to write (YAML)")->required();
   cmd->add_option("--speakers", o.speakers, "Enrol only these speakers (default: all)")
       ->delimiter(',');
@@ -93,7 +93,7 @@ void add_eval_voices(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   CLI::App* cmd = eval.add_subcommand(
       "voices",
       "Speaker identification (GMM-UBM): accuracy (closed set), unknown_reject_rate (--unknown)");
-  cmd->add_option("--dataset", flags->dataset, kDatasetHelp)->expected(2)->required();
+  cmd->add_option("--dataset", flags->dataset, kVoicesDatasetHelp)->expected(2)->required();
   cmd->add_option("--enroll", o.enroll,
                   "First N recordings of each speaker enrol, the rest are tests (with --model: "
                   "skipped)")

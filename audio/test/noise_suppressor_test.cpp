@@ -9,7 +9,7 @@
 namespace dreamsense::audio {
 namespace {
 
-double power(const std::vector<float>& x, size_t a, size_t b) {
+double band_power(const std::vector<float>& x, size_t a, size_t b) {
   double p = 0;
   for (size_t i = a; i < b; ++i) p += static_cast<double>(x[i]) * x[i];
   return p / static_cast<double>(b - a);
@@ -52,7 +52,8 @@ TEST(NoiseSuppressor, RaisesTheSnrOfAVoiceInWhiteNoise) {
   const double before = snr(s.noisy), after = snr(*y);
   EXPECT_GT(after, before + 5) << before << " -> " << after;
   // The noise alone is attenuated by about the gain floor (15 dB), at least 10 dB.
-  const double att = 10 * std::log10(power(s.noisy, 4000, 15000) / power(*y, 4000, 15000));
+  const double att =
+      10 * std::log10(band_power(s.noisy, 4000, 15000) / band_power(*y, 4000, 15000));
   EXPECT_GT(att, 10);
   EXPECT_LT(att, 17);
 }

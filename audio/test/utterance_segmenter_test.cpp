@@ -14,7 +14,7 @@
 namespace dreamsense::audio {
 namespace {
 
-constexpr int kRate = 16000;
+constexpr int kSegmenterRate = 16000;
 
 // `channels`-channel stream of `seconds` of low noise with tone bursts [from, to) (seconds);
 // channel c carries the burst scaled by (c + 1).
@@ -22,11 +22,11 @@ std::vector<float> scene(double seconds, const std::vector<std::pair<double, dou
                          int channels = 1, uint32_t seed = 1) {
   std::mt19937 rng(seed);
   std::normal_distribution<float> d(0.f, 0.002f);
-  const int64_t n = static_cast<int64_t>(seconds * kRate);
+  const int64_t n = static_cast<int64_t>(seconds * kSegmenterRate);
   std::vector<float> x(static_cast<size_t>(n * channels));
   for (int64_t i = 0; i < n; ++i) {
     double s = 0;
-    const double t = static_cast<double>(i) / kRate;
+    const double t = static_cast<double>(i) / kSegmenterRate;
     for (auto [a, b] : bursts)
       // Syllables of 0.3 s, each at another pitch (a steady tone longer than the noise window
       // would rightly be taken for noise).
@@ -52,7 +52,7 @@ std::vector<Utterance> segment(const std::vector<float>& x, UtteranceSegmenterOp
     const int64_t len = std::min(chunk, n - i);
     EXPECT_TRUE((*seg)->push(std::span<const float>(x).subspan(static_cast<size_t>(i * ch),
                                                                static_cast<size_t>(len * ch)),
-                             t0 + frames_to_duration(i, kRate), out));
+                             t0 + frames_to_duration(i, kSegmenterRate), out));
   }
   if (flush) (*seg)->flush(out);
   return out;
@@ -74,7 +74,8 @@ TEST(UtteranceSegmenter, BoundariesPreRollAndHangover) {
   EXPECT_NEAR(s(u[1].speech_end), 5.5, frame);
   for (const auto& v : u) {
     EXPECT_FALSE(v.truncated);
-    EXPECT_EQ(v.frames(), duration_to_frames(v.end - v.start, kRate)) << "samples match stamps";
+    EXPECT_EQ(v.frames(), duration_to_frames(v.end - v.start, kSegmenterRate))
+        << "samples match stamps";
     EXPECT_GT(v.mean_probability, 0.5f);
   }
 }
@@ -87,7 +88,7 @@ TEST(UtteranceSegmenter, StampsFollowTheStreamAnchor) {
   ASSERT_EQ(u.size(), 1u);
   EXPECT_NEAR(s(u[0].speech_start) - 100.0, 1.0, 0.02);
   // The first sample of the utterance is exactly the stream sample its stamp says.
-  const int64_t first = duration_to_frames(u[0].start - t0, kRate);
+  const int64_t first = duration_to_frames(u[0].start - t0, kSegmenterRate);
   EXPECT_FLOAT_EQ(u[0].samples[0], x[static_cast<size_t>(first)]);
 }
 

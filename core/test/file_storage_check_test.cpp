@@ -87,5 +87,30 @@ TEST(FileStorageCheck, UnreadableAndCompressedFilesAreErrors) {
   fs::remove(gz);
 }
 
+// fuzz/README.md finding 3: OpenCV allocates a declared rows x cols before reading the data.
+TEST(FileStorageCheck, MatrixDeclaringMoreElementsThanTheFileHoldsIsRefused) {
+  for (const char* name : {"big.yaml", "big.xml", "big.json"}) {
+    const fs::path p = fs::path(::testing::TempDir()) / name;
+    {  // what OpenCV writes, a 40 x 30 matrix: passes
+      cv::FileStorage out(p.string(), cv::FileStorage::WRITE);
+      out << "m" << cv::Mat(40, 30, CV_32F, cv::Scalar(1.5));
+    }
+    EXPECT_TRUE(check_file_storage_input(p)) << name;
+    fs::remove(p);
+  }
+  const auto huge_rows = check_file_storage_text(
+      "%YAML:1.0\nK: !!opencv-matrix\n  rows: 2147483648\n  cols: 2\n  dt: d\n  data: [ 1 ]\n",
+      "cam.yaml");
+  ASSERT_FALSE(huge_rows);
+  EXPECT_EQ(huge_rows.error().code, ErrorCode::kCorruptData);
+  EXPECT_NE(huge_rows.error().message.find("cam.yaml"), std::string::npos);
+  EXPECT_NE(huge_rows.error().message.find("2147483648"), std::string::npos);
+  // Each size small, the product not.
+  EXPECT_FALSE(check_file_storage_text(
+      "<?xml version=\"1.0\"?>\n<opencv_storage><K type_id=\"opencv-matrix\"><rows>60000</rows>"
+      "<cols>60000</cols><dt>d</dt><data>1</data></K></opencv_storage>\n",
+      "cam.xml"));
+}
+
 }  // namespace
 }  // namespace dreamsense

@@ -7,10 +7,12 @@
 
 #include <gtest/gtest.h>
 
+#include "test_time.hpp"
+
 namespace dreamsense::primitives {
 namespace {
 
-Timestamp ms(int64_t v) { return Timestamp::from_ns(v * 1'000'000); }
+using test::ms;
 
 MultiFrame tick(int64_t t) {
   MultiFrame mf;

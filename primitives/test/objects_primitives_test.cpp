@@ -9,10 +9,12 @@
 
 #include <gtest/gtest.h>
 
+#include "test_time.hpp"
+
 namespace dreamsense::primitives {
 namespace {
 
-Timestamp ms(int64_t v) { return Timestamp::from_ns(v * 1'000'000); }
+using test::ms;
 
 // The demo's table: horizontal at y = 0.30 in a y-down world (up = -y).
 TablePlane table() { return TablePlane{{0, -1, 0}, 0.30}; }

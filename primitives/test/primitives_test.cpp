@@ -11,10 +11,12 @@
 
 #include <set>
 
+#include "test_time.hpp"
+
 namespace dreamsense::primitives {
 namespace {
 
-Timestamp ms(int64_t v) { return Timestamp::from_ns(v * 1'000'000); }
+using test::ms;
 
 SkeletonBody child_with_right_hand(cv::Vec3d hand) {
   SkeletonBody b;

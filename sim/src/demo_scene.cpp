@@ -4,6 +4,8 @@
 #include <cmath>
 #include <random>
 
+#include "sim_math.hpp"
+
 namespace dreamsense::sim {
 namespace {
 
@@ -12,19 +14,14 @@ constexpr double kUpperArm = 0.21, kForearm = 0.19, kHand = 0.07;
 constexpr double kTransitionS = 0.5;
 constexpr double kHeadLagS = 0.06;  // the head starts turning after the eyes
 
-double uniform(std::mt19937_64& rng, double lo, double hi) {
-  return lo + (hi - lo) * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
-}
+using detail::uniform;
 
 double smoothstep(double x) {
   x = std::clamp(x, 0.0, 1.0);
   return x * x * (3 - 2 * x);
 }
 
-cv::Vec3d normalized(const cv::Vec3d& v) {
-  const double n = cv::norm(v);
-  return n > 1e-12 ? v / n : cv::Vec3d(0, 0, 0);
-}
+using detail::normalized;
 
 // Two-bone inverse kinematics: elbow and (reachable) wrist for a wrist target, the elbow bending
 // towards `pole`.

@@ -26,6 +26,8 @@
 #include <sstream>
 #include <thread>
 
+#include "sim_math.hpp"
+
 namespace dreamsense::sim {
 namespace {
 
@@ -53,9 +55,7 @@ double gaussian(std::mt19937_64& rng) {  // Box-Muller (portable)
   const double u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
   return std::sqrt(-2 * std::log(u1)) * std::cos(2 * CV_PI * u2);
 }
-double uniform(std::mt19937_64& rng, double lo, double hi) {
-  return lo + (hi - lo) * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
-}
+using detail::uniform;
 
 // Fixed decimal precision for truth values (stable text, no "-0").
 double q(double v, double scale = 1e6) {

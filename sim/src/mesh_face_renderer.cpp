@@ -13,6 +13,7 @@
 #include <map>
 
 #include "portrait.hpp"
+#include "sim_math.hpp"
 
 #ifndef DREAMSENSE_DEMO_DATA_DIR
 #define DREAMSENSE_DEMO_DATA_DIR "data/demo"
@@ -70,10 +71,7 @@ inline void sample_bgra(const cv::Mat& tex, double x, double y, double out[4]) {
         (1 - fy) * ((1 - fx) * p0[k] + fx * p0[k + 4]) + fy * ((1 - fx) * p1[k] + fx * p1[k + 4]);
 }
 
-cv::Vec3d normalized(const cv::Vec3d& v) {
-  const double n = cv::norm(v);
-  return n > 1e-12 ? v / n : cv::Vec3d(0, 0, 0);
-}
+using detail::normalized;
 
 // Unit gaze direction (head frame) for eye-in-head yaw/pitch (degrees), as look_at_angles.
 cv::Vec3d direction_from_angles(double yaw_deg, double pitch_deg) {

@@ -17,7 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool media_available() {
+bool renderer_media_available() {
   const MeshFaceOptions o;
   return fs::exists(o.portrait) && fs::exists(o.landmarks);
 }
@@ -25,7 +25,7 @@ bool media_available() {
 const MeshFaceRenderer* shared_face() {
   static std::unique_ptr<MeshFaceRenderer> face = [] {
     std::unique_ptr<MeshFaceRenderer> f;
-    if (!media_available()) return f;
+    if (!renderer_media_available()) return f;
     auto r = MeshFaceRenderer::create({});
     if (r) f = std::move(*r);
     return f;

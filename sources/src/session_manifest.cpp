@@ -15,8 +15,13 @@
 #include <string>
 #include <unistd.h>
 
+#include "posix_file.hpp"
+
 namespace dreamsense::sources {
 namespace {
+
+using detail::errno_text;
+using detail::sync_dir;
 
 constexpr const char* kFormatName = "dreamsense-session";
 
@@ -205,8 +210,6 @@ Result<SessionManifest> parse_manifest(const YAML::Node& root) {
   return m;
 }
 
-std::string errno_text(int err) { return std::strerror(err); }
-
 // Writes `text` to `path` and fsyncs it.
 Status write_file_synced(const std::filesystem::path& path, const std::string& text) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -234,13 +237,6 @@ Status write_file_synced(const std::filesystem::path& path, const std::string& t
     return make_error(ErrorCode::kIoError, "{}: close failed: {}", path.string(),
                       errno_text(errno));
   return ok_status();
-}
-
-void sync_dir(const std::filesystem::path& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return;
-  ::fsync(fd);
-  ::close(fd);
 }
 
 // Shortest text that reads back as the same double ("25", "29.97").

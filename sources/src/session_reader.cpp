@@ -34,16 +34,18 @@
 #include <unistd.h>
 #include <vector>
 
+#include "posix_file.hpp"
+
 namespace dreamsense::sources {
 namespace {
+
+using detail::errno_text;
 
 // Upper bound of SessionReaderOptions::decode_threads.
 constexpr int kMaxDecodeThreads = 16;
 
 // Streams whose first stamps are further apart than this are on different clocks.
 constexpr int64_t kMaxFirstStampSpreadNs = 10'000'000'000LL;
-
-std::string errno_text(int err) { return std::strerror(err); }
 
 // JPEG decoding straight to OpenCV's layout with libjpeg(-turbo): colour frames are decoded into
 // BGR (JCS_EXT_BGR) and grey frames into one channel, directly into the cv::Mat rows. The pixels

@@ -23,10 +23,13 @@
 #include <unistd.h>
 #include <vector>
 
+#include "posix_file.hpp"
+
 namespace dreamsense::sources {
 namespace {
 
-std::string errno_text(int err) { return std::strerror(err); }
+using detail::errno_text;
+using detail::sync_dir;
 
 // An append-only file descriptor with the name used in messages.
 class AppendFile {
@@ -391,13 +394,6 @@ class WavWriter : public StreamWriter {
   int64_t start_ns_ = 0;
   std::vector<int16_t> shorts_;
 };
-
-void sync_dir(const std::filesystem::path& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return;
-  ::fsync(fd);
-  ::close(fd);
-}
 
 }  // namespace
 

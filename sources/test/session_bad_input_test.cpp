@@ -146,14 +146,14 @@ TEST_F(SessionBadInput, UnknownStreamInOnly) {
 // damaged record in the middle is skipped and counted, too much damage is an error.
 
 // Opens the session (failing the test if it does not) and reads every frame of `stream`.
-struct ReadBack {
+struct StreamReadBack {
   std::vector<int64_t> stamps;
   StreamDamage damage;
 };
-ReadBack read_stream(const std::filesystem::path& dir, const SensorId& stream,
-                     SessionReaderOptions options = {}) {
+StreamReadBack read_stream(const std::filesystem::path& dir, const SensorId& stream,
+                           SessionReaderOptions options = {}) {
   options.only = {stream};
-  ReadBack out;
+  StreamReadBack out;
   auto reader = SessionReader::open(dir, options);
   if (!reader) {
     ADD_FAILURE() << reader.error().message;
@@ -172,7 +172,7 @@ TEST_F(SessionBadInput, TruncatedMjpegDataIsATornTail) {
   EXPECT_MESSAGE_HAS(open_error(), "torn at the end; --allow-damaged");
   // Marked incomplete (a crash), the torn tail is what a crash leaves: read what is there.
   replace_in_file(dir_ / kManifestName, "complete: true", "complete: false");
-  const ReadBack r = read_stream(dir_, "cam");
+  const StreamReadBack r = read_stream(dir_, "cam");
   EXPECT_GT(r.damage.torn_tail, 0u);
   EXPECT_EQ(r.damage.damaged, 0u);
   EXPECT_EQ(r.stamps.size() + r.damage.torn_tail, 10u);  // nothing else lost
@@ -180,7 +180,7 @@ TEST_F(SessionBadInput, TruncatedMjpegDataIsATornTail) {
 
 TEST_F(SessionBadInput, TruncatedDepthDataIsATornTail) {
   std::filesystem::resize_file(dir_ / "depth.depth", 3 * kWidth * kHeight * 2);
-  const ReadBack r = read_stream(dir_, "depth", {.allow_damaged = true});
+  const StreamReadBack r = read_stream(dir_, "depth", {.allow_damaged = true});
   EXPECT_EQ(r.stamps.size(), 3u);
   EXPECT_EQ(r.damage.torn_tail, 7u);
 }
@@ -201,7 +201,7 @@ TEST_F(SessionBadInput, CorruptJpegBytesCostThatFrame) {
     const std::string zeros(size - 4, '\0');
     f.write(zeros.data(), static_cast<std::streamsize>(zeros.size()));
   }
-  const ReadBack r = read_stream(dir_, "cam");
+  const StreamReadBack r = read_stream(dir_, "cam");
   ASSERT_EQ(r.stamps.size(), 9u);
   EXPECT_EQ(std::count(r.stamps.begin(), r.stamps.end(), static_cast<int64_t>(stamp)), 0);
   EXPECT_EQ(r.damage.damaged, 1u);
@@ -217,7 +217,7 @@ TEST_F(SessionBadInput, CorruptJpegMarkerCostsThatFrame) {
     std::fstream f(dir_ / "cam.mjpg", std::ios::in | std::ios::out | std::ios::binary);
     f.write("\0\0\0\0", 4);
   }
-  const ReadBack r = read_stream(dir_, "cam");
+  const StreamReadBack r = read_stream(dir_, "cam");
   EXPECT_EQ(r.stamps.size(), 9u);
   EXPECT_EQ(r.damage.damaged, 1u);
   ASSERT_FALSE(r.damage.first.empty());
@@ -246,7 +246,7 @@ TEST_F(SessionBadInput, TooMuchDamageIsAnErrorUnlessAllowed) {
   EXPECT_EQ(e.code, ErrorCode::kCorruptData);
   EXPECT_MESSAGE_HAS(e, "cam.mjpg: 3 of 10 records damaged");
   EXPECT_MESSAGE_HAS(e, "--allow-damaged");
-  const ReadBack r = read_stream(dir_, "cam", {.allow_damaged = true});
+  const StreamReadBack r = read_stream(dir_, "cam", {.allow_damaged = true});
   EXPECT_EQ(r.stamps.size(), 7u);
   EXPECT_EQ(r.damage.damaged, 3u);
 }
@@ -299,7 +299,7 @@ TEST_F(SessionBadInput, WrongChannelCountWav) {
 TEST_F(SessionBadInput, NonIncreasingStampInIndexCostsThatFrame) {
   // Frame 2 (line 4, after the header line) goes back in time.
   replace_in_file(dir_ / "cam.idx", "2,80000000,", "2,30000000,");
-  const ReadBack r = read_stream(dir_, "cam");
+  const StreamReadBack r = read_stream(dir_, "cam");
   EXPECT_EQ(r.stamps.size(), 9u);
   EXPECT_EQ(r.damage.damaged, 1u);
   ASSERT_FALSE(r.damage.first.empty());
@@ -309,7 +309,7 @@ TEST_F(SessionBadInput, NonIncreasingStampInIndexCostsThatFrame) {
 
 TEST_F(SessionBadInput, MalformedIndexLineCostsThatFrame) {
   replace_in_file(dir_ / "depth.idx", "\n5,", "\n5;");
-  const ReadBack r = read_stream(dir_, "depth");
+  const StreamReadBack r = read_stream(dir_, "depth");
   EXPECT_EQ(r.stamps.size(), 9u);
   EXPECT_EQ(r.damage.damaged, 1u);
   ASSERT_FALSE(r.damage.first.empty());
@@ -323,7 +323,7 @@ TEST_F(SessionBadInput, IndexCutShortInACompleteSessionIsReported) {
   size_t pos = 0;
   for (int k = 0; k < 5; ++k) pos = idx.find('\n', pos) + 1;
   write_file(dir_ / "cam.idx", idx.substr(0, pos));
-  const ReadBack r = read_stream(dir_, "cam", {.allow_damaged = true});
+  const StreamReadBack r = read_stream(dir_, "cam", {.allow_damaged = true});
   EXPECT_EQ(r.stamps.size(), 4u);
   EXPECT_NEAR(static_cast<double>(r.damage.damaged), 6.0, 1.0);  // estimated from frame sizes
   ASSERT_FALSE(r.damage.first.empty());
@@ -333,7 +333,7 @@ TEST_F(SessionBadInput, IndexCutShortInACompleteSessionIsReported) {
 
 TEST_F(SessionBadInput, MalformedSkeletonLineCostsThatRecord) {
   replace_in_file(dir_ / "skel.jsonl", "{\"stamp_ns\":120000000", "{\"stamp_ns\":120000000,,");
-  const ReadBack r = read_stream(dir_, "skel");
+  const StreamReadBack r = read_stream(dir_, "skel");
   EXPECT_EQ(r.stamps.size(), 9u);
   EXPECT_EQ(r.damage.damaged, 1u);
   ASSERT_FALSE(r.damage.first.empty());
@@ -345,7 +345,7 @@ TEST_F(SessionBadInput, CutLastSkeletonLineIsATornTailEvenInACompleteSession) {
   std::string text = read_file(dir_ / "skel.jsonl");
   text.resize(text.size() - 10);  // the recorder died in the middle of the last line
   write_file(dir_ / "skel.jsonl", text);
-  const ReadBack r = read_stream(dir_, "skel");
+  const StreamReadBack r = read_stream(dir_, "skel");
   EXPECT_EQ(r.stamps.size(), 9u);
   EXPECT_EQ(r.damage.torn_tail, 1u);
   EXPECT_EQ(r.damage.damaged, 0u);
@@ -359,7 +359,7 @@ TEST_F(SessionBadInput, ImplausibleJointsAndEmptyLinesAreCounted) {
   const auto comma = text.find(',', head + 8);
   text.replace(head + 8, comma - (head + 8), "1e308");  // x of the head: 1e308 m
   write_file(dir_ / "skel.jsonl", text);
-  const ReadBack r = read_stream(dir_, "skel", {.allow_damaged = true});
+  const StreamReadBack r = read_stream(dir_, "skel", {.allow_damaged = true});
   EXPECT_EQ(r.damage.empty_lines, 1u);
   EXPECT_EQ(r.damage.damaged, 1u);
   EXPECT_EQ(r.stamps.size(), 9u);
@@ -367,7 +367,7 @@ TEST_F(SessionBadInput, ImplausibleJointsAndEmptyLinesAreCounted) {
 
 TEST_F(SessionBadInput, UnknownSkeletonJointCostsThatRecord) {
   replace_in_file(dir_ / "skel.jsonl", "\"head\"", "\"tail\"");
-  const ReadBack r = read_stream(dir_, "skel", {.allow_damaged = true});
+  const StreamReadBack r = read_stream(dir_, "skel", {.allow_damaged = true});
   ASSERT_FALSE(r.damage.first.empty());
   EXPECT_TEXT_HAS(r.damage.first[0].what, "skel.jsonl: line 1: bodies[0]: unknown joint 'tail'");
 }

@@ -20,7 +20,7 @@ std::vector<cv::Point2d> moved_face(double s, double deg, cv::Point2d offset) {
   return out;
 }
 
-cv::Mat textured(int w, int h) {
+cv::Mat noise_image(int w, int h) {
   cv::Mat m(h, w, CV_8UC1);
   cv::randu(m, 30, 220);
   cv::GaussianBlur(m, m, cv::Size(0, 0), 1.5);
@@ -43,7 +43,7 @@ TEST(FaceAlignment, EyesLandOnTheirTargets) {
 TEST(FaceAlignment, RotatedScaledFaceIsUndone) {
   AlignmentOptions o;
   const auto lm = moved_face(120, 25, {200, 80});
-  cv::Mat image = textured(400, 300);
+  cv::Mat image = noise_image(400, 300);
   auto face = align_face(image, lm, o);
   ASSERT_TRUE(face.has_value());
   ASSERT_TRUE(face->has_value());
@@ -104,7 +104,7 @@ TEST(FaceAlignment, RegionGivesTheSameCropAsTheWholeFrame) {
 
 TEST(FaceAlignment, MirrorSwapsSidesAndIsAnInvolution) {
   AlignmentOptions o;
-  auto face = align_face(textured(300, 300), moved_face(100, 10, {100, 100}), o);
+  auto face = align_face(noise_image(300, 300), moved_face(100, 10, {100, 100}), o);
   ASSERT_TRUE(face && *face);
   const AlignedFace m = mirror_face(**face);
   const auto [r0, l0] = eye_centres((*face)->landmarks);
@@ -143,7 +143,7 @@ TEST(FaceCrops, DetectedFaceWithPlausibleLandmarks) {
   Fakes f;
   f.boxes = {cv::Rect2d(10, 10, 140, 140)};
   f.landmarks = moved_face(140, 0, {10, 10});
-  auto r = f.aligner().align(textured(48, 48));
+  auto r = f.aligner().align(noise_image(48, 48));
   ASSERT_TRUE(r && *r);
   EXPECT_EQ((*r)->source, AlignmentSource::kLandmarks);
   EXPECT_EQ((*r)->landmarks.size(), 68u);
@@ -152,17 +152,17 @@ TEST(FaceCrops, DetectedFaceWithPlausibleLandmarks) {
 TEST(FaceCrops, NoDetectionFallsBackToTheCropBoxThenToTheCropGeometry) {
   Fakes f;
   f.landmarks = moved_face(150, 3, {5, 5});
-  auto r = f.aligner().align(textured(48, 48));
+  auto r = f.aligner().align(noise_image(48, 48));
   ASSERT_TRUE(r && *r);
   EXPECT_EQ((*r)->source, AlignmentSource::kLandmarksFromCrop);
   f.landmarks = std::nullopt;
-  r = f.aligner().align(textured(48, 48));
+  r = f.aligner().align(noise_image(48, 48));
   ASSERT_TRUE(r && *r);
   EXPECT_EQ((*r)->source, AlignmentSource::kCropGeometry);
   EXPECT_TRUE((*r)->landmarks.empty());
   FaceCropOptions photos;
   photos.assume_crop = false;
-  r = f.aligner(photos).align(textured(48, 48));
+  r = f.aligner(photos).align(noise_image(48, 48));
   ASSERT_TRUE(r.has_value());
   EXPECT_FALSE(r->has_value());  // photos: a face must be detected
 }
@@ -177,7 +177,7 @@ TEST(FaceCrops, ImplausibleLandmarksAreNotUsed) {
   Fakes f;
   f.boxes = {cv::Rect2d(0, 0, 160, 160)};
   f.landmarks = moved_face(160, 60, {80, 0});
-  auto r = f.aligner().align(textured(48, 48));
+  auto r = f.aligner().align(noise_image(48, 48));
   ASSERT_TRUE(r && *r);
   EXPECT_EQ((*r)->source, AlignmentSource::kCropGeometry);
 }
@@ -187,7 +187,7 @@ TEST(FaceCrops, FlatTinyOrEmptyImagesHaveNoFace) {
   f.landmarks = moved_face(150, 0, {5, 5});
   auto a = f.aligner();
   for (const cv::Mat& m :
-       {cv::Mat(48, 48, CV_8UC1, cv::Scalar(128)), textured(12, 12), cv::Mat()}) {
+       {cv::Mat(48, 48, CV_8UC1, cv::Scalar(128)), noise_image(12, 12), cv::Mat()}) {
     auto r = a.align(m);
     ASSERT_TRUE(r.has_value());
     EXPECT_FALSE(r->has_value());

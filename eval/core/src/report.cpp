@@ -61,22 +61,30 @@ Status write_report(const EvalReport& report, const std::string& target) {
   return write_json_document(report.to_json(), target);
 }
 
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::optional<double> median(std::vector<double> values) {
+  if (values.empty()) return std::nullopt;
+  const auto mid = static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  if (values.size() % 2 == 1) return values[mid];
+  const double hi = values[mid];
+  const double lo = *std::max_element(values.begin(), values.begin() + mid);
+  return (lo + hi) / 2;
+}
+
+nlohmann::json number_or_null(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
 double Stopwatch::stop() {
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_).count();
+  const double ms = ms_since(t0_);
   samples_ms_.push_back(ms);
   return ms;
 }
 
-std::optional<double> Stopwatch::median_ms() const {
-  if (samples_ms_.empty()) return std::nullopt;
-  std::vector<double> v = samples_ms_;
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
-  if (v.size() % 2 == 1) return v[mid];
-  const double hi = v[mid];
-  const double lo = *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid));
-  return (lo + hi) / 2;
-}
+std::optional<double> Stopwatch::median_ms() const { return median(samples_ms_); }
 
 }  // namespace dreamsense::eval

@@ -26,10 +26,6 @@ struct PreparedFace {
   double align_ms = 0;
 };
 
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
 // Reads and aligns every item (single thread, in order).
 Result<std::vector<PreparedFace>> prepare(const std::vector<FaceImageItem>& items,
                                           vision::FaceCropOptions crop,
@@ -80,16 +76,6 @@ std::string block_key(const ExpressionMethod& m, const std::string& block) {
   if (block == "hog") return geometry + fmt::format("hog/{}/{}", f.hog.cell_px, f.hog.bins);
   if (block == "face_api") return geometry + fmt::format("face_api/{}", f.face_api_flip);
   return geometry + block;
-}
-
-std::optional<double> median(std::vector<double> v) {
-  if (v.empty()) return std::nullopt;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-
-nlohmann::json opt(const std::optional<double>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
 }
 
 // Per-face cost once the landmarks are known: warp + descriptors + classifier, one thread.
@@ -198,15 +184,15 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
         missing.empty()
             ? std::string()
             : fmt::format("; classes the model lacks (counted wrong): {}", missing_note));
-    report.metrics = {
-        {"accuracy", opt(cm.accuracy())},
-        {"balanced_accuracy", opt(cm.balanced_accuracy())},
-        {"confusion", cm.confusion_json()},
-        {model->method().name,
-         {{"accuracy", opt(cm.accuracy())}, {"balanced_accuracy", opt(cm.balanced_accuracy())}}}};
+    report.metrics = {{"accuracy", number_or_null(cm.accuracy())},
+                      {"balanced_accuracy", number_or_null(cm.balanced_accuracy())},
+                      {"confusion", cm.confusion_json()},
+                      {model->method().name,
+                       {{"accuracy", number_or_null(cm.accuracy())},
+                        {"balanced_accuracy", number_or_null(cm.balanced_accuracy())}}}};
     report.per_class = cm.per_class_json();
-    report.timing = {{"ms_per_face_median", opt(median(ms))},
-                     {"ms_alignment_median", opt(median(align_ms))}};
+    report.timing = {{"ms_per_face_median", number_or_null(median(ms))},
+                     {"ms_alignment_median", number_or_null(median(align_ms))}};
     report.extra = {{"alignment", alignment_counts(*faces)},
                     {"methods", {model->method().name}},
                     {"model", o.model.string()},
@@ -333,20 +319,20 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
       "folds; faces aligned by cascade + dlib landmarks with crop fallbacks",
       folds.size(), std::set<std::string>(subjects.begin(), subjects.end()).size(), o.seed, names);
   const ConfusionMatrix& top = cms.front();
-  report.metrics = {{"accuracy", opt(top.accuracy())},
-                    {"balanced_accuracy", opt(top.balanced_accuracy())},
+  report.metrics = {{"accuracy", number_or_null(top.accuracy())},
+                    {"balanced_accuracy", number_or_null(top.balanced_accuracy())},
                     {"confusion", top.confusion_json()}};
-  report.timing = {{"ms_per_face_median", opt(median(ms.front()))},
-                   {"ms_alignment_median", opt(median(align_ms))}};
+  report.timing = {{"ms_per_face_median", number_or_null(median(ms.front()))},
+                   {"ms_alignment_median", number_or_null(median(align_ms))}};
   nlohmann::json method_names = nlohmann::json::array();
   for (size_t mi = 0; mi < methods->size(); ++mi) {
     const std::string& n = (*methods)[mi].name;
     method_names.push_back(n);
-    report.metrics[n] = {{"accuracy", opt(cms[mi].accuracy())},
-                         {"balanced_accuracy", opt(cms[mi].balanced_accuracy())},
+    report.metrics[n] = {{"accuracy", number_or_null(cms[mi].accuracy())},
+                         {"balanced_accuracy", number_or_null(cms[mi].balanced_accuracy())},
                          {"confusion", cms[mi].confusion_json()},
                          {"per_class", cms[mi].per_class_json()}};
-    report.timing[n] = {{"ms_per_face_median", opt(median(ms[mi]))}};
+    report.timing[n] = {{"ms_per_face_median", number_or_null(median(ms[mi]))}};
   }
   report.per_class = top.per_class_json();
   report.extra = {

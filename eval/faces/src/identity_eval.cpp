@@ -14,23 +14,7 @@
 #include <set>
 
 namespace dreamsense::eval::faces {
-namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::optional<double> median(std::vector<double> v) {
-  if (v.empty()) return std::nullopt;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-
-nlohmann::json opt(const std::optional<double>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-}
-
-}  // namespace
+namespace {}  // namespace
 
 Status FaceIdEvalOptions::check() const {
   if (enroll < 1) return make_error(ErrorCode::kInvalidArgument, "--enroll must be >= 1");
@@ -164,7 +148,7 @@ Result<EvalReport> run_face_id_eval(const FaceIdEvalOptions& o, const Progress& 
     const auto frac = [](size_t a, size_t b) {
       return b ? nlohmann::json(static_cast<double>(a) / b) : nlohmann::json(nullptr);
     };
-    nlohmann::json mj = {{"accuracy", opt(cm.accuracy())},
+    nlohmann::json mj = {{"accuracy", number_or_null(cm.accuracy())},
                          {"false_accept_rate", frac(accepted_unknown, unknown_probes)},
                          {"closed_set_accuracy", frac(closed_correct, known_probes)},
                          {"false_reject_rate", frac(rejected_known, known_probes)},
@@ -174,15 +158,15 @@ Result<EvalReport> run_face_id_eval(const FaceIdEvalOptions& o, const Progress& 
     if (mi == 0) {
       for (const auto& [k, v] : mj.items()) report.metrics[k] = v;
       report.per_class = cm.per_class_json();
-      report.timing["ms_per_face_median"] = opt(median(ms));
+      report.timing["ms_per_face_median"] = number_or_null(median(ms));
     }
     report.metrics[m.name] = mj;
-    report.timing[m.name] = {{"ms_per_face_median", opt(median(ms))}};
+    report.timing[m.name] = {{"ms_per_face_median", number_or_null(median(ms))}};
     method_names.push_back(m.name);
     if (progress) progress(0.5 + 0.5 * (mi + 1.0) / methods.size());
   }
   report.items = known_probes + unknown_probes;
-  report.timing["ms_alignment_median"] = opt(median(align_ms));
+  report.timing["ms_alignment_median"] = number_or_null(median(align_ms));
   std::string names;
   for (const auto& m : methods) names += (names.empty() ? "" : ", ") + m.name;
   report.protocol = fmt::format(

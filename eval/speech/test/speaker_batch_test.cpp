@@ -105,14 +105,14 @@ TEST(SpeechNeighbourVote, NoPathSingleClipAndNoFeatures) {
   EXPECT_EQ(neighbour_vote(c.scores, c.dist)[3], 1);
 }
 
-class TempDir {
+class SpeakerBatchDir {
  public:
-  TempDir() {
+  SpeakerBatchDir() {
     path_ = fs::temp_directory_path() / ("ds_speaker_batch_" + std::to_string(getpid()));
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
-  ~TempDir() {
+  ~SpeakerBatchDir() {
     std::error_code ec;
     fs::remove_all(path_, ec);
   }
@@ -138,7 +138,7 @@ void write_wav(const fs::path& p, const std::vector<int16_t>& s) {
 TEST(SpeechFsddRunner, ReportsPerUtteranceAndVotedResultsAndAppliesTheWarp) {
   if (!fs::exists(kTidigitsModel / "mdef"))
     GTEST_SKIP() << "needs pocketsphinx-testdata (TIDIGITS model)";
-  TempDir t;
+  SpeakerBatchDir t;
   write_wav(t.path() / "1_ann_0.wav", glide(120, 300, 0.4));
   write_wav(t.path() / "1_ann_1.wav", glide(120, 310, 0.45));
   write_wav(t.path() / "2_bob_0.wav", glide(300, 120, 0.4));
@@ -188,7 +188,7 @@ TEST(SpeechFsddRunner, ReportsPerUtteranceAndVotedResultsAndAppliesTheWarp) {
 TEST(SpeechFsddRunner, ModelFolderDecodesLikeThePackagedModel) {
   if (!fs::exists(kTidigitsModel / "mdef"))
     GTEST_SKIP() << "needs pocketsphinx-testdata (TIDIGITS model)";
-  TempDir t;
+  SpeakerBatchDir t;
   write_wav(t.path() / "1_ann_0.wav", glide(120, 300, 0.4));
   write_wav(t.path() / "2_bob_0.wav", glide(300, 120, 0.4));
   fs::copy(kTidigitsModel, t.path() / "model");

@@ -19,14 +19,14 @@ constexpr std::array<JointId, kGestureJoints> kArmJoints = {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-const ModelFileKind& file_kind() {
+const ModelFileKind& gestures_file_kind() {
   static const ModelFileKind kind{"gestures model", GestureModel::kFormatName,
                                   GestureModel::kFormatVersion, "dreamsense train gestures"};
   return kind;
 }
 
-Error corrupt(const fs::path& path, const std::string& what) {
-  return model_corrupt(file_kind(), path, what);
+Error gestures_corrupt(const fs::path& path, const std::string& what) {
+  return model_corrupt(gestures_file_kind(), path, what);
 }
 
 }  // namespace
@@ -328,7 +328,7 @@ Status GestureModel::save(const fs::path& path) const {
 Result<GestureModel> GestureModel::load(const fs::path& path) {
   GestureModel g;
   try {
-    DS_ASSIGN_OR_RETURN(cv::FileStorage f, open_model_file(file_kind(), path));
+    DS_ASSIGN_OR_RETURN(cv::FileStorage f, open_model_file(gestures_file_kind(), path));
     auto need = [&](const cv::FileNode& parent, const char* key) -> cv::FileNode {
       cv::FileNode n = parent[key];
       if (n.empty()) throw std::runtime_error(std::string("missing key ") + key);
@@ -338,7 +338,8 @@ Result<GestureModel> GestureModel::load(const fs::path& path) {
     const cv::FileNode body = need(f.root(), "body");
     cv::Mat up;
     need(body, "up") >> up;
-    if (up.total() != 3) return tl::unexpected(corrupt(path, "body.up must have 3 numbers"));
+    if (up.total() != 3)
+      return tl::unexpected(gestures_corrupt(path, "body.up must have 3 numbers"));
     up.convertTo(up, CV_64F);
     o.body.up = cv::Vec3d(up.at<double>(0), up.at<double>(1), up.at<double>(2));
     o.body.normalize_facing = static_cast<int>(need(body, "normalize_facing")) != 0;
@@ -356,18 +357,19 @@ Result<GestureModel> GestureModel::load(const fs::path& path) {
     o.min_threshold = static_cast<double>(need(f.root(), "min_threshold"));
     o.min_duration_s = static_cast<double>(need(f.root(), "min_duration_s"));
     o.max_duration_s = static_cast<double>(need(f.root(), "max_duration_s"));
-    if (auto s = o.check(); !s) return tl::unexpected(corrupt(path, s.error().message));
+    if (auto s = o.check(); !s) return tl::unexpected(gestures_corrupt(path, s.error().message));
     const cv::FileNode gs = need(f.root(), "gestures");
     if (!gs.isSeq() || gs.size() == 0)
-      return tl::unexpected(corrupt(path, "gestures is not a non-empty list"));
+      return tl::unexpected(gestures_corrupt(path, "gestures is not a non-empty list"));
     for (const auto& n : gs) {
       g.labels_.push_back(static_cast<std::string>(need(n, "label")));
       g.thresholds_.push_back(static_cast<double>(need(n, "threshold")));
       if (!(g.thresholds_.back() > 0))
-        return tl::unexpected(corrupt(path, "threshold of '" + g.labels_.back() + "' <= 0"));
+        return tl::unexpected(
+            gestures_corrupt(path, "threshold of '" + g.labels_.back() + "' <= 0"));
     }
     const cv::FileNode ts = need(f.root(), "templates");
-    if (!ts.isSeq()) return tl::unexpected(corrupt(path, "templates is not a list"));
+    if (!ts.isSeq()) return tl::unexpected(gestures_corrupt(path, "templates is not a list"));
     for (const auto& n : ts) {
       GestureTemplate t;
       t.label = static_cast<std::string>(need(n, "label"));
@@ -376,20 +378,24 @@ Result<GestureModel> GestureModel::load(const fs::path& path) {
       need(n, "trajectory") >> traj;
       if (traj.type() != CV_32F || traj.cols != kGestureDims || traj.rows != o.samples ||
           !traj.isContinuous())
-        return tl::unexpected(corrupt(path, fmt::format("template of '{}': expected {} x {} floats",
-                                                        t.label, o.samples, kGestureDims)));
+        return tl::unexpected(
+            gestures_corrupt(path, fmt::format("template of '{}': expected {} x {} floats", t.label,
+                                               o.samples, kGestureDims)));
       if (std::find(g.labels_.begin(), g.labels_.end(), t.label) == g.labels_.end())
-        return tl::unexpected(corrupt(path, "template of unknown gesture '" + t.label + "'"));
+        return tl::unexpected(
+            gestures_corrupt(path, "template of unknown gesture '" + t.label + "'"));
       if (!(t.duration_s > 0))
-        return tl::unexpected(corrupt(path, "template of '" + t.label + "' has no duration"));
+        return tl::unexpected(
+            gestures_corrupt(path, "template of '" + t.label + "' has no duration"));
       t.trajectory.assign(traj.ptr<float>(0), traj.ptr<float>(0) + traj.total());
       g.templates_.push_back(std::move(t));
     }
   } catch (const cv::Exception& e) {
-    return tl::unexpected(corrupt(path, "unreadable YAML, truncated or corrupt: " +
-                                            (e.err.empty() ? std::string("parse error") : e.err)));
+    return tl::unexpected(
+        gestures_corrupt(path, "unreadable YAML, truncated or corrupt: " +
+                                   (e.err.empty() ? std::string("parse error") : e.err)));
   } catch (const std::exception& e) {
-    return tl::unexpected(corrupt(path, e.what()));
+    return tl::unexpected(gestures_corrupt(path, e.what()));
   }
   return g;
 }

@@ -14,7 +14,7 @@ namespace dreamsense::head_pose {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kDegToRad = CV_PI / 180.0;
+constexpr double kRadiansPerDegree = CV_PI / 180.0;
 
 bool finite(const cv::Vec3d& v) {
   return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
@@ -210,7 +210,7 @@ std::optional<TriangulatedFace> triangulate_face(const MultiViewLandmarks& frame
       selected[a].push_back((*views[a].px)[static_cast<size_t>(options.landmark_index[k])]);
     views[a].px = &selected[a];
   }
-  const double min_cos = std::cos(options.min_ray_angle_deg * kDegToRad);
+  const double min_cos = std::cos(options.min_ray_angle_deg * kRadiansPerDegree);
   std::vector<size_t> kept(views.size());
   for (size_t a = 0; a < kept.size(); ++a) kept[a] = a;
   // With three or more cameras, every pair triangulates the eyes on its own: a calibration that

@@ -17,7 +17,7 @@ namespace dreamsense::speech {
 namespace {
 
 namespace fs = std::filesystem;
-const fs::path kTestData = "/usr/share/pocketsphinx/test/data";  // pocketsphinx-testdata
+const fs::path kPocketsphinxData = "/usr/share/pocketsphinx/test/data";  // pocketsphinx-testdata
 
 std::vector<float> read_raw_float(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -57,15 +57,15 @@ std::vector<RecognizedSpeech> run(Analyzer& a, const std::vector<float>& mono) {
 
 TEST(SpeechAnalyzer, CutsTheUtteranceOutOfTheStreamAndRecognisesIt) {
   if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kTestData / "goforward.raw"))
+      !fs::exists(kPocketsphinxData / "goforward.raw"))
     GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
   SpeechAnalyzerOptions o;
   o.audio_sensor = "mic";
-  o.grammar = kTestData / "goforward.gram";
+  o.grammar = kPocketsphinxData / "goforward.gram";
   auto a = make_speech_analyzer(o);
   ASSERT_TRUE(a) << a.error().message;
   std::vector<float> stream(16000, 0.f);  // 1 s of quiet, the utterance, 2 s of quiet
-  const auto speech = read_raw_float(kTestData / "goforward.raw");
+  const auto speech = read_raw_float(kPocketsphinxData / "goforward.raw");
   stream.insert(stream.end(), speech.begin(), speech.end());
   stream.insert(stream.end(), 32000, 0.f);
   const auto heard = run(**a, stream);
@@ -77,11 +77,11 @@ TEST(SpeechAnalyzer, CutsTheUtteranceOutOfTheStreamAndRecognisesIt) {
 
 TEST(SpeechAnalyzer, QuietStreamWritesNothing) {
   if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kTestData / "goforward.gram"))
+      !fs::exists(kPocketsphinxData / "goforward.gram"))
     GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
   SpeechAnalyzerOptions o;
   o.audio_sensor = "mic";
-  o.grammar = kTestData / "goforward.gram";
+  o.grammar = kPocketsphinxData / "goforward.gram";
   auto a = make_speech_analyzer(o);
   ASSERT_TRUE(a);
   EXPECT_TRUE(run(**a, std::vector<float>(48000, 0.f)).empty());
@@ -140,18 +140,18 @@ std::vector<RecognizedSpeech> run_array(Analyzer& a, const std::vector<float>& m
 
 TEST(SpeechAnalyzer, SteersTheArrayTowardTheSoundDirection) {
   if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kTestData / "goforward.raw"))
+      !fs::exists(kPocketsphinxData / "goforward.raw"))
     GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
   SpeechAnalyzerOptions o;
   o.audio_sensor = "mic";
-  o.grammar = kTestData / "goforward.gram";
+  o.grammar = kPocketsphinxData / "goforward.gram";
   o.mic_positions_m = {{0.113, 0, 0}, {-0.036, 0, 0}, {-0.076, 0, 0}, {-0.113, 0, 0}};
   auto a = make_speech_analyzer(o);
   ASSERT_TRUE(a) << a.error().message;
   const auto reads = (*a)->contract().reads;
   EXPECT_NE(std::find(reads.begin(), reads.end(), keys::kSoundDirection.name), reads.end());
   std::vector<float> stream(16000, 0.f);
-  const auto speech = read_raw_float(kTestData / "goforward.raw");
+  const auto speech = read_raw_float(kPocketsphinxData / "goforward.raw");
   stream.insert(stream.end(), speech.begin(), speech.end());
   stream.insert(stream.end(), 32000, 0.f);
   double rms = 0;
@@ -170,11 +170,11 @@ TEST(SpeechAnalyzer, SteersTheArrayTowardTheSoundDirection) {
 
 TEST(SpeechAnalyzer, ArrayWithTheWrongChannelCountIsAnError) {
   if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kTestData / "goforward.gram"))
+      !fs::exists(kPocketsphinxData / "goforward.gram"))
     GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
   SpeechAnalyzerOptions o;
   o.audio_sensor = "mic";
-  o.grammar = kTestData / "goforward.gram";
+  o.grammar = kPocketsphinxData / "goforward.gram";
   o.mic_positions_m = {{0.1, 0, 0}, {0, 0, 0}, {-0.1, 0, 0}};
   auto a = make_speech_analyzer(o);
   ASSERT_TRUE(a);

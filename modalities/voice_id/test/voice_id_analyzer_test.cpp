@@ -24,14 +24,16 @@ using testing::synth_utterance;
 using testing::SyntheticSpeaker;
 
 const SyntheticSpeaker kChild{260, 1.25}, kTherapist{120, 1.0};
-constexpr int kRate = 16000;
+constexpr int kAnalyzerRate = 16000;
 
-std::shared_ptr<const VoiceModel> model() {
+std::shared_ptr<const VoiceModel> shared_model() {
   static const auto m = [] {
     std::vector<LabelledAudio> enrol;
     for (uint32_t i = 0; i < 4; ++i) {
-      enrol.push_back({"child", synth_utterance(kChild, 1.5, kRate, 10 + i), kRate, "c"});
-      enrol.push_back({"therapist", synth_utterance(kTherapist, 1.5, kRate, 20 + i), kRate, "t"});
+      enrol.push_back(
+          {"child", synth_utterance(kChild, 1.5, kAnalyzerRate, 10 + i), kAnalyzerRate, "c"});
+      enrol.push_back({"therapist", synth_utterance(kTherapist, 1.5, kAnalyzerRate, 20 + i),
+                       kAnalyzerRate, "t"});
     }
     VoiceTrainOptions o;
     o.ubm.components = 16;
@@ -59,7 +61,7 @@ std::vector<SpeakerIdentity> run(Analyzer& a, const std::vector<float>& mono,
   const int64_t chunk = 640;
   for (int64_t k = 0; k * chunk < static_cast<int64_t>(mono.size()); ++k) {
     AudioChunk c;
-    c.sample_rate = kRate;
+    c.sample_rate = kAnalyzerRate;
     c.channels = 2;
     for (int64_t i = k * chunk; i < std::min<int64_t>((k + 1) * chunk, mono.size()); ++i) {
       c.samples.push_back(mono[static_cast<size_t>(i)] + noise(rng));
@@ -70,7 +72,7 @@ std::vector<SpeakerIdentity> run(Analyzer& a, const std::vector<float>& mono,
     mf.chunks["mic"].push_back(make_frame("mic", mf.stamp, static_cast<uint64_t>(k), c));
     if (reference != nullptr) {  // what the robot's loudspeaker played (mono)
       AudioChunk r;
-      r.sample_rate = kRate;
+      r.sample_rate = kAnalyzerRate;
       r.channels = 1;
       for (int64_t i = k * chunk; i < std::min<int64_t>((k + 1) * chunk, reference->size()); ++i)
         r.samples.push_back((*reference)[static_cast<size_t>(i)]);
@@ -100,13 +102,13 @@ void append(std::vector<float>& s, const std::vector<float>& x) {
   s.insert(s.end(), x.begin(), x.end());
 }
 std::vector<float> quiet(double seconds) {
-  return std::vector<float>(size_t(seconds * kRate), 0.f);
+  return std::vector<float>(size_t(seconds * kAnalyzerRate), 0.f);
 }
 
 // Privacy: enrolment folders named after people are reported as speaker_<k> (enrolment order)
 // unless names are included; role words stay; speaker_id never changes with include_names.
 TEST(VoiceIdAnalyzer, PeoplesNamesOnlyWithIncludeNames) {
-  VoiceModel named = *model();
+  VoiceModel named = *shared_model();
   ASSERT_EQ(named.speakers.size(), 2u);
   for (auto& sp : named.speakers) sp.name = sp.id = sp.id == "child" ? "Zoe Example" : "therapist";
   EXPECT_EQ(public_speaker_id(named, "Zoe Example"), "speaker_1");
@@ -114,9 +116,9 @@ TEST(VoiceIdAnalyzer, PeoplesNamesOnlyWithIncludeNames) {
   EXPECT_EQ(public_speaker_id(named, "unknown"), "unknown");
   EXPECT_EQ(public_speaker_id(named, "not enrolled"), "unknown");
   std::vector<float> s = quiet(0.5);
-  append(s, synth_utterance(kChild, 1.2, kRate, 501, 0, 0));
+  append(s, synth_utterance(kChild, 1.2, kAnalyzerRate, 501, 0, 0));
   append(s, quiet(1.0));
-  append(s, synth_utterance(kTherapist, 1.2, kRate, 502, 0, 0));
+  append(s, synth_utterance(kTherapist, 1.2, kAnalyzerRate, 502, 0, 0));
   append(s, quiet(1.0));
   for (bool include : {false, true}) {
     VoiceIdAnalyzerOptions o;
@@ -137,15 +139,15 @@ TEST(VoiceIdAnalyzer, PeoplesNamesOnlyWithIncludeNames) {
 TEST(VoiceIdAnalyzer, GmmUbmNamesEachUtterance) {
   VoiceIdAnalyzerOptions o;
   o.audio_sensor = "mic";
-  o.model = model();
+  o.model = shared_model();
   auto a = make_voice_id_analyzer(o);
   ASSERT_TRUE(a) << a.error().message;
   std::vector<float> s = quiet(0.5);
-  append(s, synth_utterance(kChild, 1.2, kRate, 501, 0, 0));  // 0.5 - 1.7 s
+  append(s, synth_utterance(kChild, 1.2, kAnalyzerRate, 501, 0, 0));  // 0.5 - 1.7 s
   append(s, quiet(1.0));
-  append(s, synth_utterance(kTherapist, 1.2, kRate, 502, 0, 0));  // 2.7 - 3.9 s
+  append(s, synth_utterance(kTherapist, 1.2, kAnalyzerRate, 502, 0, 0));  // 2.7 - 3.9 s
   append(s, quiet(1.0));
-  append(s, synth_utterance(kChild, 0.8, kRate, 503, 0, 0));  // 4.9 - 5.7 s
+  append(s, synth_utterance(kChild, 0.8, kAnalyzerRate, 503, 0, 0));  // 4.9 - 5.7 s
   append(s, quiet(1.0));
   const auto ids = run(**a, s);
   ASSERT_EQ(ids.size(), 3u);
@@ -165,22 +167,22 @@ TEST(VoiceIdAnalyzer, GmmUbmNamesEachUtterance) {
 // named, as before.
 TEST(VoiceIdAnalyzer, RobotVoiceIsGatedByItsReference) {
   std::vector<float> s = quiet(0.5), ref = quiet(0.5);
-  append(s, synth_utterance(kChild, 1.2, kRate, 601, 0, 0));  // 0.5 - 1.7 s
+  append(s, synth_utterance(kChild, 1.2, kAnalyzerRate, 601, 0, 0));  // 0.5 - 1.7 s
   append(ref, quiet(1.2));
   append(s, quiet(1.0));
   append(ref, quiet(1.0));
-  const auto robot = synth_utterance(kTherapist, 1.2, kRate, 602, 0, 0);  // 2.7 - 3.9 s
+  const auto robot = synth_utterance(kTherapist, 1.2, kAnalyzerRate, 602, 0, 0);  // 2.7 - 3.9 s
   append(s, robot);
   append(ref, robot);
   append(s, quiet(1.0));
   append(ref, quiet(1.0));
-  append(s, synth_utterance(kChild, 0.9, kRate, 603, 0, 0));  // 4.9 - 5.8 s
+  append(s, synth_utterance(kChild, 0.9, kAnalyzerRate, 603, 0, 0));  // 4.9 - 5.8 s
   append(s, quiet(1.0));
   append(ref, quiet(1.9));
   for (const bool gated : {true, false}) {
     VoiceIdAnalyzerOptions o;
     o.audio_sensor = "mic";
-    o.model = model();
+    o.model = shared_model();
     if (gated) o.reference_sensor = "robot";
     auto a = make_voice_id_analyzer(o);
     ASSERT_TRUE(a) << a.error().message;
@@ -208,8 +210,10 @@ TEST(VoiceIdAnalyzer, RobotVoiceIsGatedByItsReference) {
 TEST(VoiceIdAnalyzer, NoiseSuppressedModelRoundTripsAndKeepsTimes) {
   std::vector<LabelledAudio> enrol;
   for (uint32_t i = 0; i < 4; ++i) {
-    enrol.push_back({"child", synth_utterance(kChild, 1.5, kRate, 10 + i), kRate, "c"});
-    enrol.push_back({"therapist", synth_utterance(kTherapist, 1.5, kRate, 20 + i), kRate, "t"});
+    enrol.push_back(
+        {"child", synth_utterance(kChild, 1.5, kAnalyzerRate, 10 + i), kAnalyzerRate, "c"});
+    enrol.push_back(
+        {"therapist", synth_utterance(kTherapist, 1.5, kAnalyzerRate, 20 + i), kAnalyzerRate, "t"});
   }
   VoiceTrainOptions to;
   to.ubm.components = 16;
@@ -224,11 +228,11 @@ TEST(VoiceIdAnalyzer, NoiseSuppressedModelRoundTripsAndKeepsTimes) {
   ASSERT_TRUE(back) << back.error().message;
   EXPECT_TRUE(back->features.noise_suppression);
   std::filesystem::remove(file);
-  auto t = synth_utterance(kTherapist, 1.2, kRate, 702, 0.3, 0.3);
+  auto t = synth_utterance(kTherapist, 1.2, kAnalyzerRate, 702, 0.3, 0.3);
   std::mt19937 rng(1);
   std::normal_distribution<float> noise(0.f, 3e-4f);
   for (auto& v : t) v += noise(rng);
-  auto one = identify(*back, t, kRate);
+  auto one = identify(*back, t, kAnalyzerRate);
   ASSERT_TRUE(one);
   EXPECT_EQ(one->best_id, "therapist");
   VoiceIdAnalyzerOptions o;
@@ -237,9 +241,9 @@ TEST(VoiceIdAnalyzer, NoiseSuppressedModelRoundTripsAndKeepsTimes) {
   auto a = make_voice_id_analyzer(o);
   ASSERT_TRUE(a) << a.error().message;
   std::vector<float> s = quiet(0.5);
-  append(s, synth_utterance(kChild, 1.2, kRate, 701, 0, 0));  // 0.5 - 1.7 s
+  append(s, synth_utterance(kChild, 1.2, kAnalyzerRate, 701, 0, 0));  // 0.5 - 1.7 s
   append(s, quiet(1.0));
-  append(s, synth_utterance(kTherapist, 1.2, kRate, 702, 0, 0));  // 2.7 - 3.9 s
+  append(s, synth_utterance(kTherapist, 1.2, kAnalyzerRate, 702, 0, 0));  // 2.7 - 3.9 s
   append(s, quiet(1.0));
   const auto ids = run(**a, s);
   ASSERT_EQ(ids.size(), 2u);
@@ -286,7 +290,7 @@ TEST(VoiceIdAnalyzer, RealStrangerIsUnknown) {
 TEST(VoiceIdAnalyzer, SilenceWritesNothing) {
   VoiceIdAnalyzerOptions o;
   o.audio_sensor = "mic";
-  o.model = model();
+  o.model = shared_model();
   auto a = make_voice_id_analyzer(o);
   ASSERT_TRUE(a);
   EXPECT_TRUE(run(**a, quiet(4.0)).empty());
@@ -300,11 +304,14 @@ TEST(VoiceIdAnalyzer, DirectionRuleFollowsDream) {
   ASSERT_TRUE(a) << a.error().message;
   EXPECT_EQ((*a)->contract().reads, std::vector<std::string>{keys::kSoundDirection.name});
   std::vector<float> s = quiet(0.5);
-  append(s, synth_utterance(kTherapist, 1.0, kRate, 1, 0, 0));  // 0.5 - 1.5 s, from the side
+  append(s,
+         synth_utterance(kTherapist, 1.0, kAnalyzerRate, 1, 0, 0));  // 0.5 - 1.5 s, from the side
   append(s, quiet(1.0));
-  append(s, synth_utterance(kTherapist, 1.0, kRate, 2, 0, 0));  // 2.5 - 3.5 s, from the front
+  append(s,
+         synth_utterance(kTherapist, 1.0, kAnalyzerRate, 2, 0, 0));  // 2.5 - 3.5 s, from the front
   append(s, quiet(1.0));
-  append(s, synth_utterance(kTherapist, 1.0, kRate, 3, 0, 0));  // 4.5 - 5.5 s, low confidence
+  append(s,
+         synth_utterance(kTherapist, 1.0, kAnalyzerRate, 3, 0, 0));  // 4.5 - 5.5 s, low confidence
   append(s, quiet(1.0));
   const auto ids = run(**a, s, [](double t) -> std::optional<std::pair<double, double>> {
     if (t >= 0.5 && t < 1.5) return std::pair{-42.0, 0.9};
@@ -336,7 +343,7 @@ TEST(VoiceIdAnalyzer, GmmUbmNeedsAModelAndSaysWhichFileIsMissing) {
 TEST(VoiceIdAnalyzer, AudioBelowTheModelsBandIsAnError) {
   VoiceIdAnalyzerOptions o;
   o.audio_sensor = "mic";
-  o.model = model();
+  o.model = shared_model();
   auto a = make_voice_id_analyzer(o);
   ASSERT_TRUE(a);
   AudioChunk c;

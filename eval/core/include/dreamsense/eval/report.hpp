@@ -34,6 +34,13 @@ Status write_report(const EvalReport& report, const std::string& target);
 // The same for any JSON document (reports of tasks with their own shape, e.g. session).
 Status write_json_document(const nlohmann::json& document, const std::string& target);
 
+// Milliseconds since `t0` on the steady clock.
+double ms_since(std::chrono::steady_clock::time_point t0);
+// The median (the mean of the two middle values for an even count); nullopt when empty.
+std::optional<double> median(std::vector<double> values);
+// A JSON number, or null when there is none.
+nlohmann::json number_or_null(const std::optional<double>& v);
+
 // Wall-clock samples of one timed step, reported as a median (e.g. ms_per_face_median).
 class Stopwatch {
  public:
