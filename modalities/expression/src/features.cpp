@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <cmath>
 
 namespace dreamsense::expression {
 
@@ -30,6 +31,57 @@ Status ExpressionFeatureOptions::check() const {
 
 bool ExpressionFeatureOptions::uses(const std::string& block) const {
   return std::find(blocks.begin(), blocks.end(), block) != blocks.end();
+}
+
+vision::AlignedFace jitter_face(const cv::Mat& image_grey, const vision::AlignedFace& face,
+                                const FaceJitter& j) {
+  if (j.identity()) return face;
+  vision::AlignedFace g = j.mirror ? vision::mirror_face(face) : face;
+  if (j.rotation_deg == 0 && j.scale == 1 && j.shift_x == 0 && j.shift_y == 0) return g;
+  const double side = face.grey.cols, c = (side - 1) / 2.0;
+  const double a = j.rotation_deg * CV_PI / 180.0;
+  const double ca = j.scale * std::cos(a), sa = j.scale * std::sin(a);
+  const cv::Matx33d m(ca, -sa, c - ca * c + sa * c + j.shift_x * side, sa, ca,
+                      c - sa * c - ca * c + j.shift_y * side, 0, 0, 1);
+  const cv::Matx23d& t = g.crop_from_image;
+  const cv::Matx33d r = m * cv::Matx33d(t(0, 0), t(0, 1), t(0, 2), t(1, 0), t(1, 1), t(1, 2), 0, 0, 1);
+  const cv::Matx23d crop_from_image(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2));
+  vision::AlignedFace out = vision::warp_face(image_grey, crop_from_image,
+                                              vision::AlignmentOptions{face.grey.cols}, g.source);
+  out.landmarks = vision::transform_points(
+      cv::Matx23d(m(0, 0), m(0, 1), m(0, 2), m(1, 0), m(1, 1), m(1, 2)), g.landmarks);
+  return out;
+}
+
+Result<std::vector<FaceJitter>> face_jitters(const std::string& sets) {
+  bool flip = false;
+  std::vector<FaceJitter> geometric{FaceJitter{}};
+  for (size_t start = 0; !sets.empty();) {
+    const size_t plus = sets.find('+', start);
+    const std::string name = sets.substr(start, plus - start);
+    if (name == "flip") {
+      flip = true;
+    } else if (name == "rot") {
+      for (double d : {10.0, -10.0}) geometric.push_back({false, d, 1, 0, 0});
+    } else if (name == "scale") {
+      for (double s : {1.1, 0.9}) geometric.push_back({false, 0, s, 0, 0});
+    } else if (name == "shift") {
+      for (double s : {0.05, -0.05}) geometric.push_back({false, 0, 1, s, 0});
+      for (double s : {0.05, -0.05}) geometric.push_back({false, 0, 1, 0, s});
+    } else {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "unknown face jitter set '{}' (flip, rot, scale, shift)", name);
+    }
+    if (plus == std::string::npos) break;
+    start = plus + 1;
+  }
+  std::vector<FaceJitter> out = geometric;
+  if (flip)
+    for (FaceJitter j : geometric) {
+      j.mirror = true;
+      out.push_back(j);
+    }
+  return out;
 }
 
 ExpressionFeatureExtractor::ExpressionFeatureExtractor(

@@ -40,6 +40,27 @@ struct ExpressionFeatureOptions {
   bool uses(const std::string& block) const;
 };
 
+// A small change of a face's crop for feature-level augmentation and test-time averaging: the
+// mirror image, then a similarity about the crop centre (rotation, scale > 1 zooms in, shift in
+// fractions of the crop side).
+struct FaceJitter {
+  bool mirror = false;
+  double rotation_deg = 0, scale = 1, shift_x = 0, shift_y = 0;
+  bool identity() const {
+    return !mirror && rotation_deg == 0 && scale == 1 && shift_x == 0 && shift_y == 0;
+  }
+  bool operator==(const FaceJitter&) const = default;
+};
+// The face re-warped from `image_grey` (the image it was aligned from) with the jitter; landmarks
+// follow. The identity returns `face`.
+vision::AlignedFace jitter_face(const cv::Mat& image_grey, const vision::AlignedFace& face,
+                                const FaceJitter& jitter);
+// Named sets, joined by '+': "flip" (mirror image), "rot" (+-10 deg), "scale" (x1.1, x0.9),
+// "shift" (+-5 % in x and in y). The result always starts with the identity and holds every
+// combination of the mirror (when "flip") with the identity and each geometric jitter
+// (e.g. flip+rot: 6 jitters). Unknown names are an error.
+Result<std::vector<FaceJitter>> face_jitters(const std::string& sets);
+
 // Not thread-safe (the network): one per thread.
 class ExpressionFeatureExtractor {
  public:
