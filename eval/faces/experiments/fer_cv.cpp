@@ -13,8 +13,8 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <set>
@@ -38,7 +38,23 @@ std::vector<int> ints(const std::string& s) {
   return out;
 }
 
+std::vector<float> row1(const Data& d, int i, int t, const std::string& feat);
+// CAT: "a,b" concatenates transforms a and b; transform t = 0 means the list, t = 1 the list
+// shifted by the mirror offset MIRROR.
+std::vector<int> g_cat, g_cat_m;
+int g_mirror = 9;
 std::vector<float> row(const Data& d, int i, int t, const std::string& feat) {
+  if (g_cat.empty()) return row1(d, i, t, feat);
+  std::vector<float> out;
+  for (size_t k = 0; k < g_cat.size(); ++k) {
+    const int c = g_cat[k];
+    const std::vector<float> r =
+        row1(d, i, t ? (g_cat_m.empty() ? c + g_mirror : g_cat_m[k]) : c, feat);
+    out.insert(out.end(), r.begin(), r.end());
+  }
+  return out;
+}
+std::vector<float> row1(const Data& d, int i, int t, const std::string& feat) {
   const std::vector<float>& a = d.v[static_cast<size_t>(i)];
   const float* base = a.data() + static_cast<size_t>(t) * d.per;
   const float* ex = a.data() + static_cast<size_t>(d.T) * d.per;
@@ -59,7 +75,7 @@ std::vector<float> row(const Data& d, int i, int t, const std::string& feat) {
 // Small MLP head: D -> H (ReLU, dropout) -> K, softmax cross-entropy, AdamW, minibatches;
 // deterministic (own LCG). Early stopping on a held-out 10 % of the training faces.
 struct Mlp {
-  cv::Mat w1, b1, w2, b2;  // H x D, 1 x H, K x H, 1 x K
+  cv::Mat w1, b1, w2, b2;                    // H x D, 1 x H, K x H, 1 x K
   cv::Mat forward(const cv::Mat& x) const {  // x: N x D -> scores N x K
     cv::Mat h = x * w1.t();
     for (int r = 0; r < h.rows; ++r) {
@@ -112,8 +128,10 @@ Mlp train_mlp(const cv::Mat& x, const std::vector<int>& y, const std::vector<int
   Mlp m;
   m.w1.create(H, D, CV_32F);
   m.w2.create(K, H, CV_32F);
-  for (int i = 0; i < H * D; ++i) m.w1.ptr<float>()[i] = static_cast<float>(rng.normal() * std::sqrt(2.0 / D));
-  for (int i = 0; i < K * H; ++i) m.w2.ptr<float>()[i] = static_cast<float>(rng.normal() * std::sqrt(1.0 / H));
+  for (int i = 0; i < H * D; ++i)
+    m.w1.ptr<float>()[i] = static_cast<float>(rng.normal() * std::sqrt(2.0 / D));
+  for (int i = 0; i < K * H; ++i)
+    m.w2.ptr<float>()[i] = static_cast<float>(rng.normal() * std::sqrt(1.0 / H));
   m.b1 = cv::Mat::zeros(1, H, CV_32F);
   m.b2 = cv::Mat::zeros(1, K, CV_32F);
   // validation faces: group % 10 == 3 (deterministic)
@@ -207,36 +225,74 @@ int main(int argc, char** argv) {
   }
   auto items = eval::faces::read_expression_dataset(argv[1], argv[2]);
   if (!items) return 1;
+  std::vector<std::string> files;
+  {
+    std::stringstream fs(argv[3]);
+    std::string f;
+    while (std::getline(fs, f, ',')) files.push_back(f);
+  }
   Data d;
-  std::ifstream in(argv[3], std::ios::binary);
-  int header[4];
-  in.read(reinterpret_cast<char*>(header), sizeof header);
-  d.n = header[0], d.T = header[1], d.per = header[2], d.extra = header[3];
-  const size_t len = static_cast<size_t>(d.T * d.per + d.extra);
-  if (const char* lim = std::getenv("FER_CV_PARTIAL")) {  // a dump still being written
-    in.seekg(0, std::ios::end);
-    const long long size = in.tellg();
-    in.seekg(16);
-    d.n = std::min<int>(d.n, static_cast<int>((size - 16) / (8 + static_cast<long long>(len) * 4)));
-    items->resize(static_cast<size_t>(d.n));
-    (void)lim;
-  }
-  for (int i = 0; i < d.n; ++i) {
-    int lh[2];
-    in.read(reinterpret_cast<char*>(lh), 8);
-    d.label.push_back(lh[0]);
-    d.has.push_back(lh[1]);
-    std::vector<float> v(len);
-    in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(len * 4));
-    d.v.push_back(std::move(v));
-  }
-  if (!in || d.n != static_cast<int>(items->size())) {
-    std::fprintf(stderr, "bad features file\n");
-    return 1;
+  if (files.size() > 1) {  // several dumps: only the 263 pooled + logits of every transform
+    for (size_t fi = 0; fi < files.size(); ++fi) {
+      std::ifstream in(files[fi], std::ios::binary);
+      int h[4];
+      in.read(reinterpret_cast<char*>(h), sizeof h);
+      const size_t len = static_cast<size_t>(h[1] * h[2] + h[3]);
+      if (fi == 0) {
+        d.n = h[0];
+        d.v.resize(static_cast<size_t>(d.n));
+      }
+      d.T += h[1];
+      std::vector<float> v(len);
+      for (int i = 0; i < d.n; ++i) {
+        int lh[2];
+        in.read(reinterpret_cast<char*>(lh), 8);
+        if (fi == 0) {
+          d.label.push_back(lh[0]);
+          d.has.push_back(lh[1]);
+        }
+        in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(len * 4));
+        for (int t = 0; t < h[1]; ++t)
+          d.v[static_cast<size_t>(i)].insert(d.v[static_cast<size_t>(i)].end(),
+                                             v.begin() + static_cast<long>(t) * h[2],
+                                             v.begin() + static_cast<long>(t) * h[2] + 263);
+      }
+      if (!in) return 1;
+    }
+    d.per = 263;
+    d.extra = 0;
+  } else {
+    std::ifstream in(argv[3], std::ios::binary);
+    int header[4];
+    in.read(reinterpret_cast<char*>(header), sizeof header);
+    d.n = header[0], d.T = header[1], d.per = header[2], d.extra = header[3];
+    const size_t len = static_cast<size_t>(d.T * d.per + d.extra);
+    if (const char* lim = std::getenv("FER_CV_PARTIAL")) {  // a dump still being written
+      in.seekg(0, std::ios::end);
+      const long long size = in.tellg();
+      in.seekg(16);
+      d.n =
+          std::min<int>(d.n, static_cast<int>((size - 16) / (8 + static_cast<long long>(len) * 4)));
+      items->resize(static_cast<size_t>(d.n));
+      (void)lim;
+    }
+    for (int i = 0; i < d.n; ++i) {
+      int lh[2];
+      in.read(reinterpret_cast<char*>(lh), 8);
+      d.label.push_back(lh[0]);
+      d.has.push_back(lh[1]);
+      std::vector<float> v(len);
+      in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(len * 4));
+      d.v.push_back(std::move(v));
+    }
+    if (!in || d.n != static_cast<int>(items->size())) {
+      std::fprintf(stderr, "bad features file\n");
+      return 1;
+    }
   }
   std::vector<std::string> subjects;
   for (const auto& it : *items) subjects.push_back(it.subject);
-  const auto folds = eval::subject_folds(subjects, 10, 12);
+  auto folds = eval::subject_folds(subjects, 10, 12);
   std::set<int> present(d.label.begin(), d.label.end());
   const std::vector<int> classes(present.begin(), present.end());
   const int K = static_cast<int>(classes.size());
@@ -254,6 +310,15 @@ int main(int argc, char** argv) {
       cfg[kv.substr(0, eq)] = kv.substr(eq + 1);
     }
     const auto t0 = std::chrono::steady_clock::now();
+    g_cat.clear();
+    g_cat_m.clear();
+    if (cfg.count("cat")) {
+      for (int v : ints(cfg["cat"])) g_cat.push_back(v);
+    }
+    if (cfg.count("catm")) g_cat_m = ints(cfg["catm"]);
+    if (cfg.count("mirror")) g_mirror = std::stoi(cfg["mirror"]);
+    std::vector<int> src_correct(3, 0), src_n(3, 0);
+    if (cfg.count("seed")) folds = eval::subject_folds(subjects, 10, std::stoull(cfg["seed"]));
     const std::vector<int> train_t = ints(cfg["train"]), test_t = ints(cfg["test"]);
     vision::SoftmaxOptions so;
     so.l2 = std::stod(cfg["l2"]);
@@ -300,7 +365,20 @@ int main(int argc, char** argv) {
         if (!c) return 1;
         lin = *c;
       }
+      std::vector<float> raw;
       auto probs = [&](const std::vector<float>& r) {
+        if (cfg["head"] == "raw") {  // the package's own classifier: logits = r[256..263)
+          // face-api order neutral, happy, sad, angry, fearful, disgusted, surprised
+          const char* names[7] = {"neutral", "happy",   "sadness", "anger",
+                                  "fear",    "disgust", "surprise"};
+          std::vector<float> p(static_cast<size_t>(K), 0.f);
+          for (int k = 0; k < 7; ++k) {
+            int label = 0;
+            while (std::string(expression::kExpressionLabels[label]) != names[k]) ++label;
+            p[static_cast<size_t>(cls(label))] = raw[static_cast<size_t>(256 + k)];
+          }
+          return vision::softmax(p);
+        }
         if (!use_mlp) return vision::softmax(lin.scores(r));
         std::vector<float> p(static_cast<size_t>(K), 0.f);
         const cv::Mat xr(1, static_cast<int>(r.size()), CV_32F, const_cast<float*>(r.data()));
@@ -318,6 +396,7 @@ int main(int argc, char** argv) {
           std::vector<float> p(static_cast<size_t>(K), 0.f);
           for (int t : test_t) {
             std::vector<float> r = row(d, i, t, cfg["feat"]);
+            raw = r;
             st.apply(r);
             const std::vector<float> q = probs(r);
             for (int k = 0; k < K; ++k) p[k] += q[k];
@@ -325,6 +404,11 @@ int main(int argc, char** argv) {
           pred = static_cast<int>(std::max_element(p.begin(), p.end()) - p.begin());
         }
         if (pred == truth) ++correct;
+        if (d.has[static_cast<size_t>(i)] && d.extra == 1) {
+          const int src = static_cast<int>(d.v[static_cast<size_t>(i)].back());
+          ++src_n[src];
+          src_correct[src] += pred == truth;
+        }
         if (pred >= 0) ++confusion[truth][pred];
       }
     }
@@ -337,6 +421,9 @@ int main(int argc, char** argv) {
     std::printf("%-60s acc %.4f bal %.4f  (%.0f s)\n", argv[a], correct / static_cast<double>(d.n),
                 bal / K,
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (d.extra == 1)
+      std::printf("    by source: landmarks %d/%d, landmarks_from_crop %d/%d, geometry %d/%d\n",
+                  src_correct[0], src_n[0], src_correct[1], src_n[1], src_correct[2], src_n[2]);
     std::fflush(stdout);
   }
   return 0;

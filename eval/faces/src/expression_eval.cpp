@@ -78,7 +78,8 @@ std::string block_key(const ExpressionMethod& m, const std::string& block) {
   if (block == "lbp1" || block == "lbp2")
     return geometry + fmt::format("{}/{}/{}", block, f.lbp_grid, f.lbp_sqrt);
   if (block == "hog") return geometry + fmt::format("hog/{}/{}", f.hog.cell_px, f.hog.bins);
-  if (block == "face_api") return geometry + fmt::format("face_api/{}", f.face_api_flip);
+  if (block == "face_api" || block == "face_api_box")
+    return geometry + fmt::format("{}/{}", block, f.face_api_flip);
   return geometry + block;
 }
 

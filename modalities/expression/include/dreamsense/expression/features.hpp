@@ -8,6 +8,10 @@
 //   face_api the 256 pooled features and 7 logits of face-api.js's expression network
 //            (vision/face_api_net.hpp) on the same alignment re-sampled at 112 px; with
 //            face_api_flip the mean of the face and its mirror image
+//   face_api_box  the same network outputs on the package's own face crop (face_api_crop: the
+//            landmarks' bounding box grown by 10 %, upright, padded to a square) instead of the
+//            eye-aligned crop: a second view of the face (issue 20); without landmarks the
+//            aligned crop
 
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/vision/descriptors.hpp"
@@ -26,7 +30,8 @@ class FaceApiExpressionNet;
 
 namespace dreamsense::expression {
 
-inline constexpr const char* kFeatureBlocks[] = {"lbp1", "lbp2", "hog", "geometry", "face_api"};
+inline constexpr const char* kFeatureBlocks[] = {"lbp1",     "lbp2",     "hog",
+                                                 "geometry", "face_api", "face_api_box"};
 
 struct ExpressionFeatureOptions {
   vision::AlignmentOptions alignment;  // canonical crop of the classical descriptors
@@ -38,6 +43,7 @@ struct ExpressionFeatureOptions {
   std::filesystem::path face_api_dir;  // empty: vision::default_face_api_model_dir()
   Status check() const;
   bool uses(const std::string& block) const;
+  bool uses_network() const { return uses("face_api") || uses("face_api_box"); }
 };
 
 // A small change of a face's crop for feature-level augmentation and test-time averaging: the
