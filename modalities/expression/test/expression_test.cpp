@@ -2,6 +2,7 @@
 #include "dreamsense/expression/features.hpp"
 #include "dreamsense/expression/labels.hpp"
 #include "dreamsense/expression/smoothing.hpp"
+#include "dreamsense/vision/face_api_net.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -186,6 +187,39 @@ TEST(ExpressionModel, AugmentationSettingsRoundTripAndAverageVariants) {
   const auto pa = model->predict(a), pb = model->predict(b), pab = model->predict({a, b});
   for (size_t k = 0; k < pab.probabilities.size(); ++k)
     EXPECT_NEAR(pab.probabilities[k], 0.5 * (pa.probabilities[k] + pb.probabilities[k]), 1e-6);
+}
+
+TEST(ExpressionFeatures, BoxViewOfTheNetworkFollowsTheMirrorImage) {
+  if (!std::filesystem::exists(vision::default_face_api_model_dir() /
+                               "face_expression_model-weights_manifest.json"))
+    GTEST_SKIP() << "face-api weights absent";
+  ExpressionFeatureOptions o;
+  o.blocks = {"face_api", "face_api_box"};
+  o.face_api_flip = false;
+  auto e = ExpressionFeatureExtractor::create(o);
+  ASSERT_TRUE(e.has_value()) << e.error().message;
+  EXPECT_EQ(e->length(), 2u * 263u);
+  EXPECT_FALSE(e->face_api_hash().empty());
+  // A face-like blob in a larger image, its landmarks = the mean face placed on it.
+  cv::Mat image(240, 240, CV_8UC1, cv::Scalar(90));
+  cv::ellipse(image, {120, 125}, {60, 80}, 0, 0, 360, cv::Scalar(170), cv::FILLED);
+  cv::circle(image, {95, 105}, 8, cv::Scalar(30), cv::FILLED);
+  cv::rectangle(image, cv::Rect(100, 160, 50, 10), cv::Scalar(40), cv::FILLED);
+  vision::AlignedFace f = synthetic_face(64, 7);
+  f.crop_from_image = cv::Matx23d(0.5, 0, -28, 0, 0.5, -30);
+  f.grey = vision::warp_face(image, f.crop_from_image, vision::AlignmentOptions{},
+                             vision::AlignmentSource::kLandmarks)
+               .grey;
+  const auto box = e->block("face_api_box", image, f);
+  const auto box_m = e->block("face_api_box", image, jitter_face(image, f, FaceJitter{true}));
+  ASSERT_EQ(box.size(), 263u);
+  EXPECT_NE(box, box_m);  // the asymmetric face: the mirror image is another view
+  EXPECT_NE(box, e->block("face_api", image, f));
+  // Mirroring twice gives the same crop again.
+  const auto twice =
+      e->block("face_api_box", image,
+               jitter_face(image, jitter_face(image, f, FaceJitter{true}), FaceJitter{true}));
+  EXPECT_EQ(box, twice);
 }
 
 TEST(ExpressionModel, VersionCorruptionAndMissingFilesAreErrorsNamingTheFile) {
