@@ -379,6 +379,21 @@ int main(int argc, char** argv) {
           }
           return vision::softmax(p);
         }
+        if (!use_mlp && cfg.count("mixraw")) {  // head + the package's classifier, mixed
+          const double w = std::stod(cfg["mixraw"]);
+          std::vector<float> p = vision::softmax(lin.scores(r));
+          const char* names[7] = {"neutral", "happy", "sadness", "anger", "fear", "disgust",
+                                  "surprise"};
+          std::vector<float> q(static_cast<size_t>(K), 0.f);
+          for (int k = 0; k < 7; ++k) {
+            int label = 0;
+            while (std::string(expression::kExpressionLabels[label]) != names[k]) ++label;
+            q[static_cast<size_t>(cls(label))] = raw[static_cast<size_t>(256 + k)];
+          }
+          q = vision::softmax(q);
+          for (int k = 0; k < K; ++k) p[k] = static_cast<float>((1 - w) * p[k] + w * q[k]);
+          return p;
+        }
         if (!use_mlp) return vision::softmax(lin.scores(r));
         std::vector<float> p(static_cast<size_t>(K), 0.f);
         const cv::Mat xr(1, static_cast<int>(r.size()), CV_32F, const_cast<float*>(r.data()));
