@@ -307,10 +307,22 @@ Result<FaceApiExpressionNet> FaceApiExpressionNet::load(const std::filesystem::p
 
 const std::string& FaceApiExpressionNet::weights_hash() const { return impl_->hash; }
 
-FaceApiOutput FaceApiExpressionNet::run(const cv::Mat& face) {
+FaceApiOutput FaceApiExpressionNet::run(const cv::Mat& face) { return run(face, nullptr, nullptr); }
+
+FaceApiOutput FaceApiExpressionNet::run(const cv::Mat& face, cv::Mat* dense2_map,
+                                        cv::Mat* dense3_map) {
   const cv::Mat blob = input_blob(face, kFaceApiInputPx);
   impl_->net.setInput(blob, "input");
-  cv::Mat pooled = impl_->net.forward("pool");
+  cv::Mat pooled;
+  if (dense2_map || dense3_map) {
+    std::vector<cv::Mat> outs;
+    impl_->net.forward(outs, std::vector<cv::String>{"pool", "dense2/relu5", "dense3/relu5"});
+    pooled = outs[0];
+    if (dense2_map) *dense2_map = outs[1].clone();
+    if (dense3_map) *dense3_map = outs[2].clone();
+  } else {
+    pooled = impl_->net.forward("pool");
+  }
   FaceApiOutput out;
   out.features.assign(pooled.ptr<float>(), pooled.ptr<float>() + kFaceApiFeatures);
   out.logits.resize(7);
@@ -486,6 +498,12 @@ Result<FaceApiLandmarkNet> FaceApiLandmarkNet::load(const std::filesystem::path&
   impl->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   impl->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   return FaceApiLandmarkNet(std::move(impl));
+}
+
+std::vector<float> FaceApiLandmarkNet::features(const cv::Mat& face) {
+  impl_->net.setInput(input_blob(face, kFaceApiInputPx), "input");
+  const cv::Mat pooled = impl_->net.forward("pool");
+  return std::vector<float>(pooled.ptr<float>(), pooled.ptr<float>() + kFaceApiFeatures);
 }
 
 std::vector<cv::Point2d> FaceApiLandmarkNet::fit(const cv::Mat& face) {

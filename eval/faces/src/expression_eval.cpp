@@ -74,8 +74,15 @@ std::string block_key(const ExpressionMethod& m, const std::string& block) {
   if (block == "lbp1" || block == "lbp2")
     return geometry + fmt::format("{}/{}/{}", block, f.lbp_grid, f.lbp_sqrt);
   if (block == "hog") return geometry + fmt::format("hog/{}/{}", f.hog.cell_px, f.hog.bins);
-  if (block == "face_api") return geometry + fmt::format("face_api/{}", f.face_api_flip);
+  if (block == "face_api" || block == "face_api_box")
+    return geometry + fmt::format("{}/{}", block, f.face_api_flip);
   return geometry + block;
+}
+
+std::string jitter_key(const expression::FaceJitter& j) {
+  return j.identity() ? std::string("|")
+                      : fmt::format("{}/{}/{}/{}/{}|", j.mirror, j.rotation_deg, j.scale, j.shift_x,
+                                    j.shift_y);
 }
 
 // Per-face cost once the landmarks are known: warp + descriptors + classifier, one thread.
@@ -233,21 +240,23 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
     if (!e) return tl::unexpected(e.error());
     extractors.push_back(std::move(*e));
   }
-  // Key "m|..." = the mirror image's block.
+  // Key "<jitter>|<block>": the block of the jittered crop (feature-level augmentation and
+  // test-time averaging).
   std::map<std::string, std::vector<std::vector<float>>> cache;
   for (size_t mi = 0; mi < methods->size(); ++mi) {
     const ExpressionMethod& m = (*methods)[mi];
+    std::vector<expression::FaceJitter> jitters = m.train_jitters();
+    for (const auto& j : m.test_jitters())
+      if (std::find(jitters.begin(), jitters.end(), j) == jitters.end()) jitters.push_back(j);
     for (const std::string& b : m.features.blocks)
-      for (bool mirrored : {false, true}) {
-        if (mirrored && !m.train_mirrored && !m.test_mirrored) continue;
-        auto& column = cache[(mirrored ? "m|" : "") + block_key(m, b)];
+      for (const auto& j : jitters) {
+        auto& column = cache[jitter_key(j) + block_key(m, b)];
         if (!column.empty()) continue;
         column.resize(items->size());
         for (size_t i = 0; i < items->size(); ++i) {
           const auto& f = faces_of(mi)[i];
           if (!f.face) continue;
-          column[i] =
-              extractors[mi].block(b, f.grey, mirrored ? vision::mirror_face(*f.face) : *f.face);
+          column[i] = extractors[mi].block(b, f.grey, expression::jitter_face(f.grey, *f.face, j));
         }
       }
   }
@@ -270,10 +279,10 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
     const std::vector<std::string> fold_labels = ordered_labels(train_present);
     for (size_t mi = 0; mi < methods->size(); ++mi) {
       const ExpressionMethod& m = (*methods)[mi];
-      auto row = [&](size_t i, bool mirrored = false) {
+      auto row = [&](size_t i, const expression::FaceJitter& j) {
         std::vector<float> v;
         for (const std::string& b : m.features.blocks) {
-          const auto& part = cache[(mirrored ? "m|" : "") + block_key(m, b)][i];
+          const auto& part = cache[jitter_key(j) + block_key(m, b)][i];
           v.insert(v.end(), part.begin(), part.end());
         }
         return v;
@@ -282,9 +291,8 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
       std::vector<int> y;
       for (size_t i : train) {
         if (!(*faces)[i].face) continue;
-        for (bool mirrored : {false, true}) {
-          if (mirrored && !m.train_mirrored) continue;
-          const std::vector<float> v = row(i, mirrored);
+        for (const auto& j : m.train_jitters()) {
+          const std::vector<float> v = row(i, j);
           x.push_back(cv::Mat(1, static_cast<int>(v.size()), CV_32F, const_cast<float*>(v.data())));
           y.push_back(static_cast<int>(
               std::find(fold_labels.begin(), fold_labels.end(), (*items)[i].label) -
@@ -296,9 +304,11 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
       if (!model) return tl::unexpected(model.error());
       for (size_t i : test) {
         std::string predicted = "no_face";
-        if ((*faces)[i].face)
-          predicted = m.test_mirrored ? model->predict(row(i), row(i, true)).label
-                                      : model->predict(row(i)).label;
+        if ((*faces)[i].face) {
+          std::vector<std::vector<float>> variants;
+          for (const auto& j : m.test_jitters()) variants.push_back(row(i, j));
+          predicted = model->predict(std::move(variants)).label;
+        }
         cms[mi].add((*items)[i].label, predicted);
       }
       if (fi + 1 == folds.size()) {  // timing of the full per-face path on the last fold
@@ -366,10 +376,9 @@ Result<ExpressionModel> run_expression_train(const ExpressionTrainOptions& o,
   for (size_t i = 0; i < items->size(); ++i) {
     const auto& f = (*faces)[i];
     if (!f.face) continue;
-    for (bool mirrored : {false, true}) {
-      if (mirrored && !method->train_mirrored) continue;
+    for (const auto& j : method->train_jitters()) {
       const std::vector<float> v =
-          extractor->extract(f.grey, mirrored ? vision::mirror_face(*f.face) : *f.face);
+          extractor->extract(f.grey, expression::jitter_face(f.grey, *f.face, j));
       x.push_back(cv::Mat(1, static_cast<int>(v.size()), CV_32F, const_cast<float*>(v.data())));
       y.push_back(static_cast<int>(std::find(labels.begin(), labels.end(), (*items)[i].label) -
                                    labels.begin()));

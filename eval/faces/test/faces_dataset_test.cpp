@@ -102,7 +102,7 @@ TEST(FacesDataset, Fer2013CrossValidationOfTheShippedMethod) {
   if (!fs::exists(dir / "happy")) GTEST_SKIP() << "FER2013 absent (" << dir << ")";
   auto shipped = expression::ExpressionModel::load(expression::default_expression_model());
   ASSERT_TRUE(shipped.has_value()) << shipped.error().message;
-  if (shipped->method().features.uses("face_api") && !have_face_api())
+  if (shipped->method().features.uses_network() && !have_face_api())
     GTEST_SKIP() << "face-api.js weights absent (npm @vladmandic/face-api)";
   auto items = read_fer2013(dir);
   ASSERT_TRUE(items.has_value()) << items.error().message;

@@ -116,7 +116,7 @@ std::filesystem::path default_expression_model() {
 }
 
 double auto_recognize_interval_s(const ExpressionModel& model) {
-  return model.method().features.uses("face_api") ? kNetworkRecognizeIntervalS : 0.0;
+  return model.method().features.uses_network() ? kNetworkRecognizeIntervalS : 0.0;
 }
 
 Status ExpressionAnalyzerOptions::check() const {

@@ -22,8 +22,27 @@ Status ExpressionMethod::check() const {
   if (name.empty())
     return make_error(ErrorCode::kInvalidArgument, "expression method without a name");
   if (auto s = features.check(); !s) return s;
+  for (const std::string* a : {&train_augment, &test_augment})
+    if (!a->empty())
+      if (auto j = face_jitters(*a); !j) return tl::unexpected(j.error());
   if (auto s = svm.check(); !s) return s;
   return softmax.check();
+}
+
+namespace {
+std::vector<FaceJitter> jitters_of(const std::string& sets, bool mirrored) {
+  std::string all = sets;
+  if (mirrored && all.find("flip") == std::string::npos) all += all.empty() ? "flip" : "+flip";
+  auto j = face_jitters(all);
+  return j ? *j : std::vector<FaceJitter>{FaceJitter{}};
+}
+}  // namespace
+
+std::vector<FaceJitter> ExpressionMethod::train_jitters() const {
+  return jitters_of(train_augment, train_mirrored);
+}
+std::vector<FaceJitter> ExpressionMethod::test_jitters() const {
+  return jitters_of(test_augment, test_mirrored);
 }
 
 Result<ExpressionMethod> expression_method(const std::string& spec) {
@@ -86,6 +105,10 @@ Result<ExpressionMethod> expression_method(const std::string& spec) {
         m.features.lbp_sqrt = value != "0";
       else if (key == "hog_cell")
         m.features.hog.cell_px = std::stoi(value);
+      else if (key == "aug")
+        m.train_augment = value;
+      else if (key == "tta")
+        m.test_augment = value;
       else if (key == "unbalanced")
         m.softmax.balance_classes = false;
       else if (key == "no_flip")
@@ -158,6 +181,23 @@ ExpressionPrediction ExpressionModel::predict(std::vector<float> features,
   return p;
 }
 
+ExpressionPrediction ExpressionModel::predict(std::vector<std::vector<float>> variants) const {
+  DS_CHECK(!variants.empty());
+  if (variants.size() == 1) return predict(std::move(variants.front()));
+  ExpressionPrediction p;
+  for (std::vector<float>& v : variants) {
+    const ExpressionPrediction q = predict(std::move(v));
+    if (p.probabilities.empty()) p.probabilities.assign(q.probabilities.size(), 0.f);
+    for (size_t k = 0; k < q.probabilities.size(); ++k) p.probabilities[k] += q.probabilities[k];
+  }
+  for (float& x : p.probabilities) x /= static_cast<float>(variants.size());
+  p.index = static_cast<int>(std::max_element(p.probabilities.begin(), p.probabilities.end()) -
+                             p.probabilities.begin());
+  p.label = labels_[static_cast<size_t>(p.index)];
+  p.confidence = p.probabilities[static_cast<size_t>(p.index)];
+  return p;
+}
+
 Status ExpressionModel::save(const std::filesystem::path& path) const {
   try {
     cv::FileStorage fs(path.string(), cv::FileStorage::WRITE | cv::FileStorage::BASE64 |
@@ -177,6 +217,7 @@ Status ExpressionModel::save(const std::filesystem::path& path) const {
        << static_cast<int>(method_.standardize) << "train_mirrored"
        << static_cast<int>(method_.train_mirrored) << "test_mirrored"
        << static_cast<int>(method_.test_mirrored);
+    fs << "train_augment" << method_.train_augment << "test_augment" << method_.test_augment;
     fs << "svm_c" << method_.svm.c << "softmax_l2" << method_.softmax.l2 << "balance_classes"
        << static_cast<int>(method_.softmax.balance_classes);
     fs << "}";
@@ -233,6 +274,8 @@ Result<ExpressionModel> ExpressionModel::load(const std::filesystem::path& path)
     me.standardize = static_cast<int>(mn["standardize"]) != 0;
     me.train_mirrored = static_cast<int>(mn["train_mirrored"]) != 0;
     me.test_mirrored = static_cast<int>(mn["test_mirrored"]) != 0;
+    me.train_augment = static_cast<std::string>(mn["train_augment"]);  // absent: ""
+    me.test_augment = static_cast<std::string>(mn["test_augment"]);
     me.svm.c = static_cast<double>(mn["svm_c"]);
     me.softmax.l2 = static_cast<double>(mn["softmax_l2"]);
     me.softmax.balance_classes = static_cast<int>(mn["balance_classes"]) != 0;
@@ -282,9 +325,12 @@ Result<ExpressionRecognizer> ExpressionRecognizer::create(ExpressionModel model)
 
 ExpressionPrediction ExpressionRecognizer::recognize(const cv::Mat& image_grey,
                                                      const vision::AlignedFace& face) {
-  if (!model_.method().test_mirrored) return model_.predict(extractor_.extract(image_grey, face));
-  return model_.predict(extractor_.extract(image_grey, face),
-                        extractor_.extract(image_grey, vision::mirror_face(face)));
+  const std::vector<FaceJitter> jitters = model_.method().test_jitters();
+  if (jitters.size() == 1) return model_.predict(extractor_.extract(image_grey, face));
+  std::vector<std::vector<float>> variants;
+  for (const FaceJitter& j : jitters)
+    variants.push_back(extractor_.extract(image_grey, jitter_face(image_grey, face, j)));
+  return model_.predict(std::move(variants));
 }
 
 }  // namespace dreamsense::expression

@@ -210,6 +210,11 @@ TEST(ExpressionAnalyzer, ShippedModelLoads) {
   EXPECT_EQ(m->labels().size(), 7u);
   EXPECT_NE(std::find(m->labels().begin(), m->labels().end(), "neutral"), m->labels().end());
   EXPECT_EQ(m->training().dataset, "fer2013");
+  // Issue 20: two views of the face (eye-aligned crop and the package's box), each averaged
+  // with its mirror image: four network passes per recognition.
+  EXPECT_TRUE(m->method().features.uses("face_api"));
+  EXPECT_TRUE(m->method().features.uses("face_api_box"));
+  EXPECT_EQ(m->method().test_jitters().size(), 2u);
   // The CK+ model stays beside it (posed expressions, contempt, no neutral).
   auto ck =
       ExpressionModel::load(default_expression_model().parent_path() / "expression_ckplus48.yaml");

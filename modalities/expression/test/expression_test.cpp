@@ -2,6 +2,7 @@
 #include "dreamsense/expression/features.hpp"
 #include "dreamsense/expression/labels.hpp"
 #include "dreamsense/expression/smoothing.hpp"
+#include "dreamsense/vision/face_api_net.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -115,6 +116,110 @@ TEST(ExpressionModel, TrainsPredictsAndRoundTrips) {
     EXPECT_EQ(loaded->predict(row).probabilities, model->predict(row).probabilities);
     std::filesystem::remove(path);
   }
+}
+
+TEST(ExpressionJitters, SetsParseAndJitteredFacesFollowTheirLandmarks) {
+  auto none = face_jitters("");
+  ASSERT_TRUE(none.has_value());
+  ASSERT_EQ(none->size(), 1u);
+  EXPECT_TRUE(none->front().identity());
+  auto flip = face_jitters("flip");
+  ASSERT_TRUE(flip.has_value());
+  ASSERT_EQ(flip->size(), 2u);
+  EXPECT_TRUE((*flip)[1].mirror);
+  auto all = face_jitters("flip+rot+scale+shift");
+  ASSERT_TRUE(all.has_value());
+  EXPECT_EQ(all->size(), 18u);
+  EXPECT_TRUE(all->front().identity());
+  EXPECT_FALSE(face_jitters("flip+wobble").has_value());
+
+  auto m = expression_method("face_api:no_flip:aug=flip+scale:tta=flip");
+  ASSERT_TRUE(m.has_value()) << m.error().message;
+  EXPECT_EQ(m->train_jitters().size(), 6u);
+  EXPECT_EQ(m->test_jitters().size(), 2u);
+  EXPECT_FALSE(expression_method("face_api:tta=spin").has_value());
+  auto legacy = expression_method("lbp_hog:mirror");  // the mirror flags count as "flip"
+  ASSERT_TRUE(legacy.has_value());
+  EXPECT_EQ(legacy->train_jitters().size(), 2u);
+  EXPECT_EQ(legacy->test_jitters().size(), 2u);
+
+  // A face in a larger image: the identity returns it, the mirror equals mirror_face, a zoom
+  // moves the landmarks away from the crop centre and re-warps the crop from the image.
+  cv::Mat image(200, 200, CV_8UC1);
+  cv::RNG rng(5);
+  rng.fill(image, cv::RNG::UNIFORM, 0, 255);
+  vision::AlignedFace f = synthetic_face(64, 4);
+  f.crop_from_image = cv::Matx23d(0.5, 0, -10, 0, 0.5, -20);
+  f.grey = vision::warp_face(image, f.crop_from_image, vision::AlignmentOptions{},
+                             vision::AlignmentSource::kLandmarks)
+               .grey;
+  EXPECT_EQ(cv::norm(jitter_face(image, f, FaceJitter{}).grey, f.grey, cv::NORM_INF), 0.0);
+  const vision::AlignedFace mirrored = jitter_face(image, f, FaceJitter{true});
+  EXPECT_EQ(cv::norm(mirrored.grey, vision::mirror_face(f).grey, cv::NORM_INF), 0.0);
+  FaceJitter zoom;
+  zoom.scale = 1.1;
+  const vision::AlignedFace z = jitter_face(image, f, zoom);
+  ASSERT_EQ(z.landmarks.size(), f.landmarks.size());
+  const double c = 31.5;
+  EXPECT_NEAR(z.landmarks[30].x - c, 1.1 * (f.landmarks[30].x - c), 1e-9);
+  const vision::AlignedFace direct = vision::warp_face(
+      image, z.crop_from_image, vision::AlignmentOptions{}, vision::AlignmentSource::kLandmarks);
+  EXPECT_EQ(cv::norm(z.grey, direct.grey, cv::NORM_INF), 0.0);
+}
+
+TEST(ExpressionModel, AugmentationSettingsRoundTripAndAverageVariants) {
+  auto m = expression_method("lbp_hog:aug=flip+rot:tta=flip");
+  ASSERT_TRUE(m.has_value());
+  cv::Mat x;
+  std::vector<int> y;
+  synthetic_set(*m, x, y, 6);
+  auto model = ExpressionModel::train(*m, x, y, {"happy", "sadness", "anger"}, {"synthetic", 60});
+  ASSERT_TRUE(model.has_value());
+  const auto path = std::filesystem::temp_directory_path() / "ds_expression_aug.yaml";
+  ASSERT_TRUE(model->save(path).has_value());
+  auto loaded = ExpressionModel::load(path);
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  EXPECT_EQ(loaded->method().train_augment, "flip+rot");
+  EXPECT_EQ(loaded->method().test_augment, "flip");
+  std::filesystem::remove(path);
+  const std::vector<float> a(x.ptr<float>(0), x.ptr<float>(0) + x.cols),
+      b(x.ptr<float>(1), x.ptr<float>(1) + x.cols);
+  const auto pa = model->predict(a), pb = model->predict(b), pab = model->predict({a, b});
+  for (size_t k = 0; k < pab.probabilities.size(); ++k)
+    EXPECT_NEAR(pab.probabilities[k], 0.5 * (pa.probabilities[k] + pb.probabilities[k]), 1e-6);
+}
+
+TEST(ExpressionFeatures, BoxViewOfTheNetworkFollowsTheMirrorImage) {
+  if (!std::filesystem::exists(vision::default_face_api_model_dir() /
+                               "face_expression_model-weights_manifest.json"))
+    GTEST_SKIP() << "face-api weights absent";
+  ExpressionFeatureOptions o;
+  o.blocks = {"face_api", "face_api_box"};
+  o.face_api_flip = false;
+  auto e = ExpressionFeatureExtractor::create(o);
+  ASSERT_TRUE(e.has_value()) << e.error().message;
+  EXPECT_EQ(e->length(), 2u * 263u);
+  EXPECT_FALSE(e->face_api_hash().empty());
+  // A face-like blob in a larger image, its landmarks = the mean face placed on it.
+  cv::Mat image(240, 240, CV_8UC1, cv::Scalar(90));
+  cv::ellipse(image, {120, 125}, {60, 80}, 0, 0, 360, cv::Scalar(170), cv::FILLED);
+  cv::circle(image, {95, 105}, 8, cv::Scalar(30), cv::FILLED);
+  cv::rectangle(image, cv::Rect(100, 160, 50, 10), cv::Scalar(40), cv::FILLED);
+  vision::AlignedFace f = synthetic_face(64, 7);
+  f.crop_from_image = cv::Matx23d(0.5, 0, -28, 0, 0.5, -30);
+  f.grey = vision::warp_face(image, f.crop_from_image, vision::AlignmentOptions{},
+                             vision::AlignmentSource::kLandmarks)
+               .grey;
+  const auto box = e->block("face_api_box", image, f);
+  const auto box_m = e->block("face_api_box", image, jitter_face(image, f, FaceJitter{true}));
+  ASSERT_EQ(box.size(), 263u);
+  EXPECT_NE(box, box_m);  // the asymmetric face: the mirror image is another view
+  EXPECT_NE(box, e->block("face_api", image, f));
+  // Mirroring twice gives the same crop again.
+  const auto twice =
+      e->block("face_api_box", image,
+               jitter_face(image, jitter_face(image, f, FaceJitter{true}), FaceJitter{true}));
+  EXPECT_EQ(box, twice);
 }
 
 TEST(ExpressionModel, VersionCorruptionAndMissingFilesAreErrorsNamingTheFile) {

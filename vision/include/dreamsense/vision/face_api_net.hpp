@@ -49,6 +49,9 @@ class FaceApiExpressionNet {
   // `face`: CV_8UC1 grey or CV_8UC3 BGR, already cropped as the package crops faces (see
   // face_api_crop); it is padded to a square (black, centred) and resized to 112x112.
   FaceApiOutput run(const cv::Mat& face);
+  // run() and, when not null, the feature maps of the last two dense blocks (after their ReLU):
+  // dense2 1 x 128 x 14 x 14, dense3 1 x 256 x 7 x 7 (NCHW, CV_32F, owned copies).
+  FaceApiOutput run(const cv::Mat& face, cv::Mat* dense2_map, cv::Mat* dense3_map);
   // FNV-1a 64-bit hash of the weight binaries (hex): a model trained on these features records
   // it, so weights of another package version are detected.
   const std::string& weights_hash() const;
@@ -101,6 +104,8 @@ class FaceApiLandmarkNet {
   ~FaceApiLandmarkNet();
   // `face`: CV_8UC1 or CV_8UC3 BGR face crop; returns 68 points in the crop's pixels.
   std::vector<cv::Point2d> fit(const cv::Mat& face);
+  // The 256 pooled backbone features (the input of the landmark layer) of the same input.
+  std::vector<float> features(const cv::Mat& face);
   const std::string& weights_hash() const;
 
  private:

@@ -36,6 +36,14 @@ struct ExpressionMethod {
   // of a face averaged with those of its mirror image at test time.
   bool train_mirrored = false;
   bool test_mirrored = false;
+  // Feature-level augmentation (face_jitters sets, e.g. "flip+rot+scale+shift": every training
+  // face also as those jittered crops) and test-time averaging of the class probabilities over
+  // the jitters of `test_augment` (e.g. "flip"). Empty: none.
+  std::string train_augment, test_augment;
+  // The jitters of the training samples / of test-time averaging (identity first; the mirror
+  // flags above count as "flip").
+  std::vector<FaceJitter> train_jitters() const;
+  std::vector<FaceJitter> test_jitters() const;
   vision::SvmOptions svm;
   vision::SoftmaxOptions softmax;
   Status check() const;
@@ -70,6 +78,8 @@ class ExpressionModel {
   ExpressionPrediction predict(std::vector<float> features) const;
   // Probabilities averaged over the face and its mirror image (method().test_mirrored).
   ExpressionPrediction predict(std::vector<float> features, std::vector<float> mirrored) const;
+  // Probabilities averaged over several feature vectors of one face (method().test_jitters()).
+  ExpressionPrediction predict(std::vector<std::vector<float>> variants) const;
 
   Status save(const std::filesystem::path& path) const;
   // Errors name the file: missing, not a model, another version, malformed.

@@ -8,6 +8,10 @@
 //   face_api the 256 pooled features and 7 logits of face-api.js's expression network
 //            (vision/face_api_net.hpp) on the same alignment re-sampled at 112 px; with
 //            face_api_flip the mean of the face and its mirror image
+//   face_api_box  the same network outputs on the package's own face crop (face_api_crop: the
+//            landmarks' bounding box grown by 10 %, upright, padded to a square) instead of the
+//            eye-aligned crop: a second view of the face (issue 20); without landmarks the
+//            aligned crop
 
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/vision/descriptors.hpp"
@@ -26,7 +30,8 @@ class FaceApiExpressionNet;
 
 namespace dreamsense::expression {
 
-inline constexpr const char* kFeatureBlocks[] = {"lbp1", "lbp2", "hog", "geometry", "face_api"};
+inline constexpr const char* kFeatureBlocks[] = {"lbp1",     "lbp2",     "hog",
+                                                 "geometry", "face_api", "face_api_box"};
 
 struct ExpressionFeatureOptions {
   vision::AlignmentOptions alignment;  // canonical crop of the classical descriptors
@@ -38,7 +43,29 @@ struct ExpressionFeatureOptions {
   std::filesystem::path face_api_dir;  // empty: vision::default_face_api_model_dir()
   Status check() const;
   bool uses(const std::string& block) const;
+  bool uses_network() const { return uses("face_api") || uses("face_api_box"); }
 };
+
+// A small change of a face's crop for feature-level augmentation and test-time averaging: the
+// mirror image, then a similarity about the crop centre (rotation, scale > 1 zooms in, shift in
+// fractions of the crop side).
+struct FaceJitter {
+  bool mirror = false;
+  double rotation_deg = 0, scale = 1, shift_x = 0, shift_y = 0;
+  bool identity() const {
+    return !mirror && rotation_deg == 0 && scale == 1 && shift_x == 0 && shift_y == 0;
+  }
+  bool operator==(const FaceJitter&) const = default;
+};
+// The face re-warped from `image_grey` (the image it was aligned from) with the jitter; landmarks
+// follow. The identity returns `face`.
+vision::AlignedFace jitter_face(const cv::Mat& image_grey, const vision::AlignedFace& face,
+                                const FaceJitter& jitter);
+// Named sets, joined by '+': "flip" (mirror image), "rot" (+-10 deg), "scale" (x1.1, x0.9),
+// "shift" (+-5 % in x and in y). The result always starts with the identity and holds every
+// combination of the mirror (when "flip") with the identity and each geometric jitter
+// (e.g. flip+rot: 6 jitters). Unknown names are an error.
+Result<std::vector<FaceJitter>> face_jitters(const std::string& sets);
 
 // Not thread-safe (the network): one per thread.
 class ExpressionFeatureExtractor {
