@@ -188,8 +188,9 @@ TEST(Evaluator, DefaultQueryComesFromTheFamilyOptions) {
   MultiFrame mf;
   mf.stamp = ms(200);
   mf.chunks["mic"].push_back(make_frame("mic", ms(200), 0, AudioChunk{}));
-  const auto& sd =
-      ev.evaluate(mf, bb.snapshot())[static_cast<int>(PrimitiveId::kGetSoundDirection) - 1];
+  // The records are kept: a reference into the returned temporary would dangle (ASan found it).
+  const auto records = ev.evaluate(mf, bb.snapshot());
+  const auto& sd = records[static_cast<int>(PrimitiveId::kGetSoundDirection) - 1];
   EXPECT_EQ(sd.status, PrimitiveStatus::kNoData) << "0.6 is below the family's 0.7";
   ASSERT_NE(std::get_if<ThresholdQuery>(&sd.query), nullptr);
   EXPECT_DOUBLE_EQ(std::get<ThresholdQuery>(sd.query).threshold, 0.7);

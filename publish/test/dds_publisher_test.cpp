@@ -11,6 +11,8 @@
 #include <thread>
 #include <unistd.h>
 
+#include "fastdds_asan_options.hpp"
+
 namespace dreamsense::publish {
 namespace {
 

@@ -28,6 +28,7 @@
 #include "LiveSpeechPubSubTypes.h"
 #include "MutualGazePubSubTypes.h"
 #include "NormalizedRegionOfInterest2DPubSubTypes.h"
+#include "fastdds_asan_options.hpp"
 
 namespace dreamsense::publish {
 namespace {

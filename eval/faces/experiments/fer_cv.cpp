@@ -382,8 +382,8 @@ int main(int argc, char** argv) {
         if (!use_mlp && cfg.count("mixraw")) {  // head + the package's classifier, mixed
           const double w = std::stod(cfg["mixraw"]);
           std::vector<float> p = vision::softmax(lin.scores(r));
-          const char* names[7] = {"neutral", "happy", "sadness", "anger", "fear", "disgust",
-                                  "surprise"};
+          const char* names[7] = {"neutral", "happy",   "sadness", "anger",
+                                  "fear",    "disgust", "surprise"};
           std::vector<float> q(static_cast<size_t>(K), 0.f);
           for (int k = 0; k < 7; ++k) {
             int label = 0;

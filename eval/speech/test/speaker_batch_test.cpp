@@ -152,8 +152,11 @@ TEST(SpeechFsddRunner, ReportsPerUtteranceAndVotedResultsAndAppliesTheWarp) {
   const auto m = r->to_json()["metrics"];
   ASSERT_TRUE(m.contains("per_utterance")) << m.dump(1);
   EXPECT_EQ(m["per_utterance"]["per_speaker"].size(), 2u);
-  ASSERT_EQ(r->to_json()["items"].size(), 4u);
-  for (const auto& it : r->to_json()["items"]) {
+  // One document: a range-for over a member of the temporary r->to_json() would read freed
+  // memory (ASan found it).
+  const auto report = r->to_json();
+  ASSERT_EQ(report["items"].size(), 4u);
+  for (const auto& it : report["items"]) {
     ASSERT_EQ(it["digit_scores"].size(), 10u);
     EXPECT_TRUE(it.contains("hypothesis_per_utterance"));
   }
