@@ -21,6 +21,22 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// std::filesystem's queries without exceptions: a path the system refuses (too long, a symlink
+// loop) is simply not there. The throwing forms ended `record --config` on such a path (fuzz
+// finding: fuzz_configs, fuzz/findings/record_config_long_path.configs).
+bool regular_file_exists(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_regular_file(p, ec);
+}
+bool folder_exists(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_directory(p, ec);
+}
+bool path_exists(const fs::path& p) {
+  std::error_code ec;
+  return fs::exists(p, ec);
+}
+
 // YAML access with errors that name the file and the key.
 class ConfigReader {
  public:
@@ -79,7 +95,7 @@ class ConfigReader {
 Status copy_into(const fs::path& from, const fs::path& to) {
   std::error_code ec;
   fs::create_directories(to.parent_path(), ec);
-  if (fs::is_directory(from))
+  if (folder_exists(from))
     fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing, ec);
   else
     fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
@@ -106,14 +122,14 @@ Status RecordConfig::check() const {
     if (auto st = o.check(); !st) add(st.error().message);
     for (const std::string& sid : {d.id + ".depth", d.id + ".color"})
       if (!ids.insert(sid).second) add(fmt::format("stream id '{}' is used twice", sid));
-    if (!d.calibration.empty() && !fs::is_regular_file(d.calibration))
+    if (!d.calibration.empty() && !regular_file_exists(d.calibration))
       add(fmt::format("depth sensor '{}': calibration {} not found", d.id, d.calibration.string()));
   }
   for (const auto& c : cameras) {
     if (c.id.empty()) add("a camera has no id");
     if (c.device.empty()) add(fmt::format("camera '{}' has no device", c.id));
     if (!ids.insert(c.id).second) add(fmt::format("stream id '{}' is used twice", c.id));
-    if (!c.calibration.empty() && !fs::is_regular_file(c.calibration))
+    if (!c.calibration.empty() && !regular_file_exists(c.calibration))
       add(fmt::format("camera '{}': calibration {} not found", c.id, c.calibration.string()));
   }
   for (const auto& k : skeletons) {
@@ -121,18 +137,18 @@ Status RecordConfig::check() const {
     if (!ids.insert(k.id).second) add(fmt::format("stream id '{}' is used twice", k.id));
     if (k.port < 0 || k.port > 65535) add(fmt::format("skeleton '{}': port out of range", k.id));
     if (!(k.rate_hz > 0)) add(fmt::format("skeleton '{}': rate_hz must be > 0", k.id));
-    if (!k.calibration.empty() && !fs::is_regular_file(k.calibration))
+    if (!k.calibration.empty() && !regular_file_exists(k.calibration))
       add(fmt::format("skeleton '{}': calibration {} not found", k.id, k.calibration.string()));
   }
   if (audio) {
     if (audio->id.empty()) add("audio has no id");
     if (!ids.insert(audio->id).second) add(fmt::format("stream id '{}' is used twice", audio->id));
-    if (!audio->calibration.empty() && !fs::is_regular_file(audio->calibration))
+    if (!audio->calibration.empty() && !regular_file_exists(audio->calibration))
       add(fmt::format("audio: calibration {} not found", audio->calibration.string()));
   }
-  if (!speech_grammar.empty() && !fs::is_regular_file(speech_grammar))
+  if (!speech_grammar.empty() && !regular_file_exists(speech_grammar))
     add(fmt::format("speech_grammar {} not found", speech_grammar.string()));
-  if (!voice_enroll.empty() && !fs::is_directory(voice_enroll))
+  if (!voice_enroll.empty() && !folder_exists(voice_enroll))
     add(fmt::format("voice_enroll {} is not a folder", voice_enroll.string()));
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "record config: {}", bad);
   return ok_status();
@@ -194,7 +210,7 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
       DS_TRY(r.get_path(cams[i], ctx, "calibration", cam.calibration));
       // A video file given by a relative path is relative to the configuration too.
       if (!cam.device.empty() && !fs::path(cam.device).is_absolute() &&
-          fs::is_regular_file(file.parent_path() / cam.device))
+          regular_file_exists(file.parent_path() / cam.device))
         cam.device = (file.parent_path() / cam.device).string();
       c.cameras.push_back(cam);
     }
@@ -212,7 +228,7 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
       DS_TRY(r.get(ds[i], ctx, "color", d.color));
       DS_TRY(r.get_path(ds[i], ctx, "calibration", d.calibration));
       // An .oni recording given by a relative path is relative to the configuration.
-      if (!d.device.empty() && fs::is_regular_file(file.parent_path() / d.device))
+      if (!d.device.empty() && regular_file_exists(file.parent_path() / d.device))
         d.device = (file.parent_path() / d.device).string();
       c.depth_sensors.push_back(d);
     }
@@ -352,7 +368,7 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
                                                        const LiveCaptureOptions& capture_options) {
   if (auto st = config.check(); !st) return tl::unexpected(st.error());
   if (auto st = writer_options.check(); !st) return tl::unexpected(st.error());
-  if (record_dir && fs::exists(*record_dir / kManifestName))
+  if (record_dir && path_exists(*record_dir / kManifestName))
     return make_error(ErrorCode::kInvalidArgument,
                       "{} already holds a session (choose a new folder)", record_dir->string());
 

@@ -101,6 +101,18 @@ TEST(RecordConfig, BadConfigurationsNameTheProblem) {
   EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
 }
 
+// fuzz_configs finding: a path the system refuses (a 300-character name: ENAMETOOLONG) threw
+// std::filesystem_error out of RecordConfig::check() and ended the program.
+TEST(RecordConfig, PathTheSystemRefusesIsNotFoundNotACrash) {
+  TempDir tmp;
+  const std::string long_name(300, 'x');
+  write_text(tmp.path() / "rec.yaml",
+             "cameras:\n  - {id: a, device: 0}\nvoice_enroll: " + long_name + "\n");
+  auto c = read_record_config(tmp.path() / "rec.yaml");
+  ASSERT_FALSE(c);
+  EXPECT_NE(c.error().message.find("voice_enroll"), std::string::npos) << c.error().message;
+}
+
 TEST(CameraSource, VideoFilePlaysBackInOrderWithIncreasingStamps) {
   TempDir tmp;
   CameraSourceOptions o;
