@@ -26,28 +26,11 @@ const std::set<std::string> kDetectors{
     "tiny_union", "ssd", "union_ssd", "union_tiny_ssd", "ssd_union", "ssd_hybrid"};
 using LandmarkFitResult = face_landmarks::LandmarkFit;
 
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::optional<double> median(std::vector<double> v) {
-  if (v.empty()) return std::nullopt;
-  const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(m), v.end());
-  if (v.size() % 2 == 1) return v[m];
-  const double hi = v[m];
-  return 0.5 * (hi + *std::max_element(v.begin(), v.begin() + static_cast<long>(m)));
-}
-
 std::optional<double> mean(const std::vector<double>& v) {
   if (v.empty()) return std::nullopt;
   double s = 0;
   for (double x : v) s += x;
   return s / static_cast<double>(v.size());
-}
-
-nlohmann::json opt(const std::optional<double>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
 }
 
 // One chain's outcome on one annotated face.
@@ -98,13 +81,13 @@ struct ChainScores {
       j["faces_detected"] = detected;
     }
     j["faces_fitted"] = nmes.size();
-    j["nme_outer_corners"] = opt(mean(nmes));
-    j["nme_outer_corners_median"] = opt(median(nmes));
+    j["nme_outer_corners"] = number_or_null(mean(nmes));
+    j["nme_outer_corners_median"] = number_or_null(median(nmes));
     j["failure_rate_08"] =
         nmes.empty() ? nlohmann::json(nullptr) : nlohmann::json(failures / double(nmes.size()));
-    j["eye_center_error"] = opt(mean(eyes));
-    j["eye_center_error_median"] = opt(median(eyes));
-    j["spread_failure_auc"] = opt(failure_auc(faces, failure_nme));
+    j["eye_center_error"] = number_or_null(mean(eyes));
+    j["eye_center_error_median"] = number_or_null(median(eyes));
+    j["spread_failure_auc"] = number_or_null(failure_auc(faces, failure_nme));
     // Occlusion-aware confidence: fits with spread_confidence >= 0.5 are "confident".
     std::vector<double> confident;
     size_t confident_failures = 0;
@@ -115,7 +98,7 @@ struct ChainScores {
       }
     j["confident_fraction"] = nmes.empty() ? nlohmann::json(nullptr)
                                            : nlohmann::json(confident.size() / double(nmes.size()));
-    j["nme_confident"] = opt(mean(confident));
+    j["nme_confident"] = number_or_null(mean(confident));
     j["confident_failure_rate"] =
         confident.empty() ? nlohmann::json(nullptr)
                           : nlohmann::json(confident_failures / double(confident.size()));
@@ -589,15 +572,18 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     m["mean_offset_px"] = {bias[b].x / n_pts, bias[b].y / n_pts};
     m["extent_ratio"] = {width_ratio[b] / n, height_ratio[b] / n};  // fitted / annotated
   }
-  report.timing["ms_per_face_median"] = opt(top.ms_median());
-  report.timing["from_box"] = {{"ms_per_face_median", opt(from_box.ms_median())}};
-  report.timing["from_box_plain"] = {{"ms_per_face_median", opt(from_box_plain.ms_median())}};
-  if (cnn) report.timing["from_box_cnn"] = {{"ms_per_face_median", opt(from_box_cnn.ms_median())}};
+  report.timing["ms_per_face_median"] = number_or_null(top.ms_median());
+  report.timing["from_box"] = {{"ms_per_face_median", number_or_null(from_box.ms_median())}};
+  report.timing["from_box_plain"] = {
+      {"ms_per_face_median", number_or_null(from_box_plain.ms_median())}};
+  if (cnn)
+    report.timing["from_box_cnn"] = {
+        {"ms_per_face_median", number_or_null(from_box_cnn.ms_median())}};
   nlohmann::json chain_names = nlohmann::json::array();
   for (const Chain& c : chains) {
     chain_names.push_back(c.name);
     report.metrics[c.name] = scores.at(c.name).metrics(o.failure_nme, true);
-    report.timing[c.name] = {{"ms_per_face_median", opt(scores.at(c.name).ms_median())}};
+    report.timing[c.name] = {{"ms_per_face_median", number_or_null(scores.at(c.name).ms_median())}};
   }
   report.extra = {{"detectors", chain_names}, {"per_face", per_face}};
   return report;
