@@ -179,7 +179,15 @@ std::vector<std::string> OptionsNode::unread_keys() const {
   std::vector<std::string> out;
   if (!node_.IsMap()) return out;
   for (const auto& kv : node_) {
-    const std::string k = kv.first.as<std::string>();
+    // A list or map as a key (`? [a, b]: 1`) names no option: reported as unread, in YAML's
+    // flow form, instead of the BadConversion that as<std::string>() throws (fuzz finding 6).
+    if (!kv.first.IsScalar()) {
+      YAML::Emitter flow;
+      flow << YAML::Flow << kv.first;
+      out.emplace_back(flow.c_str());
+      continue;
+    }
+    const std::string k = kv.first.Scalar();
     if (read_.count(k) == 0) {
       out.push_back(k);
       continue;

@@ -48,6 +48,11 @@ TEST(OptionsNode, WrongTypesAndUnknownKeysNameTheKey) {
   const auto unread = n.unread_keys();
   EXPECT_NE(std::find(unread.begin(), unread.end(), "typo"), unread.end())
       << "a key nobody reads is an unknown option";
+  // Fuzz finding 6: a list as a key names no option; it is reported, not thrown.
+  OptionsNode list_key("x", YAML::Load("{? [a, b] : 1}"));
+  std::vector<std::string> list_unread;
+  EXPECT_NO_THROW(list_unread = list_key.unread_keys());
+  EXPECT_EQ(list_unread, std::vector<std::string>{"[a, b]"});
   cv::Vec3d v;
   OptionsNode bad("x", YAML::Load("{v: [1, 2]}"));
   EXPECT_FALSE(bad.get("v", v)) << "a vector needs three numbers";

@@ -28,6 +28,16 @@ Result<std::vector<std::string>> role_list(const std::filesystem::path& file, co
   return out;
 }
 
+// A key that is not a plain name (`? [a, b]: 1` makes a list the key) is the user's error, not the
+// YAML::BadConversion that as<std::string>() throws (fuzz finding 6).
+Result<std::string> key_name(const std::filesystem::path& file, const std::string& context,
+                             const YAML::Node& key) {
+  if (!key.IsScalar())
+    return tl::unexpected(
+        config_error(file, fmt::format("{}a key must be a name, not a list or a map", context)));
+  return key.Scalar();
+}
+
 }  // namespace
 
 std::string PipelineConfig::where(const std::string& key) const {
@@ -50,7 +60,7 @@ Result<PipelineConfig> PipelineConfig::read(const std::filesystem::path& path) {
   if (!root.IsMap())
     return tl::unexpected(config_error(path, "expected a map with analyzers and/or roles"));
   for (const auto& kv : root) {
-    const std::string key = kv.first.as<std::string>();
+    DS_ASSIGN_OR_RETURN(const std::string key, key_name(path, "", kv.first));
     if (key == "version") {
       int v = 0;
       try {
@@ -62,7 +72,7 @@ Result<PipelineConfig> PipelineConfig::read(const std::filesystem::path& path) {
       if (!kv.second.IsMap())
         return tl::unexpected(config_error(path, "analyzers: expected a map of analyser names"));
       for (const auto& a : kv.second) {
-        const std::string name = a.first.as<std::string>();
+        DS_ASSIGN_OR_RETURN(const std::string name, key_name(path, "analyzers: ", a.first));
         AnalyzerConfig ac;
         const YAML::Node n = a.second;
         if (n.IsScalar()) {
@@ -74,7 +84,8 @@ Result<PipelineConfig> PipelineConfig::read(const std::filesystem::path& path) {
           }
         } else if (n.IsMap()) {
           for (const auto& e : n) {
-            const std::string k = e.first.as<std::string>();
+            DS_ASSIGN_OR_RETURN(const std::string k,
+                                key_name(path, fmt::format("analyzers.{}: ", name), e.first));
             if (k == "enabled") {
               try {
                 ac.enabled = e.second.as<bool>();
@@ -103,7 +114,7 @@ Result<PipelineConfig> PipelineConfig::read(const std::filesystem::path& path) {
       if (!kv.second.IsMap())
         return tl::unexpected(config_error(path, "roles: expected a map of stream ids"));
       for (const auto& r : kv.second) {
-        const std::string id = r.first.as<std::string>();
+        DS_ASSIGN_OR_RETURN(const std::string id, key_name(path, "roles: ", r.first));
         auto list = role_list(path, id, r.second);
         if (!list) return tl::unexpected(list.error());
         c.roles[id] = *list;

@@ -47,11 +47,18 @@ class ConfigReader {
                       key.empty() ? "" : ": ", what);
   }
 
+  // A key that is not a plain name (`? [a, b]: 1` makes a list the key) is the user's error, not
+  // the YAML::BadConversion that as<std::string>() throws (fuzz finding 6).
+  Result<std::string> key_name(const YAML::Node& key, const std::string& context) const {
+    if (!key.IsScalar()) return error(context, "a key must be a name, not a list or a map");
+    return key.Scalar();
+  }
+
   Status only_keys(const YAML::Node& map, const std::string& context,
                    std::initializer_list<const char*> allowed) const {
     if (!map.IsMap()) return error(context, "expected a map");
     for (const auto& kv : map) {
-      const auto key = kv.first.as<std::string>();
+      DS_ASSIGN_OR_RETURN(const auto key, key_name(kv.first, context));
       if (std::none_of(allowed.begin(), allowed.end(), [&](const char* k) { return key == k; })) {
         std::string list;
         for (const char* k : allowed) list += (list.empty() ? "" : ", ") + std::string(k);
@@ -189,7 +196,7 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
     if (const YAML::Node m = s["metadata"]; m && !m.IsNull()) {
       if (!m.IsMap()) return r.error("session.metadata", "expected a map");
       for (const auto& kv : m) {
-        const auto key = kv.first.as<std::string>();
+        DS_ASSIGN_OR_RETURN(const auto key, r.key_name(kv.first, "session.metadata"));
         if (!kv.second.IsScalar())
           return r.error("session.metadata." + key, "expected a single value");
         c.metadata[key] = kv.second.Scalar();

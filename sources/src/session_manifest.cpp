@@ -191,7 +191,11 @@ Result<SessionManifest> parse_manifest(const YAML::Node& root) {
     if (!md.IsMap())
       return manifest_error(ErrorCode::kCorruptData, "key 'metadata': expected a map");
     for (const auto& kv : md) {
-      const std::string key = kv.first.as<std::string>();
+      // A list or map as a key is damage, not a BadConversion out of the reader (fuzz finding 6).
+      if (!kv.first.IsScalar())
+        return manifest_error(ErrorCode::kCorruptData,
+                              "key 'metadata': a key must be a name, not a list or a map");
+      const std::string key = kv.first.Scalar();
       if (!kv.second.IsScalar() && !kv.second.IsNull())
         return manifest_error(ErrorCode::kCorruptData,
                               fmt::format("key 'metadata.{}': expected a scalar value", key));

@@ -107,10 +107,28 @@ TEST(RecordConfig, PathTheSystemRefusesIsNotFoundNotACrash) {
   TempDir tmp;
   const std::string long_name(300, 'x');
   write_text(tmp.path() / "rec.yaml",
-             "cameras:\n  - {id: a, device: 0}\nvoice_enroll: " + long_name + "\n");
+             "session:\n  voice_enroll: " + long_name + "\ncameras:\n  - {id: a, device: 0}\n");
   auto c = read_record_config(tmp.path() / "rec.yaml");
   ASSERT_FALSE(c);
   EXPECT_NE(c.error().message.find("voice_enroll"), std::string::npos) << c.error().message;
+  EXPECT_NE(c.error().message.find("is not a folder"), std::string::npos) << c.error().message;
+}
+
+// Fuzz finding 6: a list or map used as a key (`? [a, b]: 1`) made as<std::string>() throw
+// YAML::BadConversion out of the reader, and the program ended.
+TEST(RecordConfig, ListOrMapAsKeyIsAnErrorNotACrash) {
+  TempDir tmp;
+  for (const std::string yaml :
+       {"? [a, b]\n: 1\ncameras:\n  - {id: a, device: 0}\n",
+        "session:\n  metadata:\n    ? {room: 1}\n    : x\ncameras:\n  - {id: a, device: 0}\n",
+        "cameras:\n  - ? [id]\n    : a\n"}) {
+    write_text(tmp.path() / "rec.yaml", yaml);
+    Result<RecordConfig> c = tl::unexpected(Error{ErrorCode::kInternal, "not read"});
+    EXPECT_NO_THROW(c = read_record_config(tmp.path() / "rec.yaml")) << yaml;
+    ASSERT_FALSE(c) << yaml;
+    EXPECT_NE(c.error().message.find("a key must be a name"), std::string::npos)
+        << c.error().message;
+  }
 }
 
 TEST(CameraSource, VideoFilePlaysBackInOrderWithIncreasingStamps) {

@@ -114,6 +114,15 @@ TEST_F(SessionBadInput, WrongTypeOfValue) {
   EXPECT_MESSAGE_HAS(e, "session.yaml: key 'streams[0] (cam).width': expected an integer");
 }
 
+// Fuzz finding 6: a list used as a key made as<std::string>() throw YAML::BadConversion out of
+// the reader (the program ended).
+TEST_F(SessionBadInput, ListAsMetadataKey) {
+  replace_in_file(dir_ / kManifestName, "generator:", "? [a, b]\n  : x\n  generator:");
+  const Error e = open_error();
+  EXPECT_EQ(e.code, ErrorCode::kCorruptData);
+  EXPECT_MESSAGE_HAS(e, "session.yaml: key 'metadata': a key must be a name");
+}
+
 TEST_F(SessionBadInput, DuplicateStreamId) {
   replace_in_file(dir_ / kManifestName, "id: depth", "id: cam");
   const Error e = open_error();
