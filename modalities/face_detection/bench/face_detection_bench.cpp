@@ -22,7 +22,11 @@ const testing::DemoFrames& frames() {
     std::filesystem::path dir = env != nullptr ? std::filesystem::path(env)
                                                : std::filesystem::temp_directory_path() /
                                                      ("ds_face_bench_" + std::to_string(getpid()));
-    auto r = testing::load_demo(dir, 2.0, 1, 50);
+    Result<testing::DemoFrames> r = tl::unexpected(Error{});
+    if (auto made = testing::ensure_demo(dir, 2.0, 1); !made)
+      r = tl::unexpected(made.error());
+    else
+      r = testing::load_demo(dir, 50);
     if (env == nullptr) std::filesystem::remove_all(dir);
     if (!r) {
       std::fprintf(stderr, "%s\n", r.error().to_string().c_str());

@@ -36,18 +36,23 @@ struct DemoFrames {
   std::map<int64_t, FaceTruth> truth;  // by stamp_ns
 };
 
+// The face analysers' own scene: the original gestures (the hands never near the face). The
+// default demo's drive_car changes camera selection on this 3 s clip (0.92); over whole sessions
+// it is measured by `eval session` (modalities/actions/README.md "Demo").
+inline sim::DemoOptions face_demo_options(double duration_s, uint64_t seed) {
+  sim::DemoOptions o;
+  o.seed = seed;
+  o.duration_s = duration_s;
+  o.script.gestures = sim::DemoScriptOptions::GestureSet::kClassic;
+  return o;
+}
+
 // Generates a demo session into `dir` unless it already holds one.
 inline Status ensure_demo(const std::filesystem::path& dir, double duration_s, uint64_t seed) {
   if (std::filesystem::exists(dir / "session.yaml")) return ok_status();
-  sim::DemoOptions o;
+  sim::DemoOptions o = face_demo_options(duration_s, seed);
   o.out_dir = dir;
-  o.seed = seed;
-  o.duration_s = duration_s;
   o.overwrite = true;
-  // The face analysers' own scene: the original gestures (the hands never near the face). The
-  // default demo's drive_car changes camera selection on this 3 s clip (0.92); over whole
-  // sessions it is measured by `eval session` (modalities/actions/README.md "Demo").
-  o.script.gestures = sim::DemoScriptOptions::GestureSet::kClassic;
   auto r = sim::generate_demo_session(o);
   if (!r) return tl::unexpected(r.error());
   return ok_status();
@@ -103,11 +108,9 @@ Status for_each_tick(const std::filesystem::path& dir, Fn&& fn, size_t max_ticks
   }
 }
 
-// Generates a demo session into `dir` (unless it already holds one) and decodes its first
-// `max_ticks` ticks (a 20 s session is 1500 1280x960 images, 5.5 GB: stream it instead).
-inline Result<DemoFrames> load_demo(const std::filesystem::path& dir, double duration_s,
-                                    uint64_t seed, size_t max_ticks = SIZE_MAX) {
-  if (auto s = ensure_demo(dir, duration_s, seed); !s) return tl::unexpected(s.error());
+// Decodes the first `max_ticks` ticks of the demo session in `dir` (a 20 s session is 1500
+// 1280x960 images, 5.5 GB: stream it instead).
+inline Result<DemoFrames> load_demo(const std::filesystem::path& dir, size_t max_ticks = SIZE_MAX) {
   DemoFrames out;
   auto s = for_each_tick(
       dir, [&](const MultiFrame& mf) { out.ticks.push_back(mf); }, max_ticks);

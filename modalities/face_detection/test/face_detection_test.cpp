@@ -6,6 +6,7 @@
 #include "dreamsense/face_detection/face_tracker.hpp"
 #include "dreamsense/face_detection/hog_face_detector.hpp"
 #include "dreamsense/perception/head_pose.hpp"
+#include "dreamsense/testing/demo_cache.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -23,13 +24,13 @@ using testing::DemoFrames;
 using testing::FaceMetrics;
 using testing::kCameras;
 
-// A 3 s demo session (seed 3), generated once for the whole binary.
+// A 3 s demo session (seed 3), generated once for the whole binary (testing/demo_cache.hpp).
 const DemoFrames& demo() {
   static const DemoFrames frames = [] {
-    const auto dir = std::filesystem::temp_directory_path() /
-                     ("ds_face_detection_test_" + std::to_string(::getpid()));
-    auto r = testing::load_demo(dir, 3.0, 3);
-    std::filesystem::remove_all(dir);
+    auto dir = dreamsense::testing::cached_demo_session("classic_s3_3s",
+                                                        testing::face_demo_options(3.0, 3));
+    if (!dir) throw std::runtime_error(dir.error().to_string());
+    auto r = testing::load_demo(*dir);
     if (!r) throw std::runtime_error(r.error().to_string());
     return std::move(*r);
   }();

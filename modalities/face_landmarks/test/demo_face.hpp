@@ -1,7 +1,7 @@
 #pragma once
 // Test support shared by face_landmarks and head_pose tests: a 3 s demo session (seed 3)
-// generated once per test binary in a temp dir, its face truth (docs/truth_format.md), and the
-// face pipeline face_detection -> face_landmarks run once over it, cached per tick.
+// generated once per test binary (testing/demo_cache.hpp), its face truth (docs/truth_format.md),
+// and the face pipeline face_detection -> face_landmarks run once over it, cached per tick.
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
@@ -10,6 +10,7 @@
 #include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/sim/demo_session.hpp"
 #include "dreamsense/sources/session.hpp"
+#include "dreamsense/testing/demo_cache.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -120,15 +121,12 @@ struct DemoRun {
 inline const DemoRun& demo_run(std::shared_ptr<const face_landmarks::Landmarker> landmarker) {
   static DemoRun run = [&] {
     DemoRun r;
-    r.dir = std::filesystem::temp_directory_path() /
-            ("dreamsense_face_demo_s3_" + std::to_string(::getpid()));
     sim::DemoOptions o;
-    o.out_dir = r.dir;
     o.seed = 3;
     o.duration_s = 3;
-    o.overwrite = true;
-    auto g = sim::generate_demo_session(o);
-    if (!g) throw std::runtime_error(g.error().to_string());
+    auto dir = testing::cached_demo_session("s3_3s", o);
+    if (!dir) throw std::runtime_error(dir.error().to_string());
+    r.dir = *dir;
     r.truth = read_face_truth(r.dir);
     for (const SensorId& c : kCameras) {
       auto m = read_camera_model(r.dir / "calib" / (c + ".yaml"));
@@ -162,8 +160,6 @@ inline const DemoRun& demo_run(std::shared_ptr<const face_landmarks::Landmarker>
       r.ticks.push_back(std::move(t));
     });
     if (!s) throw std::runtime_error(s.error().to_string());
-    std::error_code ec;
-    std::filesystem::remove_all(r.dir, ec);  // everything needed is cached
     return r;
   }();
   return run;
