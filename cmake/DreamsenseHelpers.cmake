@@ -13,13 +13,16 @@ function(ds_add_library name)
   target_compile_options(dreamsense_${name} PRIVATE ${DREAMSENSE_WARNINGS})
 endfunction()
 
-# ds_add_test(<name> SOURCES ... DEPS ... [LABELS unit|analyzer|pipeline|dataset] [FIXTURES f])
-# One gtest executable per call; each TEST() becomes a ctest entry carrying the labels.
+# ds_add_test(<name> SOURCES ... DEPS ... [LABELS unit|analyzer|pipeline|dataset] [FIXTURES f]
+#             [COST seconds])
+# One gtest executable per call; each TEST() becomes a ctest entry carrying the labels. COST (the
+# seconds one of its tests takes, roughly) makes `ctest -j` start those tests first: a clean
+# clone has no timings of an earlier run, and a long test started last leaves a core idle.
 function(ds_add_test name)
   if(NOT DREAMSENSE_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS;FIXTURES" ${ARGN})
+  cmake_parse_arguments(ARG "" "COST" "SOURCES;DEPS;LABELS;FIXTURES" ${ARGN})
   if(NOT ARG_LABELS)
     set(ARG_LABELS unit)
   endif()
@@ -45,6 +48,9 @@ function(ds_add_test name)
   set(props "LABELS \"${ARG_LABELS}\"")
   if(ARG_FIXTURES)
     string(APPEND props " FIXTURES_REQUIRED \"${ARG_FIXTURES}\"")
+  endif()
+  if(ARG_COST)
+    string(APPEND props " COST ${ARG_COST}")
   endif()
   set(script ${CMAKE_CURRENT_BINARY_DIR}/${name}_properties.cmake)
   file(WRITE ${script}
