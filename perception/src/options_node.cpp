@@ -42,7 +42,7 @@ void set_path(YAML::Node node, const std::vector<std::string>& parts, size_t i,
 }  // namespace
 
 OptionsNode::OptionsNode(std::string where, YAML::Node node)
-    : where_(std::move(where)), node_(std::move(node)) {
+    : where_(std::move(where)), node_(node) {  // YAML::Node has no move constructor
   if (!node_ || node_.IsNull()) node_ = YAML::Node(YAML::NodeType::Map);
 }
 
