@@ -31,14 +31,14 @@ else
   [[ $base == "$(git rev-parse HEAD)" ]] && base=$(git rev-parse HEAD~1)
   mapfile -t files < <(git diff --name-only --diff-filter=AMR "$base" -- '*.cpp')
 fi
-# Only files the build compiles (tests and benches included when configured).
-checked=()
-for f in "${files[@]}"; do
-  if grep -q "\"file\": \".*/${f}\"" "$build/compile_commands.json"; then checked+=("$f"); fi
-done
+# Only files the build compiles (tests and benches included when configured). The release preset
+# is a unity build: tools/tidy/per_file_commands.py gives each source its unity file's command.
+commands=$(mktemp -d)
+trap 'rm -rf "$commands"' EXIT
+mapfile -t checked < <(python3 tools/tidy/per_file_commands.py "$build" "$commands" "${files[@]}")
 if [[ ${#checked[@]} -eq 0 ]]; then
   echo "tidy: no compiled .cpp files to check"
   exit 0
 fi
 echo "tidy: ${#checked[@]} files"
-printf '%s\n' "${checked[@]}" | xargs -P "${TIDY_JOBS:-2}" -n 4 "$tidy" -p "$build" --quiet "${config[@]}"
+printf '%s\n' "${checked[@]}" | xargs -P "${TIDY_JOBS:-2}" -n 4 "$tidy" -p "$commands" --quiet "${config[@]}"
