@@ -126,13 +126,8 @@ Result<SessionSelfCalibration> self_calibrate_session(
   // Enough searching: this many ticks seen by two or more cameras (triangulated or not: when
   // they do not, cameras that disagree, the reason is clear by then).
   auto enough = [&] { return multi_view >= options.enough_frames; };
-  auto flush = [&]() -> Status {
-    if (group.empty()) return ok_status();
-    ++tick_index;
-    if (tick_index % options.tick_step != 0) {
-      group.clear();
-      return ok_status();
-    }
+  // Searches the frames of one chosen tick (`group`, then cleared) for the face.
+  auto search_tick = [&]() -> Status {
     ++out.ticks_searched;
     head_pose::MultiViewLandmarks mv;
     mv.stamp_ns = group_ns;
@@ -155,7 +150,65 @@ Result<SessionSelfCalibration> self_calibrate_session(
     group.clear();
     return ok_status();
   };
-  for (;;) {
+  auto flush = [&]() -> Status {
+    if (group.empty()) return ok_status();
+    ++tick_index;
+    if (tick_index % options.tick_step != 0) {
+      group.clear();
+      return ok_status();
+    }
+    return search_tick();
+  };
+  const int64_t max_ns = static_cast<int64_t>(options.max_seconds * 1e9);
+
+  // MJPEG cameras have an index: the ticks are grouped from it and only the chosen ticks' frames
+  // are decoded (1 in tick_step). Decoding every frame in between was most of the CPU (11.2 s for
+  // a 20 s session, issue 15). The same ticks and frames as reading them all; a tick whose frames
+  // all fail to decode still counts in the 1-in-tick_step choice (the reader would skip it).
+  struct IndexedFrame {
+    int64_t stamp_ns = 0;
+    SensorId id;
+    size_t k = 0;
+  };
+  std::vector<IndexedFrame> indexed;
+  bool all_indexed = true;
+  for (const auto& stream : manifest->streams) {  // manifest order breaks ties, as in next()
+    if (cameras.count(stream.id) == 0) continue;
+    const auto records = (*reader)->records(stream.id);
+    if (records.empty()) all_indexed = false;  // a video stream (or nothing to read)
+    for (size_t k = 0; k < records.size(); ++k)
+      indexed.push_back({records[k].stamp_ns, stream.id, k});
+  }
+  const bool from_index = all_indexed && !indexed.empty();
+  if (from_index) {
+    std::stable_sort(
+        indexed.begin(), indexed.end(),
+        [](const IndexedFrame& a, const IndexedFrame& b) { return a.stamp_ns < b.stamp_ns; });
+    first_ns = indexed.front().stamp_ns;
+    for (size_t i = 0; i < indexed.size() && !enough();) {
+      const int64_t tick_ns = indexed[i].stamp_ns;
+      if (tick_ns - first_ns > max_ns) break;
+      size_t end = i;
+      while (end < indexed.size() && indexed[end].stamp_ns - tick_ns <= kSameTickNs &&
+             indexed[end].stamp_ns - first_ns <= max_ns)
+        ++end;
+      if (++tick_index % options.tick_step == 0) {
+        group_ns = tick_ns;
+        for (size_t g = i; g < end; ++g) {
+          auto frame = (*reader)->decode_record(indexed[g].id, indexed[g].k);
+          if (!frame) {
+            if (frame.error().code == ErrorCode::kCorruptData) continue;  // a damaged record
+            return tl::unexpected(frame.error());
+          }
+          group.push_back(*frame);
+        }
+        if (!group.empty()) DS_RETURN_IF_ERROR(search_tick());
+      }
+      out.seconds_searched = static_cast<double>(indexed[end - 1].stamp_ns - first_ns) * 1e-9;
+      i = end;
+    }
+  }
+  while (!from_index) {  // video streams: every frame is read
     auto frame = (*reader)->next();
     if (!frame) {
       if (frame.error().code == ErrorCode::kEndOfStream) break;
@@ -167,7 +220,7 @@ Result<SessionSelfCalibration> self_calibrate_session(
       first_ns = group_ns = ns;
       started = true;
     }
-    if (ns - first_ns > static_cast<int64_t>(options.max_seconds * 1e9)) break;
+    if (ns - first_ns > max_ns) break;
     if (ns - group_ns > kSameTickNs) {
       DS_RETURN_IF_ERROR(flush());
       group_ns = ns;

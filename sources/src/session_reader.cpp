@@ -242,6 +242,11 @@ class StreamReader {
   void set_listed_damage(size_t n) { listed_ = n; }
   // The records kept at open() and where they are in the data file (SessionReader::records).
   virtual std::vector<RecordLocation> records() const { return {}; }
+  // Decodes records()[k] (SessionReader::decode_record); only indexed streams have records.
+  virtual Result<FramePtr> decode_record(size_t k) const {
+    return make_error(ErrorCode::kUnsupported, "{}: record {}: not an indexed stream", entry_.file,
+                      k);
+  }
   // Beyond the policy's threshold: an error, unless allowed. In a session marked complete a torn
   // tail is lost data too (a crash leaves one record at most), so it counts.
   Status check_damage_limit(const SessionReaderOptions& options) const {
@@ -458,6 +463,14 @@ class IndexedReader : public StreamReader {
     for (const Entry& e : entries_)
       out.push_back({e.frame, e.sequence, e.stamp_ns, e.offset, e.size});
     return out;
+  }
+
+  Result<FramePtr> decode_record(size_t k) const override {
+    if (k >= entries_.size())
+      return make_error(ErrorCode::kInvalidArgument, "{}: record {} of {} does not exist",
+                        entry_.file, k, entries_.size());
+    std::vector<uchar> buffer;
+    return decode(k, buffer);
   }
 
   size_t frame_count() const { return entries_.size(); }
@@ -1162,6 +1175,12 @@ std::vector<RecordLocation> SessionReader::records(const SensorId& id) const {
   for (const auto& r : impl_->streams)
     if (r->entry().id == id) return r->records();
   return {};
+}
+
+Result<FramePtr> SessionReader::decode_record(const SensorId& id, size_t k) const {
+  for (const auto& r : impl_->streams)
+    if (r->entry().id == id) return r->decode_record(k);
+  return make_error(ErrorCode::kNotFound, "{}: stream '{}' is not read", impl_->dir.string(), id);
 }
 
 std::vector<StreamDamage> SessionReader::damage() const {

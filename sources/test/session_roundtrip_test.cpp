@@ -271,6 +271,42 @@ TEST(SessionRoundTrip, GreyImagesAndAudioStartStamp) {
   EXPECT_EQ(rb.by_stream.at("mic")[1]->stamp.ns(), t0 + kFramePeriodNs);
 }
 
+// decode_record (used by the self-calibration to decode only the frames it searches): the frame
+// next() returns for that record, without moving the replay; errors for what has no index.
+TEST(SessionRoundTrip, DecodeRecordGivesTheFrameNextGives) {
+  TempDir tmp;
+  const auto dir = tmp.path() / "s";
+  write_session(dir, 6);
+  auto reader = SessionReader::open(dir);
+  ASSERT_TRUE(reader) << reader.error().message;
+  const auto records = (*reader)->records("cam");
+  ASSERT_EQ(records.size(), 6u);
+  auto third = (*reader)->decode_record("cam", 3);
+  ASSERT_TRUE(third) << third.error().message;
+  auto depth = (*reader)->decode_record("depth", 2);
+  ASSERT_TRUE(depth) << depth.error().message;
+  const ReadBack rb = read_all(**reader);  // the replay starts at the beginning all the same
+  ASSERT_EQ(rb.by_stream.at("cam").size(), 6u);
+  const FramePtr& expected = rb.by_stream.at("cam")[3];
+  EXPECT_EQ((*third)->stamp, expected->stamp);
+  EXPECT_EQ((*third)->sequence, expected->sequence);
+  EXPECT_EQ((*third)->stamp.ns(), records[3].stamp_ns);
+  EXPECT_EQ(
+      cv::norm((*third)->as<ColorImage>()->image, expected->as<ColorImage>()->image, cv::NORM_INF),
+      0);
+  EXPECT_EQ(cv::norm((*depth)->as<DepthImage>()->depth_mm,
+                     rb.by_stream.at("depth")[2]->as<DepthImage>()->depth_mm, cv::NORM_INF),
+            0);
+  auto beyond = (*reader)->decode_record("cam", 6);
+  ASSERT_FALSE(beyond);
+  EXPECT_EQ(beyond.error().code, ErrorCode::kInvalidArgument);
+  auto unknown = (*reader)->decode_record("nope", 0);
+  ASSERT_FALSE(unknown);
+  EXPECT_EQ(unknown.error().code, ErrorCode::kNotFound);
+  auto audio = (*reader)->decode_record("mic", 0);
+  ASSERT_FALSE(audio) << "audio has no records";
+}
+
 TEST(SessionRoundTrip, MjpegFramesDecodeExactlyAsImdecode) {
   // The reader decodes mjpeg with libjpeg-turbo straight into BGR / grey; the pixels must be those
   // of cv::imdecode(IMREAD_UNCHANGED) on the same bytes (channel order, chroma upsampling).

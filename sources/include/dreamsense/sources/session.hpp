@@ -198,6 +198,10 @@ class SessionReader : public Source {
   // not decode are still in it: next() finds those); empty for audio and video streams and for a
   // stream that is not read.
   std::vector<RecordLocation> records(const SensorId& id) const;
+  // Reads and decodes records(id)[k] as next() would return it, without moving the replay: for a
+  // caller that needs a few frames of a long stream (the self-calibration uses every 6th tick).
+  // Corrupt data is a kCorruptData error (not counted in damage()).
+  Result<FramePtr> decode_record(const SensorId& id, size_t k) const;
 
  private:
   SessionReader();
