@@ -613,6 +613,12 @@ TEST_F(Cli, HelpAndUsageErrors) {
   EXPECT_EQ(run("analyze --help").exit_code, 0);
   EXPECT_NE(run("analyze").exit_code, 0) << "missing SESSION";
   EXPECT_NE(run("no-such-verb").exit_code, 0);
+  // An unknown actions method is named, with the known ones, before any data is read.
+  const RunResult bad =
+      run("eval actions --dataset utkinect " + root().string() + " --methods pyramid,bogus");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("'bogus'"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("pyramid_lda"), std::string::npos) << bad.err;
 }
 
 }  // namespace

@@ -40,11 +40,20 @@ ActionMethod pyramid_method() {
   return m;
 }
 
+ActionMethod pyramid_lda_method() {
+  ActionMethod m = pyramid_method();
+  m.name = "pyramid_lda";
+  m.options.features.distances = true;
+  m.options.classifier.kind = ClassifierKind::kShrinkageLda;
+  return m;
+}
+
 Result<ActionMethod> method_by_name(const std::string& name) {
   if (name == "baseline") return baseline_method();
   if (name == "pyramid") return pyramid_method();
-  return make_error(ErrorCode::kInvalidArgument, "unknown actions method '{}' (baseline, pyramid)",
-                    name);
+  if (name == "pyramid_lda") return pyramid_lda_method();
+  return make_error(ErrorCode::kInvalidArgument,
+                    "unknown actions method '{}' (baseline, pyramid, pyramid_lda)", name);
 }
 
 Status ActionEvalOptions::check() const {
@@ -72,6 +81,8 @@ struct MethodResult {
   Stopwatch timing;
   std::unique_ptr<ConfusionMatrix> confusion;
   std::vector<double> loso;  // leave-one-subject-out accuracies (utkinect)
+  // utkinect: the same random halves with train and test swapped (with 5 subjects: 3 train)
+  std::vector<double> swapped;
 };
 
 double mean(const std::vector<double>& v) {
@@ -117,6 +128,7 @@ nlohmann::json method_json(const MethodResult& r) {
     j["loso_accuracy"] = mean(r.loso);
     j["loso_per_subject"] = r.loso;
   }
+  if (!r.swapped.empty()) j["swapped_halves_accuracy"] = mean(r.swapped);
   if (auto ms = r.timing.median_ms()) j["ms_per_window_median"] = *ms;
   j["per_class"] = r.confusion->per_class_json();
   return j;
@@ -196,7 +208,8 @@ Result<EvalReport> run_action_eval(const ActionEvalOptions& o,
     report.protocol = fmt::format(
         "{} random half/half subject splits (seed {}; {} subjects: the first {} of each draw "
         "train, the other {} test), mean accuracy; one time-normalised window per segment, "
-        "forced choice; plus leave-one-subject-out (loso_accuracy)",
+        "forced choice; plus leave-one-subject-out (loso_accuracy) and the same halves with "
+        "train and test swapped (swapped_halves_accuracy)",
         splits.size(), o.seed, subjects.size(), subjects.size() / 2,
         subjects.size() - subjects.size() / 2);
     loso.clear();  // reported separately below
@@ -223,8 +236,8 @@ Result<EvalReport> run_action_eval(const ActionEvalOptions& o,
     }
     loso.clear();
   }
-  std::vector<Split> utk_loso;
-  if (o.dataset == "utkinect")
+  std::vector<Split> utk_loso, swapped;
+  if (o.dataset == "utkinect") {
     for (const auto& s : subjects) {
       Split sp;
       sp.test = {s};
@@ -232,9 +245,11 @@ Result<EvalReport> run_action_eval(const ActionEvalOptions& o,
         if (t != s) sp.train.insert(t);
       utk_loso.push_back(sp);
     }
+    for (const auto& sp : splits) swapped.push_back({sp.test, sp.train});
+  }
 
   std::vector<MethodResult> results(o.methods.size());
-  const size_t steps = o.methods.size() * (splits.size() + utk_loso.size());
+  const size_t steps = o.methods.size() * (splits.size() + utk_loso.size() + swapped.size());
   size_t done = 0;
   for (size_t k = 0; k < o.methods.size(); ++k) {
     MethodResult& r = results[k];
@@ -245,17 +260,19 @@ Result<EvalReport> run_action_eval(const ActionEvalOptions& o,
       r.accuracies.push_back(*acc);
       if (progress) progress(static_cast<double>(++done) / steps);
     }
-    for (const auto& sp : utk_loso) {
-      auto acc = run_split(d, sp, o.methods[k], r, false);
-      if (!acc) return tl::unexpected(acc.error());
-      r.loso.push_back(*acc);
-      if (progress) progress(static_cast<double>(++done) / steps);
-    }
+    for (auto [protocol, out] : {std::pair{&utk_loso, &r.loso}, std::pair{&swapped, &r.swapped}})
+      for (const auto& sp : *protocol) {
+        auto acc = run_split(d, sp, o.methods[k], r, false);
+        if (!acc) return tl::unexpected(acc.error());
+        out->push_back(*acc);
+        if (progress) progress(static_cast<double>(++done) / steps);
+      }
   }
   const MethodResult& main = results.back();
   report.metrics["accuracy"] = mean(main.accuracies);
   report.metrics["accuracy_std"] = stddev(main.accuracies);
   if (!main.loso.empty()) report.metrics["loso_accuracy"] = mean(main.loso);
+  if (!main.swapped.empty()) report.metrics["swapped_halves_accuracy"] = mean(main.swapped);
   report.metrics["method"] = o.methods.back().name;
   report.metrics["confusion"] = main.confusion->confusion_json();
   nlohmann::json methods = nlohmann::json::object();

@@ -13,14 +13,23 @@ namespace dreamsense::actions {
 namespace fs = std::filesystem;
 
 std::string_view to_string(ClassifierKind k) {
-  return k == ClassifierKind::kLinearSvm ? "linear_svm" : "rbf_svm";
+  switch (k) {
+    case ClassifierKind::kLinearSvm:
+      return "linear_svm";
+    case ClassifierKind::kRbfSvm:
+      return "rbf_svm";
+    case ClassifierKind::kShrinkageLda:
+      return "shrinkage_lda";
+  }
+  return "?";
 }
 
 Result<ClassifierKind> classifier_kind_from_string(std::string_view s) {
   if (s == "linear_svm") return ClassifierKind::kLinearSvm;
   if (s == "rbf_svm") return ClassifierKind::kRbfSvm;
-  return make_error(ErrorCode::kInvalidArgument, "unknown classifier '{}' (linear_svm, rbf_svm)",
-                    s);
+  if (s == "shrinkage_lda") return ClassifierKind::kShrinkageLda;
+  return make_error(ErrorCode::kInvalidArgument,
+                    "unknown classifier '{}' (linear_svm, rbf_svm, shrinkage_lda)", s);
 }
 
 Status ClassifierOptions::check() const {
@@ -55,14 +64,30 @@ Status ActionModelOptions::check() const {
 namespace {
 
 struct Fitted {
-  detail::LinearSvm linear;
+  detail::LinearSvm linear;  // linear SVM or LDA discriminants
   detail::RbfSvm rbf;
 };
+
+// Weights and a bias per class, argmax wins (the linear SVM and LDA).
+bool is_linear(ClassifierKind k) { return k != ClassifierKind::kRbfSvm; }
+
+// LDA's discriminants differ from the log posteriors by a constant per window; the log
+// posterior (<= 0) is what a rejection threshold can be compared with across windows.
+void to_log_posterior(double* d, int n) {
+  double mx = -1e300;
+  for (int k = 0; k < n; ++k) mx = std::max(mx, d[k]);
+  double sum = 0;
+  for (int k = 0; k < n; ++k) sum += std::exp(d[k] - mx);
+  const double log_sum = mx + std::log(sum);
+  for (int k = 0; k < n; ++k) d[k] -= log_sum;
+}
 
 Fitted fit(const cv::Mat& x, const std::vector<int>& y, int classes, const ClassifierOptions& o) {
   Fitted f;
   if (o.kind == ClassifierKind::kLinearSvm) {
     f.linear = detail::train_linear_svm(x, y, classes, o.c, o.l1);
+  } else if (o.kind == ClassifierKind::kShrinkageLda) {
+    f.linear = detail::train_shrinkage_lda(x, y, classes);
   } else {
     const double gamma = o.gamma > 0 ? o.gamma : 1.0 / std::max(x.cols, 1);
     f.rbf = detail::train_rbf_svm(x, y, classes, o.c, gamma);
@@ -73,13 +98,14 @@ Fitted fit(const cv::Mat& x, const std::vector<int>& y, int classes, const Class
 // Decision values and the predicted class (linear: argmax; RBF: most votes, ties by decision).
 int decide(const Fitted& f, ClassifierKind kind, int classes, const float* x, double* out) {
   std::vector<int> votes(static_cast<size_t>(classes), 0);
-  if (kind == ClassifierKind::kLinearSvm)
+  if (is_linear(kind))
     detail::linear_decision(f.linear, x, out);
   else
     detail::rbf_decision(f.rbf, x, out, votes.data());
+  if (kind == ClassifierKind::kShrinkageLda) to_log_posterior(out, classes);
   int best = 0;
   for (int k = 1; k < classes; ++k) {
-    const bool better = kind == ClassifierKind::kLinearSvm
+    const bool better = is_linear(kind)
                             ? out[k] > out[best]
                             : (votes[static_cast<size_t>(k)] > votes[static_cast<size_t>(best)] ||
                                (votes[static_cast<size_t>(k)] == votes[static_cast<size_t>(best)] &&
@@ -335,6 +361,7 @@ Result<ActionModel> ActionModel::train(const std::vector<WindowRef>& examples,
     }
     // A window that no one-vs-rest classifier claims (decision < 0) is never accepted; held-out
     // margins of easy training data can be far above 0, so the quantile only lowers the bar.
+    // (LDA's log posteriors are <= 0: there the quantile alone is the bar.)
     m.reject_threshold_ = std::min(quantile(winners, co.reject_quantile), 0.0);
     if (!distances.empty())
       m.novelty_threshold_ = co.novelty_margin * quantile(distances, 1.0 - co.reject_quantile);
@@ -364,9 +391,10 @@ ActionScores ActionModel::classify(std::span<const SkeletonFrame> window, bool r
 
 void ActionModel::decision(const float* xs, double* out, int* votes) const {
   const int classes = static_cast<int>(labels_.size());
-  if (options_.classifier.kind == ClassifierKind::kLinearSvm) {
+  if (is_linear(options_.classifier.kind)) {
     detail::LinearSvm l{weights_, bias_};
     detail::linear_decision(l, xs, out);
+    if (options_.classifier.kind == ClassifierKind::kShrinkageLda) to_log_posterior(out, classes);
     for (int k = 0; k < classes; ++k) votes[k] = 0;
   } else {
     detail::RbfSvm r{gamma_, support_vectors_, coef_, rho_, counts_};
@@ -391,7 +419,7 @@ ActionScores ActionModel::classify_features(std::span<const float> f, bool rejec
   std::vector<int> votes(static_cast<size_t>(classes));
   decision(xs.data(), s.decision.data(), votes.data());
   int best = 0;
-  const bool linear = options_.classifier.kind == ClassifierKind::kLinearSvm;
+  const bool linear = is_linear(options_.classifier.kind);
   for (int k = 1; k < classes; ++k) {
     const size_t a = static_cast<size_t>(k), b = static_cast<size_t>(best);
     if (linear ? s.decision[a] > s.decision[b]
@@ -437,7 +465,8 @@ Status ActionModel::save(const fs::path& path) const {
       << "rjp_frames" << o.features.rjp_frames << "pyramid_levels" << o.features.pyramid_levels
       << "velocities" << static_cast<int>(o.features.velocities) << "fourier" << o.features.fourier
       << "rjp_average" << static_cast<int>(o.features.rjp_average) << "pose_relative"
-      << static_cast<int>(o.features.pose_relative) << "}";
+      << static_cast<int>(o.features.pose_relative) << "distances"
+      << static_cast<int>(o.features.distances) << "}";
     f << "classifier"
       << "{"
       << "kind" << std::string(to_string(o.classifier.kind)) << "c" << o.classifier.c << "gamma"
@@ -457,7 +486,7 @@ Status ActionModel::save(const fs::path& path) const {
     f << "centroids"
       << "{"
       << "means" << centroids_ << "radii" << radii_ << "}";
-    if (o.classifier.kind == ClassifierKind::kLinearSvm) {
+    if (is_linear(o.classifier.kind)) {
       f << "linear"
         << "{"
         << "weights" << weights_ << "bias" << bias_ << "}";
@@ -516,6 +545,8 @@ Result<ActionModel> ActionModel::load(const fs::path& path) {
     o.features.fourier = static_cast<int>(need(fe, "fourier", "features."));
     o.features.rjp_average = static_cast<int>(need(fe, "rjp_average", "features.")) != 0;
     o.features.pose_relative = static_cast<int>(need(fe, "pose_relative", "features.")) != 0;
+    // Models written before the distances existed have none.
+    if (!fe["distances"].empty()) o.features.distances = static_cast<int>(fe["distances"]) != 0;
     const cv::FileNode cl = need(f.root(), "classifier", "");
     auto kind =
         classifier_kind_from_string(static_cast<std::string>(need(cl, "kind", "classifier.")));
@@ -558,7 +589,7 @@ Result<ActionModel> ActionModel::load(const fs::path& path) {
     need(ce, "radii", "centroids.") >> m.radii_;
     if (!shape_ok(m.centroids_, classes, dim, CV_32F) || !shape_ok(m.radii_, classes, 1, CV_32F))
       return tl::unexpected(corrupt(path, "centroids: inconsistent sizes"));
-    if (o.classifier.kind == ClassifierKind::kLinearSvm) {
+    if (is_linear(o.classifier.kind)) {
       const cv::FileNode li = need(f.root(), "linear", "");
       need(li, "weights", "linear.") >> m.weights_;
       need(li, "bias", "linear.") >> m.bias_;

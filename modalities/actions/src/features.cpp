@@ -47,7 +47,8 @@ int feature_dimension(const FeatureOptions& o) {
   const int j = static_cast<int>(joint_indices(o.joints).size());
   if (o.method == FeatureMethod::kRelativePositions) return o.rjp_frames * (j * (j - 1) / 2) * 3;
   const int cells = (1 << o.pyramid_levels) - 1;
-  return cells * 3 * j * (o.velocities ? 2 : 1) + o.fourier * 3 * j;
+  const int pairs = o.distances ? j * (j - 1) / 2 : 0;
+  return cells * 3 * j * (o.velocities ? 2 : 1) + o.fourier * 3 * j + cells * 2 * pairs;
 }
 
 std::vector<float> extract_features(const NormalizedWindow& w, const FeatureOptions& o) {
@@ -138,6 +139,37 @@ std::vector<float> extract_features(const NormalizedWindow& w, const FeatureOpti
           im -= series[t] * sn[t];
         }
         out.push_back(static_cast<float>(std::hypot(re, im) / s));
+      }
+    }
+  }
+  if (o.distances) {
+    // d[p][t]: the distance of joint pair p at instant t (the resampled window, not the
+    // pose-relative series: a distance needs no origin).
+    const int np = nj * (nj - 1) / 2;
+    std::vector<float> d(static_cast<size_t>(np * s));
+    for (int t = 0; t < s; ++t) {
+      const cv::Vec3f* frame = &r[static_cast<size_t>(t) * kJointCount];
+      int p = 0;
+      for (int a = 0; a < nj; ++a)
+        for (int b = a + 1; b < nj; ++b, ++p)
+          d[static_cast<size_t>(p * s + t)] = static_cast<float>(cv::norm(
+              frame[joints[static_cast<size_t>(a)]] - frame[joints[static_cast<size_t>(b)]]));
+    }
+    for (int level = 0; level < o.pyramid_levels; ++level) {
+      const int cells = 1 << level;
+      for (int cell = 0; cell < cells; ++cell) {
+        const int b = cell * s / cells, e = (cell + 1) * s / cells, n = std::max(e - b, 1);
+        for (int p = 0; p < np; ++p) {
+          double sum = 0, sq = 0;
+          for (int t = b; t < e; ++t) {
+            const double v = d[static_cast<size_t>(p * s + t)];
+            sum += v;
+            sq += v * v;
+          }
+          const double m = sum / n;
+          out.push_back(static_cast<float>(m));
+          out.push_back(static_cast<float>(std::sqrt(std::max(sq / n - m * m, 0.0))));
+        }
       }
     }
   }

@@ -54,6 +54,7 @@ TEST_P(ActionModelTest, LearnsSyntheticClassesAndRoundTripsThroughItsFile) {
   o.features.method = GetParam().first;
   o.classifier.kind = GetParam().second;
   o.classifier.c = o.classifier.kind == ClassifierKind::kRbfSvm ? 10 : 1;
+  o.features.distances = o.classifier.kind == ClassifierKind::kShrinkageLda;
   if (o.classifier.kind == ClassifierKind::kRbfSvm) {  // non-default options must survive the file
     o.body.normalize_bones = false;
     o.features.joints = JointSet::kAll;
@@ -85,6 +86,7 @@ TEST_P(ActionModelTest, LearnsSyntheticClassesAndRoundTripsThroughItsFile) {
   EXPECT_EQ(b.features.method, o.features.method);
   EXPECT_EQ(b.features.rjp_average, o.features.rjp_average);
   EXPECT_EQ(b.features.pose_relative, o.features.pose_relative);
+  EXPECT_EQ(b.features.distances, o.features.distances);
   EXPECT_EQ(b.classifier.standardize_each, o.classifier.standardize_each);
   EXPECT_EQ(b.classifier.kind, o.classifier.kind);
   EXPECT_DOUBLE_EQ(back->reject_threshold(), m->reject_threshold());
@@ -103,7 +105,35 @@ INSTANTIATE_TEST_SUITE_P(
     Methods, ActionModelTest,
     ::testing::Values(std::make_pair(FeatureMethod::kPyramid, ClassifierKind::kLinearSvm),
                       std::make_pair(FeatureMethod::kRelativePositions, ClassifierKind::kRbfSvm),
-                      std::make_pair(FeatureMethod::kPyramid, ClassifierKind::kRbfSvm)));
+                      std::make_pair(FeatureMethod::kPyramid, ClassifierKind::kRbfSvm),
+                      std::make_pair(FeatureMethod::kPyramid, ClassifierKind::kShrinkageLda)));
+
+TEST(ActionModel, LdaDecisionsAreLogPosteriorsAndItRejectsTheUnknown) {
+  ActionModelOptions o;
+  o.features.distances = true;
+  o.classifier.kind = ClassifierKind::kShrinkageLda;
+  auto m = ActionModel::train(examples(6, 1), o);
+  ASSERT_TRUE(m) << m.error().message;
+  const auto tests = examples(4, 2);
+  for (const auto& e : tests) {
+    const ActionScores s = m->classify(e.frames, false);
+    double sum = 0;
+    for (double d : s.decision) {
+      EXPECT_LE(d, 1e-9);
+      sum += std::exp(d);
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-6);
+  }
+  EXPECT_LE(m->reject_threshold(), 0.0);
+  int rejected = 0;
+  for (int s = 0; s < 5; ++s) {
+    BodyParams p;
+    p.seed = 77 + static_cast<uint64_t>(s);
+    p.speed = 2.0;
+    rejected += m->classify(test::sequence(Motion::kCircleRight, 0.2 * s, 1.2, p)).rejected;
+  }
+  EXPECT_GE(rejected, 3);
+}
 
 TEST(ActionModel, UnknownMotionIsRejectedAndEmptyWindowIsNoData) {
   auto m = ActionModel::train(examples(6, 1), ActionModelOptions{});

@@ -65,6 +65,38 @@ TEST(Features, PyramidSeesTemporalOrderButNotTheFrameRate) {
   EXPECT_GT(distance(fa, fr), 0.5);
 }
 
+TEST(Features, DistancesAreInvariantToTheFacingAndFollowTheHands) {
+  FeatureOptions o;
+  o.distances = true;
+  const int without = feature_dimension(FeatureOptions{});
+  EXPECT_EQ(feature_dimension(o), without + 3 * 2 * 66);  // 3 cells x (mean, sd) x 66 pairs
+  // The pairwise distances (the tail of the descriptor) do not depend on where the body faces
+  // when facing normalisation is off; the positions do.
+  BodyParams front, side;
+  side.yaw_deg = 70;
+  BodyFrameOptions no_facing;
+  no_facing.normalize_facing = false;
+  const auto a = extract_features(
+      normalize_window(test::sequence(Motion::kWaveRight, 0, 1.0, front), no_facing), o);
+  const auto b = extract_features(
+      normalize_window(test::sequence(Motion::kWaveRight, 0, 1.0, side), no_facing), o);
+  ASSERT_EQ(static_cast<int>(a.size()), feature_dimension(o));
+  const std::vector<float> da(a.begin() + without, a.end()), db(b.begin() + without, b.end());
+  const std::vector<float> pa(a.begin(), a.begin() + without), pb(b.begin(), b.begin() + without);
+  EXPECT_LT(distance(da, db), 1e-3);
+  EXPECT_GT(distance(pa, pb), 0.5);
+  // A still body: every distance's spread is 0; a wave moves the hand: some spread is not.
+  const auto still = extract_features(
+      normalize_window(test::sequence(Motion::kStill, 0, 1.0, front), no_facing), o);
+  double spread_still = 0, spread_wave = 0;
+  for (int k = without + 1; k < static_cast<int>(still.size()); k += 2) {
+    spread_still = std::max(spread_still, static_cast<double>(still[static_cast<size_t>(k)]));
+    spread_wave = std::max(spread_wave, static_cast<double>(a[static_cast<size_t>(k)]));
+  }
+  EXPECT_LT(spread_still, 1e-4);
+  EXPECT_GT(spread_wave, 0.05);
+}
+
 TEST(Features, UnusableWindowGivesNoFeatures) {
   EXPECT_TRUE(extract_features(NormalizedWindow{}, FeatureOptions{}).empty());
 }

@@ -72,7 +72,7 @@ struct DreamEvalOptions {
   // run); training and test seeds must not overlap.
   std::filesystem::path model;
   std::vector<uint64_t> train_seeds;
-  std::vector<ActionMethod> methods = {baseline_method(), pyramid_method()};
+  std::vector<ActionMethod> methods = {baseline_method(), pyramid_method(), pyramid_lda_method()};
   double train_hop_s = 0.2;
   Status check() const;
 };

@@ -20,13 +20,15 @@ namespace dreamsense::actions {
 
 inline constexpr const char* kNoneLabel = "none";
 
-enum class ClassifierKind { kLinearSvm, kRbfSvm };
-std::string_view to_string(ClassifierKind k);  // "linear_svm", "rbf_svm"
+// kShrinkageLda: linear discriminant analysis with Ledoit-Wolf shrinkage (README.md "Method");
+// its decision values are log posteriors (<= 0).
+enum class ClassifierKind { kLinearSvm, kRbfSvm, kShrinkageLda };
+std::string_view to_string(ClassifierKind k);  // "linear_svm", "rbf_svm", "shrinkage_lda"
 Result<ClassifierKind> classifier_kind_from_string(std::string_view s);
 
 struct ClassifierOptions {
   ClassifierKind kind = ClassifierKind::kLinearSvm;
-  double c = 1.0;      // SVM cost
+  double c = 1.0;      // SVM cost (not used by the LDA)
   double gamma = 0.0;  // RBF kernel width on standardised features; 0 = 1 / dimension
   // Scale each feature to unit variance (true), or all features by one common factor (false:
   // keeps the descriptor's geometry, so dimensions that barely vary stay small).

@@ -7,7 +7,9 @@
 //   (linear time normalisation: rate invariance within the window); per joint coordinate, the
 //   means of the position and of its velocity over the cells of a temporal pyramid (1, 2, 4, ...
 //   cells), plus the magnitudes of the lowest Fourier coefficients of the whole window (Wang et
-//   al. 2012's Fourier temporal pyramid, level 0).
+//   al. 2012's Fourier temporal pyramid, level 0); optionally (`distances`) the Euclidean
+//   distances between every pair of the descriptor's joints, their mean and standard deviation
+//   over the same pyramid cells (rotation-invariant: a wrong facing estimate leaves them alone).
 
 #include "dreamsense/actions/normalization.hpp"
 #include "dreamsense/core/status.hpp"
@@ -44,6 +46,9 @@ struct FeatureOptions {
   // own path relative to the window origin (the body's displacement) kept separately, so that
   // walking a metre does not drown the arms' posture. Off: all joints relative to the origin.
   bool pose_relative = true;
+  // pyramid: also the pairwise joint distances (mean and standard deviation per pyramid cell):
+  // hand to hand, hand to head, ... Off in the linear-SVM method, on in the LDA one (README.md).
+  bool distances = false;
   Status check() const;
 };
 
