@@ -60,7 +60,8 @@ nlohmann::json SessionSelfCalibration::to_json() const {
   j["ticks_multi_view"] = face.frames_multi_view;
   j["ticks_triangulated"] = face.frames_triangulated;
   j["views_dropped"] = face.views_dropped;
-  j["camera_pair_scale_spread"] = face.median_pair_scale_spread;
+  j["camera_pair_scale_spread"] = face.median_pair_scale_spread;         // per tick, median
+  j["camera_pair_median_scale_spread"] = face.pair_median_scale_spread;  // what is checked
   j["ticks_used"] = face.frames_used;
   j["points"] = face.model.points_m.size();
   j["residual_rms_mm"] = 1000 * face.median_rms_m;

@@ -20,6 +20,9 @@ void register_analyzers(AnalyzerRegistry& registry) {
     DS_RETURN_IF_ERROR(options.get("use_profile", o.detector.use_profile));
     DS_RETURN_IF_ERROR(options.get("detection_width", o.detector.detection_width));
     DS_RETURN_IF_ERROR(options.get("full_search_interval", o.tracker.full_search_interval));
+    DS_RETURN_IF_ERROR(options.get("roi_margin", o.tracker.roi_margin));
+    DS_RETURN_IF_ERROR(options.get("roi_min_scale", o.tracker.roi_min_scale));
+    DS_RETURN_IF_ERROR(options.get("roi_max_scale", o.tracker.roi_max_scale));
     DS_RETURN_IF_ERROR(options.get("parallel", o.parallel));
     PlannedAnalyzers p;
     // The calibrations give the faces' 3-D positions and the yaw-based camera selection.

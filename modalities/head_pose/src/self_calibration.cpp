@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 
 namespace dreamsense::head_pose {
@@ -125,6 +126,8 @@ Status SelfCalibrationOptions::check() const {
   if (!(max_median_rms_m > 0)) bad += " max_median_rms_m must be > 0;";
   if (!(min_interocular_m > 0 && max_interocular_m > min_interocular_m))
     bad += " need 0 < min_interocular_m < max_interocular_m;";
+  if (!(max_pair_scale_spread > 0)) bad += " max_pair_scale_spread must be > 0;";
+  if (min_pair_ticks < 1) bad += " min_pair_ticks must be >= 1;";
   if (!bad.empty())
     return make_error(ErrorCode::kInvalidArgument, "SelfCalibrationOptions:{}", bad);
   return ok_status();
@@ -218,6 +221,7 @@ std::optional<TriangulatedFace> triangulate_face(const MultiViewLandmarks& frame
   // pairs' eye distances are compared (relative spread, (max - min) / median) before any camera
   // is dropped.
   double pair_scale_spread = 0;
+  std::vector<TriangulatedFace::PairInterocular> pair_iod;
   if (kept.size() >= 3) {
     std::vector<size_t> eye_k[2];
     for (size_t k = 0; k < n_points; ++k) {
@@ -236,7 +240,10 @@ std::optional<TriangulatedFace> triangulate_face(const MultiViewLandmarks& frame
             ok = ok && finite(p.points[k]);
             c[e] += p.points[k] * (1.0 / 6);
           }
-        if (ok) iod.push_back(cv::norm(c[1] - c[0]));
+        if (!ok) continue;
+        iod.push_back(cv::norm(c[1] - c[0]));
+        const CameraModel *ca = views[kept[a]].camera, *cb = views[kept[b]].camera;
+        pair_iod.push_back({std::min(ca, cb), std::max(ca, cb), iod.back()});
       }
     if (iod.size() >= 2) {
       const auto [lo, hi] = std::minmax_element(iod.begin(), iod.end());
@@ -268,6 +275,7 @@ std::optional<TriangulatedFace> triangulate_face(const MultiViewLandmarks& frame
   TriangulatedFace out;
   out.cameras_dropped = static_cast<int>(views.size() - kept.size());
   out.pair_scale_spread = pair_scale_spread;
+  out.pair_interocular = std::move(pair_iod);
   out.points_world = s.points;
   out.cameras = static_cast<int>(kept.size());
   double ss = 0;
@@ -312,6 +320,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   const size_t n_points = index.size();
   int multi_view = 0, views_dropped = 0;
   std::vector<double> spreads;
+  std::map<std::pair<const CameraModel*, const CameraModel*>, std::vector<double>> pair_iods;
   std::vector<TriangulatedFace> shapes;
   for (const MultiViewLandmarks& f : frames) {
     int with_landmarks = 0;
@@ -322,6 +331,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
     if (t && t->points >= options.min_points_per_frame) {
       views_dropped += t->cameras_dropped;
       if (t->pair_scale_spread > 0) spreads.push_back(t->pair_scale_spread);
+      for (const auto& p : t->pair_interocular) pair_iods[{p.a, p.b}].push_back(p.interocular_m);
       shapes.push_back(std::move(*t));
     }
   }
@@ -354,12 +364,20 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   }
 
   out.median_pair_scale_spread = spreads.empty() ? 0.0 : median(spreads);
-  if (out.median_pair_scale_spread > options.max_pair_scale_spread) {
+  std::vector<double> pair_medians;
+  for (auto& [pair, iods] : pair_iods)
+    if (static_cast<int>(iods.size()) >= options.min_pair_ticks)
+      pair_medians.push_back(median(iods));
+  if (pair_medians.size() >= 2) {
+    const auto [lo, hi] = std::minmax_element(pair_medians.begin(), pair_medians.end());
+    out.pair_median_scale_spread = (*hi - *lo) / median(pair_medians);
+  }
+  if (out.pair_median_scale_spread > options.max_pair_scale_spread) {
     out.status = SelfCalibrationStatus::kInconsistent;
     out.reason = fmt::format(
-        "the camera pairs disagree on the size of the face by {:.0f}% (median over {} ticks, "
-        "limit {:.0f}%): camera calibrations that disagree",
-        100 * out.median_pair_scale_spread, spreads.size(), 100 * options.max_pair_scale_spread);
+        "the camera pairs disagree on the size of the face by {:.0f}% (their median eye "
+        "distances over {} ticks, limit {:.0f}%): camera calibrations that disagree",
+        100 * out.pair_median_scale_spread, spreads.size(), 100 * options.max_pair_scale_spread);
     return out;
   }
   // Generalised Procrustes: reference = the tick with the most points.

@@ -61,6 +61,13 @@ struct TriangulatedFace {
   // With >= 3 cameras kept: relative spread of the eye distance triangulated by each camera pair
   // ((max - min) / median); 0 otherwise.
   double pair_scale_spread = 0;
+  // With >= 3 cameras: the eye distance (metres) each camera pair triangulates on its own.
+  struct PairInterocular {
+    const CameraModel* a = nullptr;  // a < b (pointer order)
+    const CameraModel* b = nullptr;
+    double interocular_m = 0;
+  };
+  std::vector<PairInterocular> pair_interocular;
   int points = 0;     // finite points
   double rms_px = 0;  // RMS reprojection error over kept cameras and points
 };
@@ -120,10 +127,15 @@ struct SelfCalibrationOptions {
   // inconsistent (a calibration in other units, a wrong baseline).
   double min_interocular_m = 0.040, max_interocular_m = 0.080;
   // Ticks with three or more cameras: when the camera pairs' eye distances disagree by more than
-  // this (median relative spread), a calibration is off along a baseline (which two-view
-  // triangulation turns into a wrong scale with no reprojection error): inconsistent. With only
-  // two cameras such an error cannot be seen.
+  // this, a calibration is off along a baseline (which two-view triangulation turns into a wrong
+  // scale with no reprojection error): inconsistent. With only two cameras such an error cannot
+  // be seen. The disagreement is that of each pair's median eye distance over the ticks
+  // ((max - min) / median of the pairs' medians): a calibration error is the same at every tick,
+  // landmark noise is not (the per-tick range of three noisy pairs reached 9 % on a sound demo
+  // session with a child wearing glasses). Pairs with fewer than min_pair_ticks ticks do not
+  // count.
   double max_pair_scale_spread = 0.08;
+  int min_pair_ticks = 5;
   Status check() const;
 };
 
@@ -135,9 +147,11 @@ struct SelfCalibration {
   int frames_multi_view = 0;            // ticks with landmarks in two or more cameras
   int frames_triangulated = 0;          // of them, triangulated consistently
   int views_dropped = 0;                // camera views dropped in triangulated ticks
-  double median_pair_scale_spread = 0;  // TriangulatedFace::pair_scale_spread, median
-  int frames_used = 0;                  // after outlier rejection
-  double median_rms_m = 0;              // median per-tick residual after alignment
+  double median_pair_scale_spread = 0;  // TriangulatedFace::pair_scale_spread, median over ticks
+  // Relative spread of the camera pairs' median eye distances (what max_pair_scale_spread bounds)
+  double pair_median_scale_spread = 0;
+  int frames_used = 0;      // after outlier rejection
+  double median_rms_m = 0;  // median per-tick residual after alignment
   double median_reprojection_px = 0;
   double interocular_m = 0;  // between the eye-opening centroids
   // Upright: "eye_line" or "mean_world_roll"; the roll added to the eye-line frame (deg; the
