@@ -527,6 +527,11 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   EXPECT_EQ(sc["status"], "converged") << sc.dump();
   EXPECT_GE(sc["ticks_used"].get<int>(), 12);
   EXPECT_LT(sc["residual_rms_mm"].get<double>(), 3.0);
+  // The demo gives the robot's head (robot_head_m): the level comes from the ticks facing it when
+  // enough do in these 4 s, else from the world-level pitch; either way the summary says which.
+  const std::string level = sc.value("level", "");
+  EXPECT_TRUE(level == "target_fixations" || level == "world_pitch") << sc.dump();
+  EXPECT_TRUE(sc.contains("fixation_ticks")) << sc.dump();
   EXPECT_TRUE(fs::exists(root() / "y" / "self_calibration" / "face_model.yaml"));
   EXPECT_NE(r.err.find("self_calibration/face_model.yaml"), std::string::npos) << r.err;
   // `--subject none` keeps the generic model and does not self-calibrate.

@@ -7,8 +7,10 @@
 #include <fmt/ranges.h>
 #include <opencv2/calib3d.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -173,6 +175,18 @@ void look_at(const cv::Vec3d& eye, const cv::Vec3d& target, const cv::Vec3d& dow
   // Rows of R are the camera axes expressed in world.
   R_cam_from_world = cv::Matx33d(x[0], x[1], x[2], y[0], y[1], y[2], z[0], z[1], z[2]);
   t_cam_from_world = -(R_cam_from_world * eye);
+}
+
+std::optional<cv::Vec3d> parse_vec3(std::string text) {
+  std::replace(text.begin(), text.end(), ',', ' ');
+  std::istringstream in(text);
+  cv::Vec3d v;
+  if (!(in >> v[0] >> v[1] >> v[2])) return std::nullopt;
+  std::string rest;
+  if (in >> rest) return std::nullopt;
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(v[i])) return std::nullopt;
+  return v;
 }
 
 }  // namespace dreamsense

@@ -1,5 +1,6 @@
 #include "dreamsense/self_calibration/analysis.hpp"
 
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/self_calibration/session.hpp"
 #include "dreamsense/sources/session.hpp"
@@ -36,7 +37,17 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
     if (options.progress) options.progress(line);
   };
   progress("self-calibration: the child's face from the session...");
-  DS_ASSIGN_OR_RETURN(const SessionSelfCalibration c, self_calibrate_session(o.session_dir));
+  // The robot's head given on the command line (--robot-head, as the gaze analyser's option)
+  // wins over the session's metadata, as it does for mutual gaze.
+  SessionSelfCalibrationOptions so;
+  for (const auto& over : o.plan.overrides)
+    if (over.analyzer == "gaze" && over.key == "mutual.robot_head_m") {
+      std::string v = over.value;
+      for (char& ch : v)
+        if (ch == '[' || ch == ']') ch = ' ';
+      so.face.fixation_target_world_m = parse_vec3(v);
+    }
+  DS_ASSIGN_OR_RETURN(const SessionSelfCalibration c, self_calibrate_session(o.session_dir, so));
   const fs::path dir = o.out_dir / "self_calibration";
   DS_RETURN_IF_ERROR(write_self_calibration(c, dir));
   nlohmann::json j = c.to_json();

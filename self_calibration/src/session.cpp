@@ -62,6 +62,9 @@ nlohmann::json SessionSelfCalibration::to_json() const {
   j["views_dropped"] = face.views_dropped;
   j["camera_pair_scale_spread"] = face.median_pair_scale_spread;         // per tick, median
   j["camera_pair_median_scale_spread"] = face.pair_median_scale_spread;  // what is checked
+  j["level"] = face.level;
+  j["fixation_ticks"] = face.fixation_ticks;
+  j["fixation_correction_deg"] = face.fixation_correction_deg;
   j["ticks_used"] = face.frames_used;
   j["points"] = face.model.points_m.size();
   j["residual_rms_mm"] = 1000 * face.median_rms_m;
@@ -88,6 +91,17 @@ Result<SessionSelfCalibration> self_calibrate_session(
   const std::clock_t cpu0 = std::clock();
   auto manifest = sources::read_manifest(dir);
   if (!manifest) return tl::unexpected(manifest.error());
+  head_pose::SelfCalibrationOptions face_options = options.face;
+  if (!face_options.fixation_target_world_m && options.fixation_from_metadata) {
+    if (const auto it = manifest->metadata.find("robot_head_m"); it != manifest->metadata.end()) {
+      face_options.fixation_target_world_m = parse_vec3(it->second);
+      if (!face_options.fixation_target_world_m)
+        return make_error(ErrorCode::kCorruptData,
+                          "{}: metadata robot_head_m must be three numbers \"x y z\" in metres "
+                          "(got \"{}\")",
+                          (dir / "session.yaml").string(), it->second);
+    }
+  }
   auto calibrated = sources::read_color_calibrations(dir, *manifest);
   if (!calibrated) return tl::unexpected(calibrated.error());
   auto roles = sources::stream_roles(*manifest);
@@ -231,7 +245,7 @@ Result<SessionSelfCalibration> self_calibrate_session(
     group.push_back(f);
   }
   if (!enough()) DS_RETURN_IF_ERROR(flush());
-  out.face = head_pose::self_calibrate_face(ticks, options.face);
+  out.face = head_pose::self_calibrate_face(ticks, face_options);
   if (out.face.converged()) {
     const auto r = model_centroid(out.face.model, 36, 41),
                l = model_centroid(out.face.model, 42, 47);

@@ -1,29 +1,13 @@
 // Declared pipeline entry of the gaze analyser (perception/analyzer_registry.hpp).
 
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/gaze/gaze_analyzer.hpp"
 #include "dreamsense/perception/analyzer_registry.hpp"
 
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <cmath>
-#include <sstream>
-
 namespace dreamsense::gaze {
 namespace {
-
-// "x y z" (spaces and/or commas) -> a vector; nullopt unless exactly three finite numbers.
-std::optional<cv::Vec3d> parse_vec3(std::string text) {
-  std::replace(text.begin(), text.end(), ',', ' ');
-  std::istringstream in(text);
-  cv::Vec3d v;
-  if (!(in >> v[0] >> v[1] >> v[2])) return std::nullopt;
-  std::string rest;
-  if (in >> rest) return std::nullopt;
-  for (int i = 0; i < 3; ++i)
-    if (!std::isfinite(v[i])) return std::nullopt;
-  return v;
-}
 
 Status read_mutual_options(OptionsNode& node, MutualGazeOptions& m) {
   std::string mode = m.mode == MutualGazeMode::kCameraPlane ? "camera_plane" : "3d";

@@ -128,6 +128,11 @@ Status SelfCalibrationOptions::check() const {
     bad += " need 0 < min_interocular_m < max_interocular_m;";
   if (!(max_pair_scale_spread > 0)) bad += " max_pair_scale_spread must be > 0;";
   if (min_pair_ticks < 1) bad += " min_pair_ticks must be >= 1;";
+  if (fixation_target_world_m && !finite(*fixation_target_world_m))
+    bad += " fixation_target_world_m must be finite;";
+  if (!(fixation_max_yaw_deg > 0 && fixation_max_pitch_deg > 0))
+    bad += " fixation_max_yaw_deg and fixation_max_pitch_deg must be > 0;";
+  if (min_fixation_ticks < 1) bad += " min_fixation_ticks must be >= 1;";
   if (!bad.empty())
     return make_error(ErrorCode::kInvalidArgument, "SelfCalibrationOptions:{}", bad);
   return ok_status();
@@ -389,6 +394,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   std::vector<double> frame_rms(shapes.size(), kNaN);
   std::vector<char> used(shapes.size(), 0);
   std::vector<cv::Matx33d> mean_from_world(shapes.size(), cv::Matx33d::eye());
+  std::vector<cv::Vec3d> mean_from_world_t(shapes.size(), cv::Vec3d(0, 0, 0));
   for (int round = 0; round < options.rounds; ++round) {
     for (size_t f = 0; f < shapes.size(); ++f) {
       const auto& pts = shapes[f].points_world;
@@ -419,6 +425,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
       for (size_t j = 0; j < a2.size(); ++j) ss += std::pow(cv::norm(T.apply(a2[j]) - b2[j]), 2);
       frame_rms[f] = a2.empty() ? kNaN : std::sqrt(ss / static_cast<double>(a2.size()));
       mean_from_world[f] = T.R;
+      mean_from_world_t[f] = T.t;
       for (size_t k = 0; k < n_points; ++k)
         if (finite(pts[k])) aligned[f][k] = T.apply(pts[k]);
     }
@@ -599,6 +606,42 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
       out.upright_roll_correction_deg -= m;
     }
   }
+  out.level = options.frontal == FrontalReference::kGenericFace3d ? "generic_face"
+              : options.frontal == FrontalReference::kMeanShape2d ? "mean_shape"
+                                                                  : "world_pitch";
+  if (options.frontal == FrontalReference::kMeanWorldPitch && options.fixation_target_world_m) {
+    // Per used tick: the target's direction in the head frame (forward = -z, y down), as a yaw
+    // and a pitch offset; turning the frame by c about its x axis adds c to every pitch offset.
+    std::vector<std::pair<double, double>> offsets;  // (yaw, pitch) in degrees
+    for (size_t f = 0; f < shapes.size(); ++f) {
+      if (!used[f]) continue;
+      const cv::Matx33d world_from_mean = mean_from_world[f].t();
+      const cv::Vec3d head_world = world_from_mean * (origin - mean_from_world_t[f]);
+      const cv::Vec3d d =
+          head_from_world * (mean_from_world[f] * (*options.fixation_target_world_m - head_world));
+      if (!(cv::norm(d) > 0)) continue;
+      offsets.emplace_back(std::atan2(d[0], -d[2]) / kRadiansPerDegree,
+                           std::atan2(d[1], -d[2]) / kRadiansPerDegree);
+    }
+    double c = 0;
+    std::vector<double> facing;
+    for (int round = 0; round < 4; ++round) {
+      facing.clear();
+      for (const auto& [yaw, pitch] : offsets)
+        if (std::abs(yaw) <= options.fixation_max_yaw_deg &&
+            std::abs(pitch + c) <= options.fixation_max_pitch_deg)
+          facing.push_back(pitch + c);
+      if (static_cast<int>(facing.size()) < options.min_fixation_ticks) break;
+      c -= median(facing);
+    }
+    out.fixation_ticks = static_cast<int>(facing.size());
+    if (out.fixation_ticks >= options.min_fixation_ticks) {
+      head_from_world = rotation_from_ypr_deg(0, c, 0) * head_from_world;
+      out.fixation_correction_deg = c;
+      out.level_pitch_correction_deg += c;
+      out.level = "target_fixations";
+    }
+  }
   out.model.name = fmt::format("self_{}", n_points);
   for (size_t k = 0; k < n_points; ++k) {
     if (!finite(mean[k])) continue;
@@ -616,10 +659,14 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   out.reason = fmt::format(
       "{} of {} ticks used ({} with two or more cameras, {} triangulated consistently), {} "
       "points, residual {:.2f} mm RMS, reprojection {:.2f} px, eyes {:.1f} mm apart, upright "
-      "{} (roll {:+.1f} deg, ticks' roll spread {:.1f} deg)",
+      "{} (roll {:+.1f} deg, ticks' roll spread {:.1f} deg), level {} ({:+.1f} deg{})",
       out.frames_used, out.frames_offered, out.frames_multi_view, out.frames_triangulated,
       out.model.points_m.size(), 1000 * out.median_rms_m, out.median_reprojection_px,
-      1000 * out.interocular_m, out.upright, out.upright_roll_correction_deg, out.roll_spread_deg);
+      1000 * out.interocular_m, out.upright, out.upright_roll_correction_deg, out.roll_spread_deg,
+      out.level, out.level_pitch_correction_deg,
+      options.fixation_target_world_m
+          ? fmt::format(", {} ticks facing the fixation target", out.fixation_ticks)
+          : std::string());
   if (out.views_dropped > 0)
     out.reason += fmt::format(
         "; {} camera views dropped as disagreeing with the others (a failed landmark fit or a "

@@ -313,5 +313,64 @@ TEST(SelfCalibration, RefusesCamerasThatDisagreeOnTheFacesSize) {
   EXPECT_NE(cal.reason.find("disagree"), std::string::npos) << cal.reason;
 }
 
+// The pitch offset of a self-calibrated model against the face it was made from (0 = its level
+// is the face's own).
+double level_error_deg(const SelfCalibration& cal, const std::vector<cv::Point3d>& face) {
+  std::vector<cv::Vec3d> a, b;
+  for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
+    const auto& p = cal.model.points_m[k];
+    const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
+    a.emplace_back(p.x, p.y, p.z);
+    b.emplace_back(q.x, q.y, q.z);
+  }
+  RigidTransform T;
+  if (!align_points(a, b, false, T)) return NAN;
+  return ypr_deg_from_rotation(T.R)[1];
+}
+
+// A child who looks down at toys most of the time and up at the robot's head now and then: the
+// world-level prior (median pitch = level) is off by the toys' angle (7 deg here; 4-7 on the
+// demo's children 1 and 2); facing a known target gives the level back. A target nobody faces
+// leaves the world level. (The search starts from the world level: a level more than about
+// fixation_max_pitch_deg off does not find the target's ticks.)
+TEST(SelfCalibration, LevelFromFixationsOnAKnownTarget) {
+  const auto face = subject_face();
+  std::mt19937 rng(29);
+  Scene s = scene(60, rng);
+  const cv::Vec3d robot(0, -0.30, 0.15);  // 25 cm above the eyes, in front of the cameras
+  std::uniform_real_distribution<double> jitter(-2, 2), toy_yaw(-25, 25), toy_pitch(4, 16);
+  for (size_t i = 0; i < s.poses.size(); ++i) {
+    if (i % 5 < 2) {  // facing the robot, within a couple of degrees
+      const cv::Vec3d d = cv::normalize(cv::Vec3d(robot - s.positions[i]));
+      const double yaw = std::atan2(-d[0], -d[2]) * 180 / CV_PI;
+      const double pitch = std::asin(d[1]) * 180 / CV_PI;
+      s.poses[i] = rotation_from_ypr_deg(yaw + jitter(rng), pitch + jitter(rng), jitter(rng));
+    } else {  // the toys on the table, below
+      s.poses[i] = rotation_from_ypr_deg(toy_yaw(rng), toy_pitch(rng), jitter(rng));
+    }
+  }
+  const auto frames = frames_of(face, s, 0.7, rng);
+  SelfCalibrationOptions o;
+  const auto world = self_calibrate_face(frames, o);
+  ASSERT_TRUE(world.converged()) << world.reason;
+  EXPECT_EQ(world.level, "world_pitch");
+  EXPECT_GT(std::abs(level_error_deg(world, face)), 4.0);
+
+  o.fixation_target_world_m = robot;
+  const auto fixed = self_calibrate_face(frames, o);
+  ASSERT_TRUE(fixed.converged()) << fixed.reason;
+  EXPECT_EQ(fixed.level, "target_fixations") << fixed.reason;
+  EXPECT_GE(fixed.fixation_ticks, 20);
+  EXPECT_LT(std::abs(level_error_deg(fixed, face)), 1.0);
+  EXPECT_NE(fixed.reason.find("facing the fixation target"), std::string::npos);
+
+  o.fixation_target_world_m = cv::Vec3d(2.0, 0.0, 1.0);  // far to the side: never faced
+  const auto unseen = self_calibrate_face(frames, o);
+  ASSERT_TRUE(unseen.converged()) << unseen.reason;
+  EXPECT_EQ(unseen.level, "world_pitch");
+  EXPECT_LT(unseen.fixation_ticks, o.min_fixation_ticks);
+  EXPECT_NEAR(level_error_deg(unseen, face), level_error_deg(world, face), 1e-6);
+}
+
 }  // namespace
 }  // namespace dreamsense::head_pose

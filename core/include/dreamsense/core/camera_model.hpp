@@ -54,5 +54,8 @@ cv::Matx33d rotation_from_ypr_deg(double yaw, double pitch, double roll);
 // with image "down" (y) as close as possible to world `down`. Returned as camera_from_world R, t.
 void look_at(const cv::Vec3d& eye, const cv::Vec3d& target, const cv::Vec3d& down,
              cv::Matx33d& R_cam_from_world, cv::Vec3d& t_cam_from_world);
+// A point written as text, e.g. session metadata such as robot_head_m: "x y z" (spaces and/or
+// commas); nullopt unless exactly three finite numbers.
+std::optional<cv::Vec3d> parse_vec3(std::string text);
 
 }  // namespace dreamsense

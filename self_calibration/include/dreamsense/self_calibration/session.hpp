@@ -31,7 +31,11 @@ struct SessionSelfCalibrationOptions {
   int enough_frames = 60;   // stop once this many ticks had the face in two or more cameras
   // Colour streams used; empty = every calibrated colour stream with the role child_camera.
   std::vector<std::string> cameras;
+  // face.fixation_target_world_m: when unset, the session's metadata robot_head_m (the robot's
+  // head, which the child faces from time to time) if present; fixation_from_metadata = false
+  // keeps it unset.
   head_pose::SelfCalibrationOptions face;
+  bool fixation_from_metadata = true;
   gaze::AnatomicalEyeOptions eyes;
   Status check() const;
 };

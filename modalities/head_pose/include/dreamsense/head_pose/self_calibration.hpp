@@ -136,6 +136,20 @@ struct SelfCalibrationOptions {
   // count.
   double max_pair_scale_spread = 0.08;
   int min_pair_ticks = 5;
+  // Level from fixations (with kMeanWorldPitch): a point in the world frame that the child faces
+  // with the head from time to time during the self-calibration stretch, e.g. the robot's head
+  // (session metadata robot_head_m), the social partner of robot-assisted therapy. After the
+  // world-level pitch, the ticks whose head direction passes within fixation_max_yaw_deg
+  // (sideways) and fixation_max_pitch_deg (up/down) of the target are taken as facing it, and
+  // the median pitch offset between head direction and target over them is made zero (4 rounds,
+  // the selection following the correction). It replaces the world-level assumption "the child
+  // holds the head level on average", which the gaze at toys on the table biases (demo children
+  // 1 and 2: 4-7 deg). Needs min_fixation_ticks such ticks; otherwise the world level stays
+  // (SelfCalibration::level says which).
+  std::optional<cv::Vec3d> fixation_target_world_m;
+  double fixation_max_yaw_deg = 10;
+  double fixation_max_pitch_deg = 12;
+  int min_fixation_ticks = 8;
   Status check() const;
 };
 
@@ -164,6 +178,12 @@ struct SelfCalibration {
   // robust spread of the ticks' pitches (deg).
   double level_pitch_correction_deg = 0;
   double pitch_spread_deg = 0;
+  // How "level" (pitch 0) was chosen: "generic_face", "mean_shape", "world_pitch" or
+  // "target_fixations" (then fixation_ticks ticks faced the target and fixation_correction_deg
+  // was added after the world-level pitch; both are also set when there were too few).
+  std::string level = "generic_face";
+  int fixation_ticks = 0;
+  double fixation_correction_deg = 0;
   bool converged() const { return status == SelfCalibrationStatus::kConverged; }
 };
 
