@@ -1,5 +1,5 @@
 // `dreamsense demo [--out DIR] [--seed N] [--duration S] [--gestures dream|dream6|classic]
-// [--no-analyze] [--snr DB] [--no-robot-voice] [--audio-only]`
+// [--no-analyze] [--snr DB] [--child-voice-shift F] [--no-robot-voice] [--audio-only]`
 
 #include "dreamsense/runner/analysis.hpp"
 #include "dreamsense/sim/demo_children.hpp"
@@ -21,6 +21,7 @@ struct DemoFlags {
   bool no_analyze = false;
   std::string gestures = "dream";  // dream (face in view), dream6, classic
   double snr_db = 20;
+  double child_voice_shift = 1.0;
   bool no_robot_voice = false, audio_only = false;
 };
 }  // namespace
@@ -44,6 +45,10 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
          "default: 0 on odd seeds, 1 and 2 alternately on even seeds")
       ->check(CLI::Range(0, static_cast<int>(sim::demo_children().size()) - 1));
   cmd->add_flag("--no-analyze", flags->no_analyze, "Only build the session");
+  cmd->add_option("--child-voice-shift", flags->child_voice_shift,
+                  "Child-like voice: the child's clips (session and enrolment) played this many "
+                  "times faster, pitch and formants raised alike (1 = as recorded; e.g. 1.3)")
+      ->check(CLI::Range(0.5, 2.0));
   cmd->add_option("--snr", flags->snr_db,
                   "Speech to pink-noise ratio of the microphone audio, dB (while speech is on)")
       ->capture_default_str()
@@ -71,6 +76,7 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     o.child = flags->child >= 0 ? flags->child : sim::demo_child_for_seed(flags->seed);
     o.overwrite = true;
     o.snr_db = flags->snr_db;
+    o.child_voice_shift = flags->child_voice_shift;
     o.robot_voice = !flags->no_robot_voice;
     o.audio_only = flags->audio_only;
     if (flags->gestures == "classic")

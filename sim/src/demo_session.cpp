@@ -84,6 +84,19 @@ Result<std::vector<double>> load_clip(const fs::path& path, int expected_rate) {
   return std::vector<double>(clip.samples.begin(), clip.samples.end());
 }
 
+// The child-like voice (DemoOptions::child_voice_shift): x read as sampled at rate x factor and
+// converted to `rate`: played at `rate` it is `factor` times faster and higher.
+std::vector<double> shift_voice(const std::vector<double>& x, double factor, int rate) {
+  if (factor == 1.0) return x;
+  std::vector<float> f(x.begin(), x.end());
+  const std::vector<int16_t> pcm = audio::to_pcm16(f);
+  const std::vector<int16_t> y = audio::resample_pcm16(
+      pcm, static_cast<int>(std::lround(rate * factor)), rate, audio::Pcm16Resampler::kSoxr);
+  std::vector<double> out(y.size());
+  for (size_t i = 0; i < y.size(); ++i) out[i] = y[i] / 32768.0;
+  return out;
+}
+
 // "<s> ten of clubs  </s> (001)" lines -> id -> text.
 Result<std::map<std::string, std::string>> read_transcription(const fs::path& path) {
   if (!fs::exists(path)) return tl::unexpected(media_error(path, "pocketsphinx-testdata"));
@@ -166,6 +179,8 @@ Status write_enrolment(const fs::path& dir, const DemoOptions& o, const DemoGeom
   for (const auto& [speaker, file] : kEnrolClips) {
     auto x = load_clip(o.pocketsphinx_data_dir / file, o.audio_sample_rate);
     if (!x) return tl::unexpected(x.error());
+    if (std::string(speaker) == "child")
+      *x = shift_voice(*x, o.child_voice_shift, o.audio_sample_rate);
     const double az = 45 * CV_PI / 180;
     const cv::Vec3d source =
         std::string(speaker) == "child"
@@ -292,6 +307,8 @@ Result<Media> load_media(const DemoOptions& o) {
     }
     auto samples = load_clip(o.pocketsphinx_data_dir / c.file, o.audio_sample_rate);
     if (!samples) return tl::unexpected(samples.error());
+    if (std::string(c.speaker) == "child")
+      *samples = shift_voice(*samples, o.child_voice_shift, o.audio_sample_rate);
     info.duration_s = static_cast<double>(samples->size()) / o.audio_sample_rate;
     std::tie(info.speech_start_s, info.speech_end_s) = speech_extent(*samples, o.audio_sample_rate);
     m.clips.push_back(info);
@@ -810,6 +827,8 @@ Status DemoOptions::check() const {
   if (!(audio_chunk_s > 0 && audio_chunk_s <= 1)) bad += " audio_chunk_s must be in (0, 1];";
   if (!(rt60_s >= 0 && rt60_s <= 2)) bad += " rt60_s must be in [0, 2];";
   if (!(snr_db > -20 && snr_db < 100)) bad += " snr_db must be in (-20, 100);";
+  if (!(child_voice_shift >= 0.5 && child_voice_shift <= 2))
+    bad += " child_voice_shift must be in [0.5, 2];";
   if (!(joint_noise_m >= 0 && joint_noise_m < 0.1)) bad += " joint_noise_m must be in [0, 0.1);";
   if (!(image_noise_sigma >= 0 && image_noise_sigma <= 40))
     bad += " image_noise_sigma must be in [0, 40];";

@@ -38,9 +38,15 @@ void register_analyzers(AnalyzerRegistry& registry) {
     bool robot_gate = true;
     DS_RETURN_IF_ERROR(options.get("robot_gate", robot_gate));
     DS_RETURN_IF_ERROR(options.get("robot_offset_s", o.robot_gate.offset_s));
-    DS_RETURN_IF_ERROR(options.get("track_by_direction", o.track_by_direction));
     DS_RETURN_IF_ERROR(options.get("vad_on_channel_mean", o.vad_on_channel_mean));
-    DS_RETURN_IF_ERROR(options.get("track_angle_deg", o.track_angle_deg));
+    // Issue 16: utterance (each alone, the baseline) or tracks (speaker_tracks.hpp).
+    std::string decision = to_string(o.decision);
+    DS_RETURN_IF_ERROR(options.get("decision", decision));
+    DS_ASSIGN_OR_RETURN(o.decision, parse_voice_decision(decision));
+    DS_RETURN_IF_ERROR(options.get("track_angle_deg", o.tracks.angle_tolerance_deg));
+    DS_RETURN_IF_ERROR(options.get("track_memory_s", o.tracks.memory_s));
+    DS_RETURN_IF_ERROR(options.get("track_max_frames", o.tracks.max_track_frames));
+    DS_RETURN_IF_ERROR(options.get("track_exclusive", o.tracks.exclusive));
     if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
       o.reference_sensor = r->id;
       p.notes.push_back(fmt::format("robot voice gated with the reference stream '{}'", r->id));

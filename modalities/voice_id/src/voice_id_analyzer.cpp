@@ -25,6 +25,17 @@ Result<VoiceIdMethod> parse_voice_id_method(const std::string& s) {
                     "voice id method '{}' is unknown (gmm_ubm or direction_rule)", s);
 }
 
+const char* to_string(VoiceDecision d) {
+  return d == VoiceDecision::kUtterance ? "utterance" : "tracks";
+}
+
+Result<VoiceDecision> parse_voice_decision(const std::string& s) {
+  if (s == "utterance") return VoiceDecision::kUtterance;
+  if (s == "tracks") return VoiceDecision::kTracks;
+  return make_error(ErrorCode::kInvalidArgument,
+                    "voice decision '{}' is unknown (utterance or tracks)", s);
+}
+
 Status DirectionRuleOptions::check() const {
   if (!(angle_deg > 0 && angle_deg < 90 && min_confidence >= 0 && min_confidence < 1))
     return make_error(ErrorCode::kInvalidArgument,
@@ -42,6 +53,7 @@ Status VoiceIdAnalyzerOptions::check() const {
                       "model_file)");
   if (auto s = direction.check(); !s) return s;
   if (auto s = robot_gate.check(); !s) return s;
+  if (auto s = tracks.check(); !s) return s;
   return segmenter.check();  // the stream's rate replaces vad.sample_rate when it starts
 }
 
@@ -63,15 +75,14 @@ class VoiceIdAnalyzer : public Analyzer {
     if (!options_.reference_sensor.empty()) c.optional_inputs.push_back(options_.reference_sensor);
     if (options_.method == VoiceIdMethod::kDirectionRule)
       c.reads.push_back(keys::kSoundDirection.name);
-    else if (options_.track_by_direction)
+    else if (options_.decision == VoiceDecision::kTracks)
       c.reads_previous.push_back(keys::kSoundDirection.name);
     return c;
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
                  BlackboardWriter& out) override {
-    if (options_.method == VoiceIdMethod::kDirectionRule || options_.track_by_direction)
-      remember_direction(prior);
+    if (options_.method == VoiceIdMethod::kDirectionRule || tracker_) remember_direction(prior);
     if (gate_)  // the robot's reference first: the gate must know this tick before deciding
       for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
         const AudioChunk* c = f->as<AudioChunk>();
@@ -169,7 +180,13 @@ class VoiceIdAnalyzer : public Analyzer {
     if (denoiser_) denoiser_->reset();
     ns_origin_ = Timestamp::unset();
     heard_.clear();
-    tracks_.clear();
+    if (tracker_) tracker_->reset();
+  }
+
+  void enable_tracks() {
+    if (model_ && options_.method == VoiceIdMethod::kGmmUbm &&
+        options_.decision == VoiceDecision::kTracks)
+      tracker_ = std::make_unique<SpeakerTracker>(options_.tracks, model_->threshold);
   }
 
   void enable_gate() {
@@ -256,7 +273,7 @@ class VoiceIdAnalyzer : public Analyzer {
         log::debug("voice_id: utterance {:.2f}-{:.2f} s, {} frames, llr{}",
                    u.speech_start.seconds(), u.speech_end.seconds(), r->frames, scores);
       }
-      if (options_.track_by_direction) accumulate_over_track(u, *r);
+      if (tracker_) decide_on_track(u, *r);
       // Enrolment folder names may be people's names: the public id unless names are asked for.
       id.speaker_id = public_speaker_id(*model_, r->speaker_id);
       id.name = options_.include_names ? r->name : id.speaker_id;
@@ -283,55 +300,35 @@ class VoiceIdAnalyzer : public Analyzer {
     return std::atan2(sy, sx) * 180 / M_PI;
   }
 
-  // Joins the utterance to the track from its direction and replaces the decision by the one on
-  // the track's accumulated evidence (frame-weighted mean LLR per speaker).
-  void accumulate_over_track(const audio::Utterance& u, Identification& r) {
-    const auto az = azimuth_of(u);
-    if (!az || r.frames == 0) return;
-    Track* track = nullptr;
-    for (auto& t : tracks_) {
-      if ((u.speech_start - t.last).seconds() > options_.track_memory_s) continue;
-      if (std::abs(t.azimuth_deg - *az) > options_.track_angle_deg) continue;
-      if (track == nullptr || std::abs(t.azimuth_deg - *az) < std::abs(track->azimuth_deg - *az))
-        track = &t;
-    }
-    if (track == nullptr) track = &tracks_.emplace_back();
-    const double frames = r.frames;
-    const double total = track->frames + frames;
-    std::vector<SpeakerScore> combined;
-    for (const auto& s : r.scores) {
-      const double past = track->llr_sum.count(s.id) ? track->llr_sum[s.id] : 0.0;
-      combined.push_back({s.id, (past + s.llr * frames) / total});
-    }
-    // Remember (older evidence scaled down beyond track_max_frames).
-    const double keep = total > options_.track_max_frames ? options_.track_max_frames / total : 1.0;
-    for (const auto& s : r.scores) {
-      const double past = track->llr_sum.count(s.id) ? track->llr_sum[s.id] : 0.0;
-      track->llr_sum[s.id] = (past + s.llr * frames) * keep;
-    }
-    track->frames = total * keep;
-    track->azimuth_deg = track->utterances == 0 ? *az
-                                                : (track->azimuth_deg * track->utterances + *az) /
-                                                      (track->utterances + 1);
-    ++track->utterances;
-    track->last = u.speech_end;
-    if (track->utterances == 1) return;  // nothing to add to the utterance's own evidence
-    std::stable_sort(combined.begin(), combined.end(),
-                     [](const SpeakerScore& a, const SpeakerScore& b) { return a.llr > b.llr; });
-    log::debug(
-        "voice_id: utterance {:.2f}-{:.2f} s on the track at {:.0f} deg ({} utterances): "
-        "{} {:.3f}",
-        u.speech_start.seconds(), u.speech_end.seconds(), track->azimuth_deg, track->utterances,
-        combined.front().id, combined.front().llr);
-    r.best_id = combined.front().id;
-    r.llr = combined.front().llr;
-    r.scores = combined;
-    const double p = 1.0 / (1.0 + std::exp(-(r.llr - model_->threshold) / model_->score_scale));
-    if (r.llr >= model_->threshold) {
-      r.speaker_id = r.best_id;
-      r.name = r.best_id;
+  // The decision on the utterance's voice track (speaker_tracks.hpp) replaces its own.
+  void decide_on_track(const audio::Utterance& u, Identification& r) {
+    UtteranceEvidence e;
+    e.start = u.speech_start;
+    e.end = u.speech_end;
+    e.azimuth_deg = azimuth_of(u);
+    e.frames = r.frames;
+    e.scores = r.scores;
+    const TrackDecision d = tracker_->add(e);
+    if (d.track_utterances > 1 || d.inherited)
+      log::debug(
+          "voice_id: utterance {:.2f}-{:.2f} s on track {} at {:.0f} deg ({} utterances, {:.0f} "
+          "frames): {} (track llr {:.3f}{})",
+          u.speech_start.seconds(), u.speech_end.seconds(), d.track, d.azimuth_deg,
+          d.track_utterances, d.track_frames,
+          d.speaker_id == kUnknownSpeaker ? d.speaker_id
+          : options_.include_names        ? d.speaker_id
+                                          : public_speaker_id(*model_, d.speaker_id),
+          d.llr, d.inherited ? ", not its own voice's answer" : "");
+    r.best_id = d.best_id;
+    r.scores = d.scores;
+    r.llr = d.llr;
+    // Confidence: the logistic of the named speaker's mean LLR on the track against the
+    // threshold (low when the name comes from the places rather than the voice).
+    const double p = 1.0 / (1.0 + std::exp(-(d.llr - model_->threshold) / model_->score_scale));
+    if (d.speaker_id != kUnknownSpeaker) {
+      r.speaker_id = r.name = d.speaker_id;
       for (const auto& s : model_->speakers)
-        if (s.id == r.best_id) r.name = s.name;
+        if (s.id == d.speaker_id) r.name = s.name;
       r.score = p;
     } else {
       r.speaker_id = r.name = kUnknownSpeaker;
@@ -376,14 +373,7 @@ class VoiceIdAnalyzer : public Analyzer {
   int seg_channels_ = 1;  // pushed to the segmenter: channel 0 (+ the channels' mean)
   std::vector<audio::Utterance> utterances_;  // scratch
   std::deque<Heard> heard_;  // directions of the last seconds (direction rule, tracks)
-  struct Track {
-    double azimuth_deg = 0;
-    Timestamp last;
-    int utterances = 0;
-    double frames = 0;
-    std::map<std::string, double> llr_sum;  // per speaker: sum over frames of the LLR
-  };
-  std::vector<Track> tracks_;
+  std::unique_ptr<SpeakerTracker> tracker_;  // decision kTracks
 };
 
 }  // namespace
@@ -401,6 +391,7 @@ Result<std::unique_ptr<Analyzer>> make_voice_id_analyzer(const VoiceIdAnalyzerOp
   if (options.method == VoiceIdMethod::kDirectionRule) model.reset();
   auto a = std::make_unique<VoiceIdAnalyzer>(options, std::move(model));
   a->enable_gate();
+  a->enable_tracks();
   return std::unique_ptr<Analyzer>(std::move(a));
 }
 

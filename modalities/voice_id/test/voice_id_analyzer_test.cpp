@@ -162,6 +162,43 @@ TEST(VoiceIdAnalyzer, GmmUbmNamesEachUtterance) {
   EXPECT_NEAR(ids[1].end.seconds(), 3.9, 0.1);
 }
 
+// Issue 16 item 2: decision over voice tracks (default) reads the sound direction of the
+// previous ticks; the utterance decision does not. With the directions, the child's two
+// utterances in front share a track and the therapist's at the side has her own.
+TEST(VoiceIdAnalyzer, TracksReadTheSoundDirectionAndNameEachPlace) {
+  VoiceIdAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.model = shared_model();
+  o.decision = VoiceDecision::kUtterance;
+  auto u = make_voice_id_analyzer(o);
+  ASSERT_TRUE(u);
+  EXPECT_TRUE((*u)->contract().reads_previous.empty());
+  o.decision = VoiceDecision::kTracks;
+  auto a = make_voice_id_analyzer(o);
+  ASSERT_TRUE(a) << a.error().message;
+  EXPECT_EQ((*a)->contract().reads_previous, std::vector<std::string>{keys::kSoundDirection.name});
+  EXPECT_EQ(*parse_voice_decision("utterance"), VoiceDecision::kUtterance);
+  EXPECT_FALSE(parse_voice_decision("best"));
+  std::vector<float> s = quiet(0.5);
+  append(s, synth_utterance(kChild, 1.2, kAnalyzerRate, 801, 0, 0));  // 0.5 - 1.7 s, front
+  append(s, quiet(1.0));
+  append(s, synth_utterance(kTherapist, 1.2, kAnalyzerRate, 802, 0, 0));  // 2.7 - 3.9 s, side
+  append(s, quiet(1.0));
+  append(s, synth_utterance(kChild, 0.6, kAnalyzerRate, 803, 0, 0));  // 4.9 - 5.5 s, front
+  append(s, quiet(1.0));
+  const auto ids = run(**a, s, [](double t) -> std::optional<std::pair<double, double>> {
+    if (t >= 0.5 && t < 1.7) return std::pair{1.0, 0.9};
+    if (t >= 2.7 && t < 3.9) return std::pair{40.0, 0.9};
+    if (t >= 4.9 && t < 5.5) return std::pair{-2.0, 0.9};
+    return std::nullopt;
+  });
+  ASSERT_EQ(ids.size(), 3u);
+  EXPECT_EQ(ids[0].speaker_id, "child");
+  EXPECT_EQ(ids[1].speaker_id, "therapist");
+  EXPECT_EQ(ids[2].speaker_id, "child");
+  EXPECT_EQ(ids[2].method, "gmm_ubm");
+}
+
 // Issue 16: the robot speaks (here with the therapist's synthetic voice) between two child
 // utterances. With its reference stream it gets no speaker; without it (negative case) it is
 // named, as before.

@@ -30,13 +30,19 @@ std::filesystem::path default_robot_prompts_dir();
 struct DemoOptions {
   std::filesystem::path out_dir;  // required; must not exist, be empty, or hold an old session
   uint64_t seed = 1;
-  double duration_s = 20;          // (0, 600]
-  double camera_rate_hz = 25;      // camera_left / camera_middle / camera_right (DREAM ~25 Hz)
-  double kinect_rate_hz = 30;      // front.color, front.depth, front.skeleton, top.color
-  int audio_sample_rate = 16000;   // must equal the clips' rate (16 kHz)
-  double audio_chunk_s = 0.1;      // length of the AudioChunk frames written
-  double rt60_s = 0.35;            // room reverberation
-  double snr_db = 20;              // speech (while active) to pink noise, per channel
+  double duration_s = 20;         // (0, 600]
+  double camera_rate_hz = 25;     // camera_left / camera_middle / camera_right (DREAM ~25 Hz)
+  double kinect_rate_hz = 30;     // front.color, front.depth, front.skeleton, top.color
+  int audio_sample_rate = 16000;  // must equal the clips' rate (16 kHz)
+  double audio_chunk_s = 0.1;     // length of the AudioChunk frames written
+  double rt60_s = 0.35;           // room reverberation
+  double snr_db = 20;             // speech (while active) to pink noise, per channel
+  // Child-like voice (issue 16): the child's clips (session and enrolment) played this much
+  // faster, like a tape: pitch and every formant x factor, duration / factor (libsoxr
+  // resampling of the 16 kHz clip read as 16 kHz x factor). 1 = the recordings as they are
+  // (adult talkers); 1.3 puts a man's ~120 Hz f0 near 155 Hz and his formants where a
+  // ten-year-old's are (a shorter vocal tract). [0.5, 2].
+  double child_voice_shift = 1.0;
   double joint_noise_m = 0.005;    // Gaussian noise on the written skeleton joints (truth: none)
   double image_noise_sigma = 2.0;  // Gaussian noise on colour images (grey levels)
   int jpeg_quality = 90;

@@ -17,6 +17,7 @@
 #include "dreamsense/audio/reference_gate.hpp"
 #include "dreamsense/audio/utterance_segmenter.hpp"
 #include "dreamsense/core/analyzer.hpp"
+#include "dreamsense/voice_id/speaker_tracks.hpp"
 #include "dreamsense/voice_id/voice_model.hpp"
 
 #include <filesystem>
@@ -27,6 +28,10 @@ namespace dreamsense::voice_id {
 enum class VoiceIdMethod { kGmmUbm, kDirectionRule };
 const char* to_string(VoiceIdMethod m);  // "gmm_ubm", "direction_rule"
 Result<VoiceIdMethod> parse_voice_id_method(const std::string& s);
+
+enum class VoiceDecision { kUtterance, kTracks };
+const char* to_string(VoiceDecision d);  // "utterance", "tracks"
+Result<VoiceDecision> parse_voice_decision(const std::string& s);
 
 struct DirectionRuleOptions {
   double angle_deg = 20;        // DREAM: child within +-20 deg of the array's broadside
@@ -59,19 +64,18 @@ struct VoiceIdAnalyzerOptions {
   SensorId reference_sensor;
   audio::ReferenceGateOptions robot_gate;
   double min_free_speech_s = 0.3;
-  // kGmmUbm, issue 16: evidence accumulated over a track of utterances from the same direction
-  // (keys::kSoundDirection of the previous ticks, read as feedback; without a sound direction
-  // analyser every utterance stands alone). An utterance whose confidence-weighted mean azimuth
-  // is within track_angle_deg of a track heard in the last track_memory_s joins it; the
-  // decision uses the frame-weighted mean LLR of the track's utterances and this one (the track
-  // keeps at most track_max_frames frames of evidence, older evidence scaled down).
   // Issue 16: the utterance decision on the mean of the array's channels (about 6 dB less noise:
   // a quiet child is cut whole, as in the speech analyser); channel 0 is still what is scored.
   bool vad_on_channel_mean = true;
-  bool track_by_direction = false;  // measured no gain on the demo (README.md): opt-in
-  double track_angle_deg = 10;
-  double track_memory_s = 60;
-  int track_max_frames = 600;
+  // kGmmUbm, issue 16 item 2: how an utterance's scores become a speaker.
+  //  - kUtterance: each utterance alone (its best LLR, unknown below the model's threshold):
+  //    the method until issue 16, kept as the measured baseline.
+  //  - kTracks: voice tracks (speaker_tracks.hpp): utterances from the same direction
+  //    (keys::kSoundDirection of the previous ticks, read as feedback: without a sound direction
+  //    analyser every utterance stands alone, = kUtterance) accumulate frame-weighted evidence,
+  //    and distinct places heard in the same stretch get distinct speakers.
+  VoiceDecision decision = VoiceDecision::kTracks;
+  SpeakerTrackOptions tracks;
   Status check() const;
 };
 
