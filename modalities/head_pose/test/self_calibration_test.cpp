@@ -46,6 +46,19 @@ std::vector<cv::Point3d> subject_face() {
   return s;
 }
 
+// The self-calibrated model's points and the same landmarks of the face it was made from.
+std::pair<std::vector<cv::Vec3d>, std::vector<cv::Vec3d>> model_and_face(
+    const SelfCalibration& cal, const std::vector<cv::Point3d>& face) {
+  std::vector<cv::Vec3d> a, b;
+  for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
+    const auto& p = cal.model.points_m[k];
+    const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
+    a.emplace_back(p.x, p.y, p.z);
+    b.emplace_back(q.x, q.y, q.z);
+  }
+  return {a, b};
+}
+
 struct Scene {
   std::vector<CameraModel> cams;
   std::vector<cv::Matx33d> poses;
@@ -137,13 +150,7 @@ TEST(SelfCalibration, RecoversASubjectsFaceWithoutTruth) {
   for (int i = 42; i <= 47; ++i) l += face[static_cast<size_t>(i)] * (1.0 / 6);
   EXPECT_NEAR(cal.interocular_m, cv::norm(l - r), 0.001);
   // Shape up to a rigid motion: < 1.5 mm per point after alignment.
-  std::vector<cv::Vec3d> a, b;
-  for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
-    const auto& p = cal.model.points_m[k];
-    const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
-    a.emplace_back(p.x, p.y, p.z);
-    b.emplace_back(q.x, q.y, q.z);
-  }
+  const auto [a, b] = model_and_face(cal, face);
   RigidTransform T;
   ASSERT_TRUE(align_points(a, b, false, T));
   double worst = 0;
@@ -192,13 +199,7 @@ TEST(SelfCalibration, UprightFromTheMedianWorldRoll) {
     o.upright = upright;
     auto cal = self_calibrate_face(frames_of(face, s, 0.7, rng), o);
     EXPECT_TRUE(cal.converged()) << cal.reason;
-    std::vector<cv::Vec3d> a, b;
-    for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
-      const auto& p = cal.model.points_m[k];
-      const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
-      a.emplace_back(p.x, p.y, p.z);
-      b.emplace_back(q.x, q.y, q.z);
-    }
+    const auto [a, b] = model_and_face(cal, face);
     RigidTransform T;
     EXPECT_TRUE(align_points(a, b, false, T));
     if (out) *out = cal;
@@ -242,13 +243,7 @@ TEST(SelfCalibration, LevelFromTheMedianWorldPitch) {
   o.frontal = FrontalReference::kMeanWorldPitch;
   const auto cal = self_calibrate_face(frames_of(face, s, 0.7, rng), o);
   ASSERT_TRUE(cal.converged()) << cal.reason;
-  std::vector<cv::Vec3d> a, b;
-  for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
-    const auto& p = cal.model.points_m[k];
-    const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
-    a.emplace_back(p.x, p.y, p.z);
-    b.emplace_back(q.x, q.y, q.z);
-  }
+  const auto [a, b] = model_and_face(cal, face);
   RigidTransform T;
   ASSERT_TRUE(align_points(a, b, false, T));
   std::vector<double> pitches;
@@ -316,13 +311,7 @@ TEST(SelfCalibration, RefusesCamerasThatDisagreeOnTheFacesSize) {
 // The pitch offset of a self-calibrated model against the face it was made from (0 = its level
 // is the face's own).
 double level_error_deg(const SelfCalibration& cal, const std::vector<cv::Point3d>& face) {
-  std::vector<cv::Vec3d> a, b;
-  for (size_t k = 0; k < cal.model.points_m.size(); ++k) {
-    const auto& p = cal.model.points_m[k];
-    const auto& q = face[static_cast<size_t>(cal.model.landmark_index[k])];
-    a.emplace_back(p.x, p.y, p.z);
-    b.emplace_back(q.x, q.y, q.z);
-  }
+  const auto [a, b] = model_and_face(cal, face);
   RigidTransform T;
   if (!align_points(a, b, false, T)) return NAN;
   return ypr_deg_from_rotation(T.R)[1];
