@@ -34,7 +34,10 @@ cmake --preset asan >/dev/null
 cmake --build --preset asan --target "${targets[@]}" -j "$(nproc)"
 echo "sanitizers: build $((SECONDS - start)) s" >&2
 start=$SECONDS
-if (($# == 0)); then set -- -L 'unit|analyzer|fuzz'; fi
+# Not under ASan: FaceDetectionDemo.TwentySecondSession (240 s there, a sixth of these tests'
+# time). It measures recall over 20 s of demo for the release tests; the same detector code runs
+# under ASan in the FaceDetector, HogFaceDetector and FaceDetectionAnalyzer tests.
+if (($# == 0)); then set -- -L 'unit|analyzer|fuzz' -E '^FaceDetectionDemo\.TwentySecondSession$'; fi
 status=0
 ctest --preset asan "$@" || status=$?
 echo "sanitizers: tests $((SECONDS - start)) s" >&2

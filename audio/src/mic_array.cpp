@@ -71,12 +71,10 @@ Result<MicArrayGeometry> read_mic_array(const std::filesystem::path& path) {
   MicArrayGeometry g;
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing mic array calibration", path.string());
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   try {
-    cv::FileStorage fs(path.string(), cv::FileStorage::READ);
-    if (!fs.isOpened())
-      return make_error(ErrorCode::kNotFound, "{}: cannot open the mic array calibration",
-                        path.string());
+    cv::FileStorage& fs = *opened;
     cv::Mat m;
     fs["mic_positions_m"] >> m;
     if (m.empty() || m.cols != 3)

@@ -91,16 +91,9 @@ Status read_key(const cv::FileStorage& fs, const char* key, T& out,
 Result<CameraModel> read_camera_model(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing calibration file", path.string());
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
-  cv::FileStorage fs;
-  try {
-    if (!fs.open(path.string(), cv::FileStorage::READ))
-      return make_error(ErrorCode::kCorruptData, "{}: unreadable calibration file", path.string());
-  } catch (const std::exception&) {
-    return make_error(ErrorCode::kCorruptData,
-                      "{}: not a valid OpenCV YAML/XML calibration file (syntax error)",
-                      path.string());
-  }
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
+  const cv::FileStorage& fs = *opened;
   CameraModel m;
   cv::Mat K, R, t;
   DS_RETURN_IF_ERROR(read_key(fs, "frame", m.frame, path));

@@ -74,7 +74,7 @@ TEST(FuzzRegression, CameraModelOpenCvCannotParseIsAnError) {
   std::ofstream(p) << "%YAML:1.\n{ :";
   EXPECT_FALSE(read_camera_model(p));
   // fuzz/findings/opencv_xml_segv.calibration without its selector byte (finding 4): OpenCV's XML
-  // reader dereferenced null on it; check_file_storage_input makes it an error.
+  // reader dereferenced null on it; open_file_storage makes it an error.
   constexpr char kXmlSegv[] = "<?xml?>\n<open-----------------------ml ve=\0%";
   std::ofstream(p, std::ios::binary).write(kXmlSegv, sizeof kXmlSegv - 1);
   EXPECT_FALSE(read_camera_model(p));

@@ -50,17 +50,7 @@ cv::Mat matrix(const cv::FileNode& node) {
 Result<cv::FileStorage> open(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing DREAM calibration file", path.string());
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
-  try {
-    cv::FileStorage fs(path.string(), cv::FileStorage::READ);
-    if (!fs.isOpened())
-      return make_error(ErrorCode::kCorruptData, "{}: not an OpenCV FileStorage file",
-                        path.string());
-    return fs;
-  } catch (const std::exception& e) {
-    return make_error(ErrorCode::kCorruptData, "{}: unreadable ({})", path.string(),
-                      opencv_reason(e));
-  }
+  return open_file_storage(path);
 }
 
 void warn(std::vector<std::string>& warnings, const std::filesystem::path& path,

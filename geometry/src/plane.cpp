@@ -128,11 +128,10 @@ Status write_table_frame(const std::filesystem::path& path, const TableFrame& ta
 Result<TableFrame> read_table_frame(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing table file", path.string());
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   try {
-    cv::FileStorage fs(path.string(), cv::FileStorage::READ);
-    if (!fs.isOpened())
-      return make_error(ErrorCode::kCorruptData, "{}: unreadable table file", path.string());
+    cv::FileStorage& fs = *opened;
     cv::Mat n, R, t, pts;
     fs["plane_normal"] >> n;
     fs["world_from_table_R"] >> R;

@@ -91,12 +91,11 @@ Result<std::vector<cv::Point2d>> read_portrait_landmarks(const std::filesystem::
                       "{}: portrait landmarks not found (data/demo/astronaut_landmarks.yaml of the "
                       "dreamsense source tree)",
                       path.string());
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   cv::Mat m;
   try {
-    cv::FileStorage fs(path.string(), cv::FileStorage::READ);
-    if (!fs.isOpened())
-      return make_error(ErrorCode::kIoError, "{}: cannot open the landmark file", path.string());
+    cv::FileStorage& fs = *opened;
     fs["landmarks_px"] >> m;
   } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));

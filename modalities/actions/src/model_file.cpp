@@ -21,9 +21,9 @@ Result<cv::FileStorage> open_model_file(const ModelFileKind& kind, const fs::pat
   if (!fs::is_regular_file(path, ec))
     return make_error(ErrorCode::kNotFound, "{}: {} missing (write one with `{}`)", path.string(),
                       kind.what, kind.train_command);
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
-  cv::FileStorage f(path.string(), cv::FileStorage::READ);
-  if (!f.isOpened()) return tl::unexpected(model_corrupt(kind, path, "unreadable"));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
+  cv::FileStorage& f = *opened;
   std::string format;
   if (f["format"].isString()) f["format"] >> format;
   if (format != kind.format_name)

@@ -240,11 +240,12 @@ Result<ExpressionModel> ExpressionModel::load(const std::filesystem::path& path)
   const std::string where = path.string();
   if (!std::filesystem::is_regular_file(path))
     return make_error(ErrorCode::kNotFound, "{}: no such expression model", where);
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   ExpressionModel m;
   try {
-    cv::FileStorage fs(where, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
-    if (!fs.isOpened() || static_cast<std::string>(fs["format"]) != kFormat)
+    cv::FileStorage& fs = *opened;
+    if (static_cast<std::string>(fs["format"]) != kFormat)
       return make_error(ErrorCode::kCorruptData, "{}: not a dreamsense expression model", where);
     const int version = static_cast<int>(fs["version"]);
     if (version != kExpressionModelVersion)

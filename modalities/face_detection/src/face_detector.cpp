@@ -170,10 +170,11 @@ Result<FaceDetector> FaceDetector::create(const FaceDetectorOptions& options) {
                         "face detector: cascade '{}' not found (install the Debian package "
                         "opencv-data)",
                         p.string());
-    DS_RETURN_IF_ERROR(check_file_storage_input(p));
+    auto opened = open_file_storage(p);
+    if (!opened) return tl::unexpected(opened.error());
     bool loaded = false;
     try {
-      loaded = c.load(p.string());
+      loaded = c.read(opened->getFirstTopLevelNode());
     } catch (const std::exception&) {
       loaded = false;
     }

@@ -244,10 +244,11 @@ Result<FaceGallery> FaceGallery::load(const std::filesystem::path& path) {
   const std::string where = path.string();
   if (!std::filesystem::is_regular_file(path))
     return make_error(ErrorCode::kNotFound, "{}: no such face gallery", where);
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   try {
-    cv::FileStorage fs(where, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
-    if (!fs.isOpened() || static_cast<std::string>(fs["format"]) != kFormat)
+    cv::FileStorage& fs = *opened;
+    if (static_cast<std::string>(fs["format"]) != kFormat)
       return make_error(ErrorCode::kCorruptData, "{}: not a dreamsense face gallery", where);
     const int version = static_cast<int>(fs["version"]);
     if (version != kFaceGalleryVersion)

@@ -59,7 +59,9 @@ TEST(FaceIdentifier, KnownFacesAreNamedAndStrangersRejected) {
       for (int k = 10; k < 14; ++k) {
         const IdentityResult r = id->identify(descriptor(*m, p, k, 0.6));
         correct += r.id == 10 + p;
-        if (r.id == 12) EXPECT_EQ(r.name, "child");
+        if (r.id == 12) {
+          EXPECT_EQ(r.name, "child");
+        }
       }
     for (int stranger = 50; stranger < 60; ++stranger)
       accepted += id->identify(descriptor(*m, stranger, 0, 0.6)).id >= 0;
@@ -155,7 +157,7 @@ TEST(FuzzRegression, FaceGalleryOpenCvCannotParseIsAnError) {
   std::ofstream(p) << "%YAML:1.\n{ :";
   EXPECT_FALSE(FaceGallery::load(p));
   // fuzz/findings/opencv_xml_segv.calibration without its selector byte (finding 4): OpenCV's XML
-  // reader dereferenced null on it; check_file_storage_input makes it an error.
+  // reader dereferenced null on it; open_file_storage makes it an error.
   constexpr char kXmlSegv[] = "<?xml?>\n<open-----------------------ml ve=\0%";
   std::ofstream(p, std::ios::binary).write(kXmlSegv, sizeof kXmlSegv - 1);
   EXPECT_FALSE(FaceGallery::load(p));

@@ -182,11 +182,12 @@ Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& 
 Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
   if (!std::ifstream(path))
     return make_error(ErrorCode::kNotFound, "{}: gaze model not found", path.string());
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   GazeModelFile m;
   try {
-    cv::FileStorage fs(path.string(), cv::FileStorage::READ);
-    if (!fs.isOpened() || static_cast<std::string>(fs["format"]) != kGazeModelFormat)
+    cv::FileStorage& fs = *opened;
+    if (static_cast<std::string>(fs["format"]) != kGazeModelFormat)
       return make_error(ErrorCode::kCorruptData, "{}: not a dreamsense gaze model (format: {})",
                         path.string(), kGazeModelFormat);
     if (static_cast<int>(fs["version"]) != 1)

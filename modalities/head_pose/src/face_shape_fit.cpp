@@ -164,11 +164,12 @@ Status write_face_model(const std::string& path, const FaceModel3d& model,
 Result<FaceModel3d> read_face_model(const std::string& path) {
   if (!std::ifstream(path))
     return make_error(ErrorCode::kNotFound, "{}: face model not found", path);
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   FaceModel3d m;
   try {
-    cv::FileStorage fs(path, cv::FileStorage::READ);
-    if (!fs.isOpened() || static_cast<std::string>(fs["format"]) != kFaceModelFormat)
+    cv::FileStorage& fs = *opened;
+    if (static_cast<std::string>(fs["format"]) != kFaceModelFormat)
       return make_error(ErrorCode::kCorruptData, "{}: not a dreamsense face model (format: {})",
                         path, kFaceModelFormat);
     if (static_cast<int>(fs["version"]) != 1)
@@ -196,9 +197,10 @@ Result<FaceModel3d> read_face_model(const std::string& path) {
 Result<cv::Matx33d> read_model_from_head(const std::filesystem::path& gaze_yaml) {
   if (!std::ifstream(gaze_yaml))
     return make_error(ErrorCode::kNotFound, "{}: gaze calibration not found", gaze_yaml.string());
-  DS_RETURN_IF_ERROR(check_file_storage_input(gaze_yaml));
+  auto opened = open_file_storage(gaze_yaml);
+  if (!opened) return tl::unexpected(opened.error());
   try {
-    cv::FileStorage fs(gaze_yaml.string(), cv::FileStorage::READ);
+    cv::FileStorage& fs = *opened;
     if (fs["model_from_head"].empty()) return cv::Matx33d::eye();
     cv::Mat R;
     fs["model_from_head"] >> R;

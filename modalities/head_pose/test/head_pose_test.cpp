@@ -400,7 +400,7 @@ TEST(FuzzRegression, FaceModelOpenCvCannotParseIsAnError) {
   EXPECT_FALSE(read_face_model(p.string()));
   EXPECT_FALSE(read_model_from_head(p));
   // fuzz/findings/opencv_xml_segv.calibration without its selector byte (finding 4): OpenCV's XML
-  // reader dereferenced null on it; check_file_storage_input makes it an error.
+  // reader dereferenced null on it; open_file_storage makes it an error.
   constexpr char kXmlSegv[] = "<?xml?>\n<open-----------------------ml ve=\0%";
   std::ofstream(p, std::ios::binary).write(kXmlSegv, sizeof kXmlSegv - 1);
   EXPECT_FALSE(read_face_model(p.string()));

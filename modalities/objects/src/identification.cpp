@@ -410,10 +410,10 @@ Result<ObjectGallery> ObjectGallery::load(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     return make_error(ErrorCode::kNotFound, "{}: no such object gallery", p);
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   try {
-    cv::FileStorage fs(p, cv::FileStorage::READ);
-    if (!fs.isOpened()) return make_error(ErrorCode::kCorruptData, "{}: not readable YAML", p);
+    cv::FileStorage& fs = *opened;
     if (static_cast<std::string>(fs["format"]) != kFormatName)
       return make_error(ErrorCode::kCorruptData, "{}: not an object gallery (format '{}')", p,
                         static_cast<std::string>(fs["format"]));

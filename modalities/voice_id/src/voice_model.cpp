@@ -123,11 +123,11 @@ Result<VoiceModel> VoiceModel::load(const fs::path& path) {
     return make_error(ErrorCode::kNotFound,
                       "{}: voice model missing (write one with `dreamsense train voices`)",
                       path.string());
-  DS_RETURN_IF_ERROR(check_file_storage_input(path));
+  auto opened = open_file_storage(path);
+  if (!opened) return tl::unexpected(opened.error());
   VoiceModel m;
   try {
-    cv::FileStorage f(path.string(), cv::FileStorage::READ);
-    if (!f.isOpened()) return tl::unexpected(corrupt(path, "unreadable"));
+    cv::FileStorage& f = *opened;
     std::string format;
     int version = 0;
     if (f["format"].isString()) f["format"] >> format;
