@@ -2,6 +2,8 @@
 
 #include "dreamsense/core/opencv_error.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -20,6 +22,107 @@ bool parsed_as_xml(std::string_view content) {
   constexpr std::string_view kBom = "\xEF\xBB\xBF";
   if (content.substr(0, kBom.size()) == kBom) content.remove_prefix(kBom.size());
   return content.substr(0, 5) == "<?xml";
+}
+
+bool is_base64_char(char c) {
+  return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '+' || c == '/' || c == '=';
+}
+
+int base64_value(char c) {
+  if (c >= 'A' && c <= 'Z') return c - 'A';
+  if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+  if (c >= '0' && c <= '9') return c - '0' + 52;
+  return c == '+' ? 62 : (c == '/' ? 63 : 0);
+}
+
+// An element format as OpenCV writes one ("f", "3d", "2f3i"): type letters, each after an
+// optional count of at least 1.
+bool valid_element_format(std::string_view dt) {
+  if (dt.empty()) return false;
+  int count = -1;
+  for (const char c : dt) {
+    if (c >= '0' && c <= '9') {
+      count = (count < 0 ? 0 : count * 10) + (c - '0');
+      if (count > 1'000'000) return false;
+    } else if (std::strchr("ucwsifdhr", c) != nullptr && c != '\0') {
+      if (count == 0) return false;
+      count = -1;
+    } else {
+      return false;
+    }
+  }
+  return count < 0;
+}
+
+// One base64 block (`payload`, starting on line `line`): only base64 characters and white space,
+// whole 4-character groups, and a header (the first 24 bytes) naming a valid element format.
+Status check_base64_block(std::string_view payload, std::string_view where, size_t line) {
+  std::string text;
+  for (const char c : payload) {
+    if (is_base64_char(c)) {
+      text += c;
+    } else if (std::isspace(static_cast<unsigned char>(c)) == 0) {
+      return make_error(ErrorCode::kCorruptData, "{}: line {}: damaged base64 data ('{}')", where,
+                        line, c);
+    }
+  }
+  constexpr size_t kHeaderChars = 32;  // 24 bytes
+  if (text.size() % 4 != 0 || text.size() < kHeaderChars)
+    return make_error(ErrorCode::kCorruptData, "{}: line {}: damaged base64 data (length {})",
+                      where, line, text.size());
+  std::string header;
+  for (size_t i = 0; i < kHeaderChars; i += 4) {
+    const int v = (base64_value(text[i]) << 18) | (base64_value(text[i + 1]) << 12) |
+                  (base64_value(text[i + 2]) << 6) | base64_value(text[i + 3]);
+    header += static_cast<char>((v >> 16) & 0xFF);
+    header += static_cast<char>((v >> 8) & 0xFF);
+    header += static_cast<char>(v & 0xFF);
+  }
+  const std::string_view dt =
+      std::string_view(header).substr(0, std::min(header.find(' '), header.find('\0')));
+  if (!valid_element_format(dt))
+    return make_error(ErrorCode::kCorruptData,
+                      "{}: line {}: damaged base64 data (no element format in its header)", where,
+                      line);
+  return ok_status();
+}
+
+// OpenCV's base64 decoder loops for ever on some damaged blocks (fuzz/README.md finding 10), so
+// every block is checked before OpenCV sees it: YAML `!!binary |` and the lines indented below
+// it, XML `type_id="binary">` up to the next tag, JSON `"$base64$` up to the closing quote.
+Status check_base64_blocks(std::string_view content, std::string_view where) {
+  const auto line_of = [&](size_t pos) {
+    return 1 + static_cast<size_t>(std::count(content.begin(), content.begin() + pos, '\n'));
+  };
+  for (const std::string_view marker : {"!!binary", "type_id=\"binary\">", "$base64$"}) {
+    for (size_t at = content.find(marker); at != std::string_view::npos;
+         at = content.find(marker, at + 1)) {
+      size_t begin = at + marker.size();
+      size_t end = content.size();
+      if (marker == "!!binary") {
+        // The block: the rest of the marker's line after '|', then every following line that is
+        // blank or indented deeper than the marker's line.
+        const size_t line_start =
+            content.rfind('\n', at) == std::string_view::npos ? 0 : content.rfind('\n', at) + 1;
+        const size_t indent = content.find_first_not_of(" \t", line_start) - line_start;
+        begin = std::min(content.find_first_not_of(" \t", begin), content.size());
+        if (begin < content.size() && content[begin] == '|') ++begin;
+        end = std::min(content.find('\n', begin), content.size());
+        while (end < content.size()) {
+          const size_t next = end + 1;
+          const size_t eol = std::min(content.find('\n', next), content.size());
+          const size_t first = content.find_first_not_of(" \t\r", next);
+          if (first < eol && first - next <= indent) break;
+          end = eol;
+        }
+      } else {
+        end = std::min(end, content.find(marker[0] == '$' ? '"' : '<', begin));
+      }
+      DS_RETURN_IF_ERROR(
+          check_base64_block(content.substr(begin, end - begin), where, line_of(begin)));
+    }
+  }
+  return ok_status();
 }
 
 // The values a matrix's dt declares per element ("3d" = 3, "d" = 1, "2f3i" = 5).
@@ -90,16 +193,27 @@ Result<cv::FileStorage> parse_file_storage(std::string_view content, std::string
                         doc.ErrorLineNum(), doc.ErrorName());
     }
   }
+  DS_RETURN_IF_ERROR(check_base64_blocks(content, where));
+  // OpenCV 4.6's YAML reader loops for ever on some files with an XML comment opener in them
+  // (fuzz/README.md findings 8 and 11); YAML's comments start with '#', and no file OpenCV
+  // writes holds one.
+  if (!parsed_as_xml(content) && content.find("<!--") != std::string_view::npos) {
+    const size_t at = content.find("<!--");
+    return make_error(ErrorCode::kCorruptData,
+                      "{}: line {}: '<!--' in a YAML file (an XML comment; YAML's start with #)",
+                      where, 1 + std::count(content.begin(), content.begin() + at, '\n'));
+  }
   // Only now may OpenCV parse it (its XML reader crashes on malformed XML).
   cv::FileStorage fs;
   try {
     if (!fs.open(std::string(content), cv::FileStorage::READ | cv::FileStorage::MEMORY))
       return make_error(ErrorCode::kCorruptData, "{}: not a YAML/XML/JSON file", where);
+    // Walking the tree throws too on some (fuzz/README.md finding 9: a nameless node's name).
+    DS_RETURN_IF_ERROR(check_matrices(fs.root(), where, 0));
   } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: not a readable YAML/XML/JSON file ({})", where,
                       opencv_reason(e));
   }
-  DS_RETURN_IF_ERROR(check_matrices(fs.root(), where, 0));
   return fs;
 }
 

@@ -83,14 +83,21 @@ TEST(FileStorageCheck, MalformedFilesAreOneLineErrors) {
   EXPECT_FALSE(parse_file_storage(std::string("%YAML:1.0\na: 1\0\n", 16), "x.yaml"));
 }
 
-// fuzz/README.md finding 8: OpenCV 4.6 parsing this from a file never returns; from memory it
-// returns at once (ctest's timeout fails this test if it hangs).
-TEST(FileStorageCheck, YamlThatHangsOpenCvsFileReaderIsParsedFromMemory) {
+// fuzz/README.md findings 8 and 11: OpenCV 4.6's YAML reader never returns on these (the first
+// only when it reads a file, the second from memory too); both are refused before it sees them
+// (a hang would fail this test by ctest's timeout).
+TEST(FileStorageCheck, YamlWithAnXmlCommentIsRefused) {
   const fs::path p = write("ds_finding8.yaml", "%YAML:1.\n   cols: 0\n  <!-- :dt:May)\n");
-  const auto opened = open_file_storage(p);
-  ASSERT_TRUE(opened) << opened.error().to_string();
-  EXPECT_TRUE((*opened)["mic_positions_m"].empty());
+  const auto finding8 = open_file_storage(p);
+  ASSERT_FALSE(finding8);
+  EXPECT_NE(finding8.error().message.find("line 3: '<!--' in a YAML file"), std::string::npos)
+      << finding8.error().message;
   fs::remove(p);
+  EXPECT_FALSE(parse_file_storage("%YAML:1.\n s:4\n<!--\n)", "finding11.yaml"));
+  // In XML it is a comment, and a YAML string may hold '#'.
+  EXPECT_TRUE(parse_file_storage(
+      "<?xml version=\"1.0\"?>\n<opencv_storage><!-- c --><a>1</a></opencv_storage>\n", "c.xml"));
+  EXPECT_TRUE(parse_file_storage("%YAML:1.0\na: \"x # y\"\n", "hash.yaml"));
 }
 
 TEST(FileStorageCheck, UnreadableAndCompressedFilesAreErrors) {
@@ -161,6 +168,54 @@ TEST(FileStorageCheck, Finding7IsRefusedQuickly) {
   const auto status = parse_file_storage(finding.substr(1), "ObjectFile.xml");
   ASSERT_FALSE(status);
   EXPECT_NE(status.error().message.find("DeskWorld_T_mat"), std::string::npos);
+}
+
+// Finding 9: walking the parsed tree threw (a nameless node's name): an error, not a crash.
+TEST(FileStorageCheck, Finding9IsAnErrorNotACrash) {
+  const auto s = parse_file_storage(
+      "%YAML:1.1.\xfd"
+      "3\n   dt: =up",
+      "mic_array.yaml");
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().code, ErrorCode::kCorruptData);
+}
+
+// Finding 10: OpenCV's base64 decoder loops for ever on some damaged blocks, so every block is
+// checked first; the blocks OpenCV writes (YAML, XML, JSON) pass.
+TEST(FileStorageCheck, DamagedBase64IsRefusedWrittenBase64Passes) {
+  for (const char* name : {"b64.yaml", "b64.xml", "b64.json"}) {
+    const fs::path p = fs::path(::testing::TempDir()) / name;
+    {
+      cv::FileStorage out(p.string(), cv::FileStorage::WRITE | cv::FileStorage::BASE64);
+      out << "m" << cv::Mat(20, 128, CV_32F, cv::Scalar(0.25)) << "small"
+          << cv::Mat::eye(2, 2, CV_64F);
+    }
+    const auto opened = open_file_storage(p);
+    ASSERT_TRUE(opened) << name << ": " << opened.error().to_string();
+    cv::Mat m;
+    (*opened)["m"] >> m;
+    EXPECT_EQ(m.rows, 20) << name;
+    fs::remove(p);
+  }
+  std::ifstream in(fs::path(DREAMSENSE_SOURCE_DIR) / "fuzz/findings/opencv_base64_hang.models",
+                   std::ios::binary);
+  const std::string finding{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  ASSERT_GT(finding.size(), 1U);
+  const auto hang = parse_file_storage(finding.substr(1), "face_gallery.yaml");
+  ASSERT_FALSE(hang);
+  EXPECT_NE(hang.error().message.find("face_gallery.yaml: line 14: damaged base64 data"),
+            std::string::npos)
+      << hang.error().message;
+  // A header whose element format has a zero count, and a cut block.
+  const std::string zero_count = "MGYgICAgICAgICAgICAgICAgICAgICAgAADAPw==";  // "0f" + spaces
+  EXPECT_FALSE(parse_file_storage(
+      "{\n \"m\": { \"rows\": 1, \"cols\": 1, \"dt\": \"f\", \"data\": \"$base64$" + zero_count +
+          "\" }\n}\n",
+      "zero.json"));
+  EXPECT_FALSE(parse_file_storage(
+      "%YAML:1.0\nm: !!opencv-matrix\n   rows: 1\n   cols: 1\n   dt: f\n   data: !!binary |\n"
+      "      MWYgICAgICAg\n",
+      "cut.yaml"));
 }
 
 }  // namespace
