@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <tinyxml2.h>
 #include <vector>
@@ -35,23 +36,24 @@ int base64_value(char c) {
   return c == '+' ? 62 : (c == '/' ? 63 : 0);
 }
 
-// An element format as OpenCV writes one ("f", "3d", "2f3i"): type letters, each after an
-// optional count of at least 1.
-bool valid_element_format(std::string_view dt) {
-  if (dt.empty()) return false;
+// The values per element of a format as OpenCV writes one ("f" = 1, "3d" = 3, "2f3i" = 5: type
+// letters, each after an optional count of at least 1); nullopt for anything else.
+std::optional<double> values_per_element(std::string_view dt) {
+  double total = 0;
   int count = -1;
   for (const char c : dt) {
     if (c >= '0' && c <= '9') {
       count = (count < 0 ? 0 : count * 10) + (c - '0');
-      if (count > 1'000'000) return false;
-    } else if (std::strchr("ucwsifdhr", c) != nullptr && c != '\0') {
-      if (count == 0) return false;
+      if (count > 1'000'000) return std::nullopt;
+    } else if (c != '\0' && std::strchr("ucwsifdhr", c) != nullptr && count != 0) {
+      total += count < 0 ? 1 : count;
       count = -1;
     } else {
-      return false;
+      return std::nullopt;
     }
   }
-  return count < 0;
+  if (total == 0 || count >= 0) return std::nullopt;
+  return total;
 }
 
 // One base64 block (`payload`, starting on line `line`): only base64 characters and white space,
@@ -80,7 +82,7 @@ Status check_base64_block(std::string_view payload, std::string_view where, size
   }
   const std::string_view dt =
       std::string_view(header).substr(0, std::min(header.find(' '), header.find('\0')));
-  if (!valid_element_format(dt))
+  if (!values_per_element(dt))
     return make_error(ErrorCode::kCorruptData,
                       "{}: line {}: damaged base64 data (no element format in its header)", where,
                       line);
@@ -125,21 +127,6 @@ Status check_base64_blocks(std::string_view content, std::string_view where) {
   return ok_status();
 }
 
-// The values a matrix's dt declares per element ("3d" = 3, "d" = 1, "2f3i" = 5).
-double values_per_element(const std::string& dt) {
-  double total = 0;
-  double count = 0;
-  for (const char c : dt) {
-    if (c >= '0' && c <= '9') {
-      count = count * 10 + (c - '0');
-    } else {
-      total += count > 0 ? count : 1;
-      count = 0;
-    }
-  }
-  return total > 0 ? total : 1;
-}
-
 // A matrix (a map with `dt`, all cv::read(Mat) needs: rows and cols, or the `sizes` of an
 // n-dimensional one) must hold the values its size declares. OpenCV 4.6 allocates the declared rows
 // x cols before it compares them with the data, and reads a size that is not a number as INT_MAX: a
@@ -154,7 +141,11 @@ Status check_matrix(const cv::FileNode& node, std::string_view where) {
   } else {
     sizes.push_back(nd);
   }
-  double declared = values_per_element(node["dt"].isString() ? node["dt"].string() : "");
+  const auto per_element = values_per_element(node["dt"].isString() ? node["dt"].string() : "");
+  if (!per_element)
+    return make_error(ErrorCode::kCorruptData, "{}: matrix '{}' has no valid element format (dt)",
+                      where, node.name());
+  double declared = *per_element;
   for (const auto& n : sizes) {
     if (!n.isInt() || static_cast<int>(n) < 0)
       return make_error(ErrorCode::kCorruptData,

@@ -149,6 +149,13 @@ TEST(FileStorageCheck, MatrixDeclaringMoreValuesThanItHoldsIsRefused) {
     ASSERT_FALSE(odd) << rows;
     EXPECT_NE(odd.error().message.find("not a non-negative integer"), std::string::npos) << rows;
   }
+  // An element format OpenCV does not know, or with a zero count.
+  for (const char* dt : {"q", "0d", "3", ""}) {
+    EXPECT_FALSE(parse_file_storage(
+        std::string("%YAML:1.0\nK: { rows: 1, cols: 1, dt: \"") + dt + "\", data: [ 1 ] }\n",
+        "dt.yaml"))
+        << dt;
+  }
   // No data at all.
   EXPECT_FALSE(parse_file_storage("%YAML:1.0\nK: { rows: 60000, cols: 60000, dt: d }\n", "k.yaml"));
   // Sizes that agree with the data pass, in any map.
