@@ -83,21 +83,29 @@ TEST(FileStorageCheck, MalformedFilesAreOneLineErrors) {
   EXPECT_FALSE(parse_file_storage(std::string("%YAML:1.0\na: 1\0\n", 16), "x.yaml"));
 }
 
-// fuzz/README.md findings 8 and 11: OpenCV 4.6's YAML reader never returns on these (the first
-// only when it reads a file, the second from memory too); both are refused before it sees them
-// (a hang would fail this test by ctest's timeout).
-TEST(FileStorageCheck, YamlWithAnXmlCommentIsRefused) {
+// fuzz/README.md findings 8, 11 and 12: OpenCV 4.6's YAML reader never returns on these (the
+// first only when it reads a file, the others from memory too); all are refused before it sees
+// them (a hang would fail this test by ctest's timeout).
+TEST(FileStorageCheck, YamlThatIsNotOneMapDocumentIsRefused) {
   const fs::path p = write("ds_finding8.yaml", "%YAML:1.\n   cols: 0\n  <!-- :dt:May)\n");
   const auto finding8 = open_file_storage(p);
   ASSERT_FALSE(finding8);
-  EXPECT_NE(finding8.error().message.find("line 3: '<!--' in a YAML file"), std::string::npos)
+  EXPECT_NE(finding8.error().message.find("more than one YAML document"), std::string::npos)
       << finding8.error().message;
   fs::remove(p);
-  EXPECT_FALSE(parse_file_storage("%YAML:1.\n s:4\n<!--\n)", "finding11.yaml"));
-  // In XML it is a comment, and a YAML string may hold '#'.
+  for (const char* content : {"%YAML:1.\n s:4\n<!--\n)", "%YAML:1.\n s:\xcb\n<H--\n.",
+                              "%YAML:1.0\na: 1\n...\n-x\n", "%YAML:1.0\n- 1\n- 2\n",
+                              // finding 13: yaml-cpp's LoadAll looped on these
+                              "\xEF\xBB\xBF,", "%YAML:1.0\n---\n,\nb: 1\n", ","}) {
+    const auto s = parse_file_storage(content, "mic_array.yaml");
+    ASSERT_FALSE(s) << content;
+    EXPECT_EQ(s.error().code, ErrorCode::kCorruptData);
+  }
+  // In XML a comment is fine; a YAML string may hold '#' and "<!--"; JSON is one map.
   EXPECT_TRUE(parse_file_storage(
       "<?xml version=\"1.0\"?>\n<opencv_storage><!-- c --><a>1</a></opencv_storage>\n", "c.xml"));
-  EXPECT_TRUE(parse_file_storage("%YAML:1.0\na: \"x # y\"\n", "hash.yaml"));
+  EXPECT_TRUE(parse_file_storage("%YAML:1.0\n---\na: \"x # y <!--\"\n", "hash.yaml"));
+  EXPECT_TRUE(parse_file_storage("{\n  \"a\": [1, 2]\n}\n", "a.json"));
 }
 
 TEST(FileStorageCheck, UnreadableAndCompressedFilesAreErrors) {
