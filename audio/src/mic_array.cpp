@@ -71,10 +71,8 @@ Result<MicArrayGeometry> read_mic_array(const std::filesystem::path& path) {
   MicArrayGeometry g;
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing mic array calibration", path.string());
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage fs, open_file_storage(path));
   try {
-    cv::FileStorage& fs = *opened;
     cv::Mat m;
     fs["mic_positions_m"] >> m;
     if (m.empty() || m.cols != 3)

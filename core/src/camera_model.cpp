@@ -91,9 +91,7 @@ Status read_key(const cv::FileStorage& fs, const char* key, T& out,
 Result<CameraModel> read_camera_model(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing calibration file", path.string());
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
-  const cv::FileStorage& fs = *opened;
+  DS_ASSIGN_OR_RETURN(const cv::FileStorage fs, open_file_storage(path));
   CameraModel m;
   cv::Mat K, R, t;
   DS_RETURN_IF_ERROR(read_key(fs, "frame", m.frame, path));

@@ -1,6 +1,7 @@
 #include "dreamsense/core/file_storage_check.hpp"
 
 #include "dreamsense/core/opencv_error.hpp"
+#include "dreamsense/core/text.hpp"
 
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
@@ -159,9 +160,6 @@ Status check_base64_block(std::string_view payload, std::string_view where, size
 // every block is checked before OpenCV sees it: YAML `!!binary |` and the lines indented below
 // it, XML `type_id="binary">` up to the next tag, JSON `"$base64$` up to the closing quote.
 Status check_base64_blocks(std::string_view content, std::string_view where) {
-  const auto line_of = [&](size_t pos) {
-    return 1 + static_cast<size_t>(std::count(content.begin(), content.begin() + pos, '\n'));
-  };
   for (const std::string_view marker : {"!!binary", "type_id=\"binary\">", "$base64$"}) {
     for (size_t at = content.find(marker); at != std::string_view::npos;
          at = content.find(marker, at + 1)) {
@@ -170,8 +168,8 @@ Status check_base64_blocks(std::string_view content, std::string_view where) {
       if (marker == "!!binary") {
         // The block: the rest of the marker's line after '|', then every following line that is
         // blank or indented deeper than the marker's line.
-        const size_t line_start =
-            content.rfind('\n', at) == std::string_view::npos ? 0 : content.rfind('\n', at) + 1;
+        const size_t newline = content.rfind('\n', at);
+        const size_t line_start = newline == std::string_view::npos ? 0 : newline + 1;
         const size_t indent = content.find_first_not_of(" \t", line_start) - line_start;
         begin = std::min(content.find_first_not_of(" \t", begin), content.size());
         if (begin < content.size() && content[begin] == '|') ++begin;
@@ -186,8 +184,8 @@ Status check_base64_blocks(std::string_view content, std::string_view where) {
       } else {
         end = std::min(end, content.find(marker[0] == '$' ? '"' : '<', begin));
       }
-      DS_RETURN_IF_ERROR(
-          check_base64_block(content.substr(begin, end - begin), where, line_of(begin)));
+      DS_RETURN_IF_ERROR(check_base64_block(content.substr(begin, end - begin), where,
+                                            line_of_offset(content, begin)));
     }
   }
   return ok_status();
@@ -249,9 +247,10 @@ Result<cv::FileStorage> parse_file_storage(std::string_view content, std::string
       return make_error(ErrorCode::kCorruptData, "{}: line {}: malformed XML ({})", where,
                         doc.ErrorLineNum(), doc.ErrorName());
     }
+  } else {
+    DS_RETURN_IF_ERROR(check_yaml_structure(content, where));
   }
   DS_RETURN_IF_ERROR(check_base64_blocks(content, where));
-  if (!parsed_as_xml(content)) DS_RETURN_IF_ERROR(check_yaml_structure(content, where));
   // Only now may OpenCV parse it (its XML reader crashes on malformed XML).
   cv::FileStorage fs;
   try {

@@ -20,9 +20,9 @@ fs::path write(const std::string& name, const std::string& content) {
   return p;
 }
 
-std::string finding_without_selector() {
-  std::ifstream in(fs::path(DREAMSENSE_SOURCE_DIR) / "fuzz/findings/opencv_xml_segv.calibration",
-                   std::ios::binary);
+// A reproducer of fuzz/findings without the selector byte the harness reads first.
+std::string finding_without_selector(const std::string& name) {
+  std::ifstream in(fs::path(DREAMSENSE_SOURCE_DIR) / "fuzz/findings" / name, std::ios::binary);
   std::string s{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   return s.empty() ? s : s.substr(1);
 }
@@ -46,7 +46,7 @@ TEST(FileStorageCheck, FilesOpenCvWritesPass) {
 
 // The finding itself: a NUL byte inside an XML attribute after a cut tag.
 TEST(FileStorageCheck, OpenCvXmlCrashFindingIsAnErrorNamingTheFile) {
-  const std::string finding = finding_without_selector();
+  const std::string finding = finding_without_selector("opencv_xml_segv.calibration");
   ASSERT_EQ(finding.size(), 44u) << "fuzz/findings/opencv_xml_segv.calibration missing or changed";
   const fs::path p = write("ds_finding4.xml", finding);
   auto s = open_file_storage(p);
@@ -175,12 +175,9 @@ TEST(FileStorageCheck, MatrixDeclaringMoreValuesThanItHoldsIsRefused) {
 
 // Finding 7 as the fuzzer found it (selector 4, a DREAM ObjectFile.xml): refused at once.
 TEST(FileStorageCheck, Finding7IsRefusedQuickly) {
-  std::ifstream in(
-      fs::path(DREAMSENSE_SOURCE_DIR) / "fuzz/findings/opencv_int_max_rows.calibration",
-      std::ios::binary);
-  const std::string finding{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  ASSERT_GT(finding.size(), 1U);
-  const auto status = parse_file_storage(finding.substr(1), "ObjectFile.xml");
+  const std::string finding = finding_without_selector("opencv_int_max_rows.calibration");
+  ASSERT_GT(finding.size(), 0U);
+  const auto status = parse_file_storage(finding, "ObjectFile.xml");
   ASSERT_FALSE(status);
   EXPECT_NE(status.error().message.find("DeskWorld_T_mat"), std::string::npos);
 }
@@ -212,11 +209,9 @@ TEST(FileStorageCheck, DamagedBase64IsRefusedWrittenBase64Passes) {
     EXPECT_EQ(m.rows, 20) << name;
     fs::remove(p);
   }
-  std::ifstream in(fs::path(DREAMSENSE_SOURCE_DIR) / "fuzz/findings/opencv_base64_hang.models",
-                   std::ios::binary);
-  const std::string finding{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  ASSERT_GT(finding.size(), 1U);
-  const auto hang = parse_file_storage(finding.substr(1), "face_gallery.yaml");
+  const std::string finding = finding_without_selector("opencv_base64_hang.models");
+  ASSERT_GT(finding.size(), 0U);
+  const auto hang = parse_file_storage(finding, "face_gallery.yaml");
   ASSERT_FALSE(hang);
   EXPECT_NE(hang.error().message.find("face_gallery.yaml: line 14: damaged base64 data"),
             std::string::npos)

@@ -128,10 +128,8 @@ Status write_table_frame(const std::filesystem::path& path, const TableFrame& ta
 Result<TableFrame> read_table_frame(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path))
     return make_error(ErrorCode::kNotFound, "{}: missing table file", path.string());
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage fs, open_file_storage(path));
   try {
-    cv::FileStorage& fs = *opened;
     cv::Mat n, R, t, pts;
     fs["plane_normal"] >> n;
     fs["world_from_table_R"] >> R;

@@ -91,11 +91,9 @@ Result<std::vector<cv::Point2d>> read_portrait_landmarks(const std::filesystem::
                       "{}: portrait landmarks not found (data/demo/astronaut_landmarks.yaml of the "
                       "dreamsense source tree)",
                       path.string());
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage fs, open_file_storage(path));
   cv::Mat m;
   try {
-    cv::FileStorage& fs = *opened;
     fs["landmarks_px"] >> m;
   } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));

@@ -21,9 +21,7 @@ Result<cv::FileStorage> open_model_file(const ModelFileKind& kind, const fs::pat
   if (!fs::is_regular_file(path, ec))
     return make_error(ErrorCode::kNotFound, "{}: {} missing (write one with `{}`)", path.string(),
                       kind.what, kind.train_command);
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
-  cv::FileStorage& f = *opened;
+  DS_ASSIGN_OR_RETURN(cv::FileStorage f, open_file_storage(path));
   std::string format;
   if (f["format"].isString()) f["format"] >> format;
   if (format != kind.format_name)

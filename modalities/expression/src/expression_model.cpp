@@ -240,11 +240,9 @@ Result<ExpressionModel> ExpressionModel::load(const std::filesystem::path& path)
   const std::string where = path.string();
   if (!std::filesystem::is_regular_file(path))
     return make_error(ErrorCode::kNotFound, "{}: no such expression model", where);
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage fs, open_file_storage(path));
   ExpressionModel m;
   try {
-    cv::FileStorage& fs = *opened;
     if (static_cast<std::string>(fs["format"]) != kFormat)
       return make_error(ErrorCode::kCorruptData, "{}: not a dreamsense expression model", where);
     const int version = static_cast<int>(fs["version"]);

@@ -170,11 +170,10 @@ Result<FaceDetector> FaceDetector::create(const FaceDetectorOptions& options) {
                         "face detector: cascade '{}' not found (install the Debian package "
                         "opencv-data)",
                         p.string());
-    auto opened = open_file_storage(p);
-    if (!opened) return tl::unexpected(opened.error());
+    DS_ASSIGN_OR_RETURN(const cv::FileStorage file, open_file_storage(p));
     bool loaded = false;
     try {
-      loaded = c.read(opened->getFirstTopLevelNode());
+      loaded = c.read(file.getFirstTopLevelNode());
     } catch (const std::exception&) {
       loaded = false;
     }

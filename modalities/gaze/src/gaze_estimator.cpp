@@ -182,11 +182,9 @@ Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& 
 Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
   if (!std::ifstream(path))
     return make_error(ErrorCode::kNotFound, "{}: gaze model not found", path.string());
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage fs, open_file_storage(path));
   GazeModelFile m;
   try {
-    cv::FileStorage& fs = *opened;
     if (static_cast<std::string>(fs["format"]) != kGazeModelFormat)
       return make_error(ErrorCode::kCorruptData, "{}: not a dreamsense gaze model (format: {})",
                         path.string(), kGazeModelFormat);

@@ -164,11 +164,9 @@ Status write_face_model(const std::string& path, const FaceModel3d& model,
 Result<FaceModel3d> read_face_model(const std::string& path) {
   if (!std::ifstream(path))
     return make_error(ErrorCode::kNotFound, "{}: face model not found", path);
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage fs, open_file_storage(path));
   FaceModel3d m;
   try {
-    cv::FileStorage& fs = *opened;
     if (static_cast<std::string>(fs["format"]) != kFaceModelFormat)
       return make_error(ErrorCode::kCorruptData, "{}: not a dreamsense face model (format: {})",
                         path, kFaceModelFormat);
@@ -197,10 +195,8 @@ Result<FaceModel3d> read_face_model(const std::string& path) {
 Result<cv::Matx33d> read_model_from_head(const std::filesystem::path& gaze_yaml) {
   if (!std::ifstream(gaze_yaml))
     return make_error(ErrorCode::kNotFound, "{}: gaze calibration not found", gaze_yaml.string());
-  auto opened = open_file_storage(gaze_yaml);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage fs, open_file_storage(gaze_yaml));
   try {
-    cv::FileStorage& fs = *opened;
     if (fs["model_from_head"].empty()) return cv::Matx33d::eye();
     cv::Mat R;
     fs["model_from_head"] >> R;

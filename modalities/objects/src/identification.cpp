@@ -410,10 +410,8 @@ Result<ObjectGallery> ObjectGallery::load(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     return make_error(ErrorCode::kNotFound, "{}: no such object gallery", p);
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage fs, open_file_storage(path));
   try {
-    cv::FileStorage& fs = *opened;
     if (static_cast<std::string>(fs["format"]) != kFormatName)
       return make_error(ErrorCode::kCorruptData, "{}: not an object gallery (format '{}')", p,
                         static_cast<std::string>(fs["format"]));

@@ -123,11 +123,9 @@ Result<VoiceModel> VoiceModel::load(const fs::path& path) {
     return make_error(ErrorCode::kNotFound,
                       "{}: voice model missing (write one with `dreamsense train voices`)",
                       path.string());
-  auto opened = open_file_storage(path);
-  if (!opened) return tl::unexpected(opened.error());
+  DS_ASSIGN_OR_RETURN(cv::FileStorage f, open_file_storage(path));
   VoiceModel m;
   try {
-    cv::FileStorage& f = *opened;
     std::string format;
     int version = 0;
     if (f["format"].isString()) f["format"] >> format;
