@@ -38,9 +38,7 @@ struct AnalyzeFlags {
   std::string mutual_mode;
   std::vector<double> robot_head;
   std::string voice_method, voice_model;
-  std::string pipeline;          // pipeline.yaml
-  std::vector<std::string> set;  // ANALYSER.KEY=VALUE
-  std::vector<std::string> enable, disable;
+  PipelineFlags pipeline;
   bool print_pipeline = false;       // analyze: show the graph and stop
   bool save_subject = false;         // analyze: keep a converged self-calibration as the subject's
   std::string calibration;           // analyze VIDEO: intrinsics instead of the approximate ones
@@ -80,14 +78,7 @@ void print_summary(const runner::AnalysisSummary& s, const std::filesystem::path
 // Analysis flags shared by analyze and live. Each analyser option flag is a shorthand for one
 // option of the declared pipeline (docs/pipeline.md), set over pipeline.yaml's value.
 void add_analysis_flags(CLI::App& cmd, AnalyzeFlags& flags) {
-  cmd.add_option("--pipeline", flags.pipeline,
-                 "pipeline.yaml: analysers on/off, their options, stream roles (docs/pipeline.md)")
-      ->check(CLI::ExistingFile);
-  cmd.add_option("--set", flags.set,
-                 "Set an analyser option, ANALYSER.KEY=VALUE (YAML value; repeatable), e.g. "
-                 "gaze.mutual.radius_m=0.25");
-  cmd.add_option("--enable", flags.enable, "Run these analysers (names as --print-pipeline shows)");
-  cmd.add_option("--disable", flags.disable, "Do not run these analysers");
+  add_pipeline_flags(cmd, flags.pipeline);
   cmd.add_option("--grammar", flags.grammar,
                  "Speech grammar (JSGF or SRGS .grxml); default: the session's own, if any "
                  "(= --set speech.grammar=FILE)")
@@ -146,7 +137,6 @@ Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& 
   apply_subject_flags(flags.subject, o);
   o.policy = flags.policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
   runner::PlanOptions& plan = o.plan;
-  plan.pipeline_file = flags.pipeline;
   auto set = [&plan](std::string analyzer, std::string key, std::string value) {
     plan.overrides.push_back({std::move(analyzer), std::move(key), std::move(value)});
   };
@@ -164,6 +154,25 @@ Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& 
   else if (!flags.voice_method.empty())
     set("voice_id", "method", flags.voice_method);
   if (!flags.voice_model.empty()) set("voice_id", "model", quoted_path(flags.voice_model));
+  return apply_pipeline_flags(flags.pipeline, plan);
+}
+
+}  // namespace
+
+void add_pipeline_flags(CLI::App& cmd, PipelineFlags& flags) {
+  cmd.add_option("--pipeline", flags.pipeline,
+                 "pipeline.yaml: analysers on/off, their options, stream roles (docs/pipeline.md)")
+      ->check(CLI::ExistingFile);
+  cmd.add_option("--set", flags.set,
+                 "Set an analyser option, ANALYSER.KEY=VALUE (YAML value; repeatable), e.g. "
+                 "gaze.mutual.radius_m=0.25");
+  cmd.add_option("--enable", flags.enable, "Run these analysers (names as --print-pipeline shows)");
+  cmd.add_option("--disable", flags.disable, "Do not run these analysers");
+}
+
+// After the verb's own shorthands (so that an explicit --set wins over them).
+Status apply_pipeline_flags(const PipelineFlags& flags, runner::PlanOptions& plan) {
+  plan.pipeline_file = flags.pipeline;
   for (const auto& kv : flags.set) {
     const auto eq = kv.find('=');
     const auto dot = kv.find('.');
@@ -172,14 +181,13 @@ Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& 
       return make_error(ErrorCode::kInvalidArgument,
                         "--set {}: expected ANALYSER.KEY=VALUE (e.g. gaze.mutual.radius_m=0.25)",
                         kv);
-    set(kv.substr(0, dot), kv.substr(dot + 1, eq - dot - 1), kv.substr(eq + 1));
+    plan.overrides.push_back(
+        {kv.substr(0, dot), kv.substr(dot + 1, eq - dot - 1), kv.substr(eq + 1)});
   }
   for (const auto& n : flags.enable) plan.enable[n] = true;
   for (const auto& n : flags.disable) plan.enable[n] = false;
   return ok_status();
 }
-
-}  // namespace
 
 Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o,
                                                            bool quiet) {

@@ -1,4 +1,5 @@
-// `dreamsense bench pipeline SESSION [--json FILE] [--no-live]`
+// `dreamsense bench pipeline SESSION [--json FILE] [--no-live] [--pipeline FILE] [--set A.K=V]
+// [--enable A] [--disable A]`
 
 #include "dreamsense/runner/analysis.hpp"
 
@@ -13,6 +14,7 @@ namespace {
 struct BenchFlags {
   std::string session, json;
   bool no_live = false;
+  PipelineFlags pipeline;  // the configuration measured (A/B of an option in one build)
 };
 
 double p95(std::vector<double> v) {
@@ -34,10 +36,15 @@ void add_bench(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("session", flags->session, "Session folder")->required();
   cmd->add_option("--json", flags->json, "Write the result JSON to FILE (- for stdout)");
   cmd->add_flag("--no-live", flags->no_live, "Skip the real-time paced run");
+  add_pipeline_flags(*cmd, flags->pipeline);
   cmd->callback([flags, &g, &exit_code] {
     (void)g;
     runner::AnalysisOptions o;
     o.session_dir = flags->session;  // no out_dir: primitives are evaluated, nothing is written
+    if (auto s = apply_pipeline_flags(flags->pipeline, o.plan); !s) {
+      exit_code = fail(s.error());
+      return;
+    }
     auto replay = runner::analyze_session(o);
     if (!replay) {
       exit_code = fail(replay.error());

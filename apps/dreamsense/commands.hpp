@@ -73,6 +73,16 @@ void add_enroll_faces(CLI::App& enroll, const GlobalFlags& g, int& exit_code);
 // cmd_landmarks.cpp: `eval landmarks` (issue 20: face detection + 68 landmarks on 300-W faces).
 void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code);
 
+// The declared pipeline's flags (cmd_analyze.cpp; analyze, live, bench pipeline): --pipeline FILE,
+// --set ANALYSER.KEY=VALUE, --enable/--disable ANALYSER.
+struct PipelineFlags {
+  std::string pipeline;          // pipeline.yaml
+  std::vector<std::string> set;  // ANALYSER.KEY=VALUE
+  std::vector<std::string> enable, disable;
+};
+void add_pipeline_flags(CLI::App& cmd, PipelineFlags& flags);
+Status apply_pipeline_flags(const PipelineFlags& flags, runner::PlanOptions& plan);
+
 // The child's calibration for analyses (cmd_analyze.cpp): --subject DIR|none, --face-model,
 // --gaze-model, --speech-model.
 struct SubjectFlags {

@@ -373,6 +373,17 @@ TEST_F(Cli, BenchPipelineReportsTheContractKeys) {
   EXPECT_GT(j["metrics"]["fps"].get<double>(), 0.0);
   EXPECT_EQ(j["metrics"]["ticks"], 100);
   EXPECT_FALSE(j["stages"].empty());
+  // The configuration measured can be changed (A/B of an option in one build).
+  const fs::path off = root() / "bench_off.json";
+  r = run("bench pipeline " + demo().string() +
+          " --no-live --disable face_detection --set gaze.mutual.radius_m=0.3 --json " +
+          off.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const json& stage : json::parse(slurp(off))["stages"])
+    EXPECT_NE(stage["name"], "face_detection");
+  r = run("bench pipeline " + demo().string() + " --no-live --set face_detection.no_such=1");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("no_such"), std::string::npos) << r.err;
 }
 
 // Numbers within `tol`, everything else equal.

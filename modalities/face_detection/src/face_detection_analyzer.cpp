@@ -80,13 +80,16 @@ class FaceDetectionAnalyzer : public Analyzer {
       r.frame_sequence = f.sequence;
       r.image_size = image.size();
       KnownFrontalness known;
-      if (const auto h = heads.find(cam.id); h != heads.end())
+      std::optional<double> head_yaw_deg;
+      if (const auto h = heads.find(cam.id); h != heads.end()) {
         known = [&v = h->second](const std::vector<DetectedFace>& faces,
                                  size_t i) -> std::optional<float> {
           if (face_of_head(faces, v.head_px) != i) return std::nullopt;
           return frontalness_from_yaw(v.yaw_deg);
         };
-      r.faces = cam.tracker.process(image, known).faces;
+        head_yaw_deg = h->second.yaw_deg;
+      }
+      r.faces = cam.tracker.process(image, known, head_yaw_deg).faces;
       cam.last = r;
       results[w] = std::move(r);
     };

@@ -3,6 +3,7 @@
 #include "dreamsense/perception/face_detection.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace dreamsense::face_detection {
 namespace {
@@ -36,6 +37,16 @@ Status FaceTrackerOptions::check() const {
   if (!(roi_min_scale > 0 && roi_min_scale <= 1 && roi_max_scale >= 1))
     add(fmt::format("roi scales [{}, {}] must satisfy 0 < min <= 1 <= max", roi_min_scale,
                     roi_max_scale));
+  if (roi_narrow_first && !(roi_narrow_max_change > 0))
+    add(fmt::format("roi_narrow_max_change {} <= 0", roi_narrow_max_change));
+  if (roi_narrow_first &&
+      !(roi_narrow_min_scale > 0 && roi_narrow_min_scale <= 1 && roi_narrow_max_scale >= 1))
+    add(fmt::format("roi narrow scales [{}, {}] must satisfy 0 < min <= 1 <= max",
+                    roi_narrow_min_scale, roi_narrow_max_scale));
+  if (!(turned_away_yaw_deg >= 0 && turned_away_yaw_deg <= 180))
+    add(fmt::format("turned_away_yaw_deg {} not in [0, 180]", turned_away_yaw_deg));
+  if (turned_away_search_interval < 1)
+    add(fmt::format("turned_away_search_interval {} < 1", turned_away_search_interval));
   if (!(merge_iou >= 0 && merge_iou < 1)) add(fmt::format("merge_iou {} not in [0, 1)", merge_iou));
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "FaceTrackerOptions: " + bad);
   return ok_status();
@@ -51,29 +62,55 @@ void FaceTracker::reset() {
   frames_since_full_ = 0;
 }
 
-TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontalness& known) {
+TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontalness& known,
+                                       std::optional<double> head_yaw_deg) {
   TrackedFrameFaces out;
   const int64_t index = frame_index_++;
   if (image.size() != last_size_) tracked_.clear();  // a new geometry: old boxes mean nothing
   last_size_ = image.size();
   ++frames_since_full_;
   bool full = false;
-  if (tracked_.empty())
-    full = index == 0 || frames_since_full_ >= options_.lost_search_interval;
-  else
+  if (tracked_.empty()) {
+    const bool turned_away = head_yaw_deg && std::abs(*head_yaw_deg) > options_.turned_away_yaw_deg;
+    const int interval =
+        turned_away ? std::max(options_.lost_search_interval, options_.turned_away_search_interval)
+                    : options_.lost_search_interval;
+    full = index == 0 || frames_since_full_ >= interval;
+    out.searched = full;
+  } else {
     full = (index + options_.full_search_phase) % options_.full_search_interval == 0;
+  }
 
   std::vector<DetectedFace> faces;
   if (!full && !tracked_.empty()) {
+    // Around each tracked face: the narrow size range first, the wide one if that finds nothing.
     for (const Track& track : tracked_) {
       const cv::Rect2d& t = track.box;
       const double size = std::max(t.width, t.height);
       const double m = options_.roi_margin * size;
-      SearchRegion region{cv::Rect(cv::Rect2d(t.x - m, t.y - m, t.width + 2 * m, t.height + 2 * m)),
-                          options_.roi_min_scale * size, options_.roi_max_scale * size};
-      region.region_px &= cv::Rect(0, 0, image.cols, image.rows);
-      if (region.region_px.empty()) continue;
-      auto found = detector_.detect(image, region, false);
+      const cv::Rect region_px =
+          cv::Rect(cv::Rect2d(t.x - m, t.y - m, t.width + 2 * m, t.height + 2 * m)) &
+          cv::Rect(0, 0, image.cols, image.rows);
+      if (region_px.empty()) continue;
+      std::vector<DetectedFace> found;
+      if (options_.roi_narrow_first) {
+        found = detector_.detect(image,
+                                 SearchRegion{region_px, options_.roi_narrow_min_scale * size,
+                                              options_.roi_narrow_max_scale * size},
+                                 false);
+        // A box near the range's edge means the face may be beyond it (the windows stop there
+        // and pull the box towards the last size): let the wide range decide.
+        const bool settled = std::all_of(found.begin(), found.end(), [&](const DetectedFace& f) {
+          const double change = std::max(f.box_px.width, f.box_px.height) / size;
+          return std::abs(std::log(change)) <= std::log1p(options_.roi_narrow_max_change);
+        });
+        if (!settled) found.clear();
+      }
+      if (found.empty())
+        found = detector_.detect(
+            image,
+            SearchRegion{region_px, options_.roi_min_scale * size, options_.roi_max_scale * size},
+            false);
       faces.insert(faces.end(), found.begin(), found.end());
     }
     if (faces.empty() && options_.full_search_on_miss) full = true;

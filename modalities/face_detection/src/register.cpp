@@ -23,6 +23,14 @@ void register_analyzers(AnalyzerRegistry& registry) {
     DS_RETURN_IF_ERROR(options.get("roi_margin", o.tracker.roi_margin));
     DS_RETURN_IF_ERROR(options.get("roi_min_scale", o.tracker.roi_min_scale));
     DS_RETURN_IF_ERROR(options.get("roi_max_scale", o.tracker.roi_max_scale));
+    DS_RETURN_IF_ERROR(options.get("roi_narrow_first", o.tracker.roi_narrow_first));
+    DS_RETURN_IF_ERROR(options.get("roi_narrow_min_scale", o.tracker.roi_narrow_min_scale));
+    DS_RETURN_IF_ERROR(options.get("roi_narrow_max_scale", o.tracker.roi_narrow_max_scale));
+    DS_RETURN_IF_ERROR(options.get("roi_narrow_max_change", o.tracker.roi_narrow_max_change));
+    DS_RETURN_IF_ERROR(options.get("lost_search_interval", o.tracker.lost_search_interval));
+    DS_RETURN_IF_ERROR(options.get("turned_away_yaw_deg", o.tracker.turned_away_yaw_deg));
+    DS_RETURN_IF_ERROR(
+        options.get("turned_away_search_interval", o.tracker.turned_away_search_interval));
     DS_RETURN_IF_ERROR(options.get("parallel", o.parallel));
     PlannedAnalyzers p;
     // The calibrations give the faces' 3-D positions and the yaw-based camera selection.

@@ -89,6 +89,12 @@ TEST(FaceDetectorOptions, RejectsBadValuesAndMissingModels) {
   FaceTrackerOptions t;
   t.full_search_interval = 0;
   EXPECT_FALSE(t.check());
+  FaceTrackerOptions narrow;
+  narrow.roi_narrow_min_scale = 1.1;  // the narrow range must hold the last size
+  EXPECT_FALSE(narrow.check());
+  FaceTrackerOptions turned;
+  turned.turned_away_search_interval = 0;
+  EXPECT_FALSE(turned.check());
   CameraSelectorOptions c;
   c.switch_ticks = 0;
   EXPECT_FALSE(c.check());
@@ -226,6 +232,62 @@ TEST(FaceTracker, SearchesAroundTheFaceAndAgreesWithFullSearch) {
   EXPECT_TRUE(tracker.process(image_of(demo().ticks[0], "camera_middle")).full_search);
 }
 
+TEST(FaceTracker, AFaceThatJumpsInSizeIsFollowedWithoutAFullSearch) {
+  // Frame 0 as is, then the same frame magnified 1.4x about the face, three times: beyond the
+  // narrow size range (0.8-1.25 of the last size). The narrow pass alone finds the face too
+  // small (1.12x: its windows stop at 1.25), so its result is refused when the size moved by
+  // more than roi_narrow_max_change, and the wide range finds the new size at once, as the
+  // wide-only search (the baseline) does. Neither needs a full-frame search.
+  const cv::Mat& image = image_of(demo().ticks[0], "camera_middle");
+  const auto faces = make_detector().detect(image);
+  ASSERT_FALSE(faces.empty());
+  const cv::Rect2d b = faces[0].box_px;
+  const cv::Point2d c(b.x + b.width / 2, b.y + b.height / 2);
+  cv::Mat magnified;
+  cv::warpAffine(image, magnified, cv::getRotationMatrix2D(c, 0, 1.4), image.size());
+  for (const bool narrow_first : {false, true}) {
+    FaceTrackerOptions o;
+    o.roi_narrow_first = narrow_first;
+    FaceTracker tracker(make_detector(), o);
+    ASSERT_TRUE(tracker.process(image).full_search);
+    std::vector<double> ratios;
+    for (int i = 0; i < 3; ++i) {
+      const TrackedFrameFaces r = tracker.process(magnified);
+      EXPECT_FALSE(r.full_search) << "narrow first " << narrow_first << ", frame " << i;
+      ASSERT_EQ(r.faces.size(), 1u) << "narrow first " << narrow_first << ", frame " << i;
+      ratios.push_back(r.faces[0].box_px.width / b.width);
+    }
+    EXPECT_NEAR(ratios[0], 1.4, 0.1) << "narrow first " << narrow_first << ": " << ratios[0] << " "
+                                     << ratios[1] << " " << ratios[2];
+  }
+}
+
+TEST(FaceTracker, LostFaceTurnedAwaySearchesTheFullFrameLessOften) {
+  // No face in the frame: every frame is a full search, unless the head is known to be turned
+  // away from this camera (then every turned_away_search_interval frames).
+  const cv::Mat blank(960, 1280, CV_8UC3, cv::Scalar(90, 90, 90));
+  FaceTrackerOptions o;
+  o.turned_away_yaw_deg = 60;
+  o.turned_away_search_interval = 4;
+  auto searches = [&](std::optional<double> yaw) {
+    FaceTracker tracker(make_detector(), o);
+    int n = 0;
+    for (int i = 0; i < 12; ++i) {
+      const TrackedFrameFaces r = tracker.process(blank, {}, yaw);
+      EXPECT_TRUE(r.faces.empty());
+      EXPECT_EQ(r.searched, r.full_search);
+      n += r.full_search;
+    }
+    return n;
+  };
+  EXPECT_EQ(searches(std::nullopt), 12);
+  EXPECT_EQ(searches(30.0), 12);
+  EXPECT_EQ(searches(-80.0), 3);  // frames 0, 4, 8
+  EXPECT_EQ(searches(170.0), 3);
+  o.turned_away_search_interval = 1;  // the baseline
+  EXPECT_EQ(searches(-80.0), 12);
+}
+
 TEST(FaceTracker, KnownFrontalnessSkipsTheProxyOnlyForThatFace) {
   // Two trackers on the same frames: one estimates the proxy for every face, the other is given
   // the frontalness of the best face on odd frames. Detections must be identical; the given value
@@ -349,6 +411,7 @@ TEST(FaceDetectionAnalyzer, DemoRecallFalsePositivesAndCameraSelection) {
 
 TEST(FaceDetectionAnalyzer, ParallelAndSerialGiveTheSameResult) {
   FaceDetectionAnalyzerOptions o;
+  o.parallel = true;
   auto par = make_face_detection_analyzer(o);
   o.parallel = false;
   auto ser = make_face_detection_analyzer(o);

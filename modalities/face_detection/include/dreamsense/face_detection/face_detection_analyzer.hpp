@@ -2,9 +2,9 @@
 // Face detection analyser: faces in every camera (keys::kFaceDetections) and the selected camera
 // (keys::kSelectedCamera). Method and numbers: modalities/face_detection/README.md.
 //
-// Per tick: every listed camera that has a frame in the MultiFrame is searched (in parallel over
-// cameras, one FaceTracker each; results do not depend on the thread count). A frame already
-// searched in an earlier tick (same sequence) is not searched again: its result is reused.
+// Per tick: every listed camera that has a frame in the MultiFrame is searched (one FaceTracker
+// each; optionally in parallel over cameras; results do not depend on the thread count). A frame
+// already searched in an earlier tick (same sequence) is not searched again: its result is reused.
 // Writes, stamped with the tick:
 //  - no camera frame at all: nothing;
 //  - frames but no face in any: absent entries for both keys;
@@ -41,7 +41,11 @@ struct FaceDetectionAnalyzerOptions {
   // most max_yaw_prediction_deg): the pose is a frame old when the cameras are rated.
   bool predict_head_yaw = true;
   double max_yaw_prediction_deg = 10;
-  bool parallel = true;  // search the cameras with cv::parallel_for_
+  // true: one task per camera (cv::parallel_for_). false: the cameras one after the other, each
+  // search spread over the cores by OpenCV's own parallel detectMultiScale; faster in wall time
+  // (-7 % for the whole pipeline, same CPU), because a camera's full search (~30 ms) left the
+  // other core idle once the other cameras' ROI searches (~2 ms) were done. Same output.
+  bool parallel = false;
   Status check() const;
 };
 

@@ -24,6 +24,24 @@ struct FaceTrackerOptions {
   double roi_margin = 0.75;
   // Face sizes searched around a tracked face, relative to its last size.
   double roi_min_scale = 0.6, roi_max_scale = 1.6;
+  // Sizes searched first around a tracked face (same region); the range above is searched only
+  // when this finds nothing. A face 25 % larger or smaller from one frame to the next would have
+  // to move at metres per second; the narrow pass costs ~40 % of the wide one (fewer pyramid
+  // levels, a smaller image). roi_narrow_first = false searches the wide range at once (baseline).
+  bool roi_narrow_first = true;
+  double roi_narrow_min_scale = 0.8, roi_narrow_max_scale = 1.25;
+  // The narrow pass's faces are kept only if their size changed by at most this fraction (either
+  // way) from the last; otherwise the wide range is searched: near the narrow range's edges its
+  // windows stop and the box comes out too close to the last size (a face magnified 1.4x came
+  // out 1.12x).
+  double roi_narrow_max_change = 0.1;
+  // While nothing is tracked and the head is known to be turned away from this camera (|yaw|
+  // above turned_away_yaw_deg, given by the caller from a head pose), the full frame is searched
+  // only every turned_away_search_interval frames: the frontal cascade does not find faces
+  // turned that far (demo: 2 of 71 such frames), and a full search is the costliest step.
+  // turned_away_search_interval = 1 searches every frame as without a head pose (baseline).
+  double turned_away_yaw_deg = 60;
+  int turned_away_search_interval = 10;
   // If the tracked faces are all missed in their regions, search the full frame at once (same
   // frame) before reporting nothing.
   bool full_search_on_miss = true;
@@ -39,6 +57,7 @@ struct FaceTrackerOptions {
 struct TrackedFrameFaces {
   std::vector<DetectedFace> faces;  // best score first; empty = nothing found
   bool full_search = false;         // the full frame was searched for this frame
+  bool searched = true;             // false: skipped (lost, head turned away; faces empty)
 };
 
 // Frontalness known without the proxy, e.g. from a head pose: called for each frontal-cascade
@@ -55,7 +74,10 @@ class FaceTracker {
   FaceTracker(FaceDetector detector, FaceTrackerOptions options);
   // Detects faces in the next frame of this camera. With `known`, faces it answers for get its
   // value instead of the frontalness proxy (also when the detector's estimate_frontalness is off).
-  TrackedFrameFaces process(const cv::Mat& image, const KnownFrontalness& known = {});
+  // `head_yaw_deg`: the head's yaw relative to this camera (0 = facing it), when a head pose
+  // gives it; only used to search less often while the face is lost and turned away.
+  TrackedFrameFaces process(const cv::Mat& image, const KnownFrontalness& known = {},
+                            std::optional<double> head_yaw_deg = std::nullopt);
   // Forget tracked faces (the next frame gets a full search).
   void reset();
   const FaceTrackerOptions& options() const { return options_; }
