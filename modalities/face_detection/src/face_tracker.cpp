@@ -53,7 +53,7 @@ Status FaceTrackerOptions::check() const {
 }
 
 FaceTracker::FaceTracker(FaceDetector detector, FaceTrackerOptions options)
-    : detector_(std::move(detector)), options_(std::move(options)) {
+    : detector_(std::move(detector)), options_(options) {
   DS_CHECK(options_.check().has_value());
 }
 

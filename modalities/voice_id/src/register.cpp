@@ -1,5 +1,6 @@
 // Declared pipeline entry of the voice identification analyser (perception/analyzer_registry.hpp).
 
+#include "dreamsense/audio/mic_array.hpp"
 #include "dreamsense/perception/analyzer_registry.hpp"
 #include "dreamsense/voice_id/audio_files.hpp"
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
@@ -47,6 +48,15 @@ void register_analyzers(AnalyzerRegistry& registry) {
     DS_RETURN_IF_ERROR(options.get("track_memory_s", o.tracks.memory_s));
     DS_RETURN_IF_ERROR(options.get("track_max_frames", o.tracks.max_track_frames));
     DS_RETURN_IF_ERROR(options.get("track_exclusive", o.tracks.exclusive));
+    // The child seen by the cameras (head pose) as a cue: needs the array's extrinsics.
+    DS_RETURN_IF_ERROR(options.get("seen_child", o.use_seen_child));
+    DS_RETURN_IF_ERROR(options.get("seen_child_tolerance_deg", o.tracks.child_place_tolerance_deg));
+    if (o.use_seen_child && !s->calibration_file.empty()) {
+      DS_ASSIGN_OR_RETURN(const audio::MicArrayGeometry g,
+                          audio::read_mic_array(s->calibration_file));
+      o.array_from_world_R = g.array_from_world_R;
+      o.array_from_world_t = g.array_from_world_t;
+    }
     if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
       o.reference_sensor = r->id;
       p.notes.push_back(fmt::format("robot voice gated with the reference stream '{}'", r->id));

@@ -16,6 +16,8 @@ Status SpeakerTrackOptions::check() const {
     bad += " max_track_frames must be >= 1;";
   if (!(max_exclusive_speakers >= 1 && max_exclusive_speakers <= 20))
     bad += " max_exclusive_speakers must be in [1, 20];";
+  if (!(child_place_tolerance_deg > 0 && child_place_tolerance_deg < 90))
+    bad += " child_place_tolerance_deg must be in (0, 90);";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "SpeakerTrackOptions:{}", bad);
   return ok_status();
 }
@@ -94,6 +96,18 @@ TrackDecision SpeakerTracker::add(const UtteranceEvidence& u) {
                        [](const SpeakerScore& a, const SpeakerScore& b) { return a.llr < b.llr; });
   const bool own_known = own->llr >= threshold_;
   t.last_known = own_known;
+  // The child seen at the utterance's place decides, before the voice's open-set test.
+  const std::string& child = options_.child_speaker_id;
+  const bool child_enrolled = !child.empty() && t.evidence.count(child) > 0;
+  const std::optional<double> offset = child_enrolled ? u.seen_child_offset_deg : std::nullopt;
+  if (offset && *offset <= options_.child_place_tolerance_deg) {
+    d.speaker_id = child;
+    d.llr = t.evidence[child] / t.frames;
+    d.inherited = !own_known || own->id != child;
+    d.by_place = true;
+    return d;
+  }
+  const bool away_from_child = offset && *offset > 2 * options_.child_place_tolerance_deg;
   // 3. Open set: the utterance's own voice or its track's evidence fits an enrolled speaker.
   if (!known(t)) {
     d.speaker_id = kUnknownSpeaker;
@@ -109,6 +123,19 @@ TrackDecision SpeakerTracker::add(const UtteranceEvidence& u) {
     if (known(o)) passing.push_back(k);
   }
   d.speaker_id = options_.exclusive ? assign(passing, which) : d.best_id;
+  if (away_from_child && d.speaker_id == child) {
+    // Not where the child is seen: the track's best other speaker, if its evidence is enough.
+    const auto other = std::find_if(d.scores.begin(), d.scores.end(),
+                                    [&](const SpeakerScore& sc) { return sc.id != child; });
+    d.by_place = true;
+    if (other == d.scores.end() || other->llr < threshold_) {
+      d.speaker_id = kUnknownSpeaker;
+      d.llr = d.scores.front().llr;
+      d.inherited = own_known;
+      return d;
+    }
+    d.speaker_id = other->id;
+  }
   d.llr = t.evidence[d.speaker_id] / t.frames;
   d.inherited = !own_known || d.speaker_id != own->id;
   return d;

@@ -3,6 +3,7 @@
 #include "dreamsense/audio/noise_suppressor.hpp"
 #include "dreamsense/audio/stamped_audio.hpp"
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
 #include "dreamsense/perception/voice_id.hpp"
 
@@ -77,12 +78,14 @@ class VoiceIdAnalyzer : public Analyzer {
       c.reads.push_back(keys::kSoundDirection.name);
     else if (options_.decision == VoiceDecision::kTracks)
       c.reads_previous.push_back(keys::kSoundDirection.name);
+    if (seen_child_enabled()) c.reads_previous.push_back(keys::kHeadPose.name);
     return c;
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
                  BlackboardWriter& out) override {
     if (options_.method == VoiceIdMethod::kDirectionRule || tracker_) remember_direction(prior);
+    if (seen_child_enabled()) remember_child(prior);
     if (gate_)  // the robot's reference first: the gate must know this tick before deciding
       for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
         const AudioChunk* c = f->as<AudioChunk>();
@@ -180,14 +183,23 @@ class VoiceIdAnalyzer : public Analyzer {
     if (denoiser_) denoiser_->reset();
     ns_origin_ = Timestamp::unset();
     heard_.clear();
+    seen_.clear();
     if (tracker_) tracker_->reset();
   }
 
   void enable_tracks() {
     if (model_ && options_.method == VoiceIdMethod::kGmmUbm &&
-        options_.decision == VoiceDecision::kTracks)
-      tracker_ = std::make_unique<SpeakerTracker>(options_.tracks, model_->threshold);
+        options_.decision == VoiceDecision::kTracks) {
+      SpeakerTrackOptions t = options_.tracks;
+      if (t.child_speaker_id.empty() && options_.use_seen_child && options_.array_from_world_R)
+        for (const EnrolledSpeaker& sp : model_->speakers)
+          if (sp.id == "child") t.child_speaker_id = sp.id;
+      tracker_ = std::make_unique<SpeakerTracker>(t, model_->threshold);
+      child_cue_ = !t.child_speaker_id.empty();
+    }
   }
+  // The seen child is used: tracks, the array's extrinsics and an enrolled child.
+  bool seen_child_enabled() const { return child_cue_; }
 
   void enable_gate() {
     if (!options_.reference_sensor.empty())
@@ -202,6 +214,22 @@ class VoiceIdAnalyzer : public Analyzer {
     heard_.push_back({e->stamp, e->value->azimuth_deg, e->confidence});
     const Duration keep = Duration::from_seconds(options_.segmenter.max_utterance_s + 5.0);
     while (!heard_.empty() && e->stamp - heard_.front().stamp > keep) heard_.pop_front();
+  }
+
+  // The child's head seen by the cameras, as an azimuth in the array frame (the sound
+  // direction's convention: atan2(x, z)).
+  void remember_child(const BlackboardView& prior) {
+    const auto e = prior.get(keys::kHeadPose);
+    if (!e || !e->present()) return;
+    const Timestamp stamp = e->value->frame_stamp.is_set() ? e->value->frame_stamp : e->stamp;
+    if (!seen_.empty() && seen_.back().stamp >= stamp) return;  // already seen
+    const cv::Vec3d a =
+        *options_.array_from_world_R * e->value->position_world_m + options_.array_from_world_t;
+    if (!(a[2] > 0 || std::abs(a[0]) > 0)) return;
+    seen_.push_back({stamp, std::atan2(a[0], a[2]) * 180 / M_PI, 1.0});
+    const Duration keep = Duration::from_seconds(options_.segmenter.max_utterance_s + 5.0 +
+                                                 options_.seen_child_lookback_s);
+    while (!seen_.empty() && stamp - seen_.front().stamp > keep) seen_.pop_front();
   }
 
   void note_alignment() {
@@ -286,18 +314,34 @@ class VoiceIdAnalyzer : public Analyzer {
     return ok_status();
   }
 
-  // Confidence-weighted mean azimuth heard during the utterance's speech (nullopt: fewer than
-  // three directions).
-  std::optional<double> azimuth_of(const audio::Utterance& u) const {
+  // Confidence-weighted circular mean of the azimuths stamped in [from, to] (nullopt: fewer
+  // than min_count of them).
+  static std::optional<double> mean_azimuth(const std::deque<Heard>& directions, Timestamp from,
+                                            Timestamp to, int min_count) {
     double sx = 0, sy = 0;
     int n = 0;
-    for (const auto& h : heard_) {
-      if (h.stamp < u.speech_start || h.stamp > u.speech_end) continue;
+    for (const auto& h : directions) {
+      if (h.stamp < from || h.stamp > to) continue;
       const double a = h.azimuth_deg * M_PI / 180, w = std::max(1e-3, h.confidence);
       sx += w * std::cos(a), sy += w * std::sin(a), ++n;
     }
-    if (n < 3) return std::nullopt;
+    if (n < min_count) return std::nullopt;
     return std::atan2(sy, sx) * 180 / M_PI;
+  }
+  // Where the utterance came from: the directions heard during its speech (at least three).
+  std::optional<double> azimuth_of(const audio::Utterance& u) const {
+    return mean_azimuth(heard_, u.speech_start, u.speech_end, 3);
+  }
+  // The utterance's angle from the child's head seen during its speech (or shortly before).
+  std::optional<double> seen_child_offset(const audio::Utterance& u,
+                                          std::optional<double> azimuth) const {
+    if (!azimuth || !child_cue_) return std::nullopt;
+    const auto seen =
+        mean_azimuth(seen_, u.speech_start - Duration::from_seconds(options_.seen_child_lookback_s),
+                     u.speech_end, 1);
+    if (!seen) return std::nullopt;
+    const double d = std::fmod(std::abs(*azimuth - *seen), 360.0);
+    return d > 180 ? 360 - d : d;
   }
 
   // The decision on the utterance's voice track (speaker_tracks.hpp) replaces its own.
@@ -306,19 +350,23 @@ class VoiceIdAnalyzer : public Analyzer {
     e.start = u.speech_start;
     e.end = u.speech_end;
     e.azimuth_deg = azimuth_of(u);
+    e.seen_child_offset_deg = seen_child_offset(u, e.azimuth_deg);
     e.frames = r.frames;
     e.scores = r.scores;
     const TrackDecision d = tracker_->add(e);
     if (d.track_utterances > 1 || d.inherited)
       log::debug(
           "voice_id: utterance {:.2f}-{:.2f} s on track {} at {:.0f} deg ({} utterances, {:.0f} "
-          "frames): {} (track llr {:.3f}{})",
+          "frames): {} (track llr {:.3f}{}{})",
           u.speech_start.seconds(), u.speech_end.seconds(), d.track, d.azimuth_deg,
           d.track_utterances, d.track_frames,
           d.speaker_id == kUnknownSpeaker ? d.speaker_id
           : options_.include_names        ? d.speaker_id
                                           : public_speaker_id(*model_, d.speaker_id),
-          d.llr, d.inherited ? ", not its own voice's answer" : "");
+          d.llr, d.inherited ? ", not its own voice's answer" : "",
+          d.by_place ? fmt::format(", decided by the child seen {:.0f} deg away",
+                                   e.seen_child_offset_deg.value_or(0))
+                     : std::string());
     r.best_id = d.best_id;
     r.scores = d.scores;
     r.llr = d.llr;
@@ -373,6 +421,8 @@ class VoiceIdAnalyzer : public Analyzer {
   int seg_channels_ = 1;  // pushed to the segmenter: channel 0 (+ the channels' mean)
   std::vector<audio::Utterance> utterances_;  // scratch
   std::deque<Heard> heard_;  // directions of the last seconds (direction rule, tracks)
+  std::deque<Heard> seen_;   // the child's head seen by the cameras: azimuth in the array frame
+  bool child_cue_ = false;   // seen_child_enabled()
   std::unique_ptr<SpeakerTracker> tracker_;  // decision kTracks
 };
 

@@ -199,5 +199,56 @@ TEST(SpeakerTracks, JointAssignmentOverThreeSpeakers) {
   EXPECT_EQ(d.speaker_id, "c");
 }
 
+// The child seen by the cameras (issue 16): the first utterance of a session, a short command
+// whose voice alone is unknown, comes from where the child's head is seen: it is the child's. The
+// same voice from 40 deg away from the seen child is not. Wherever the child sits: here at
+// +35 deg, the therapist straight ahead (DREAM's direction rule assumes the opposite).
+TEST(SpeakerTracks, TheChildSeenAtTheUtterancesPlaceDecides) {
+  SpeakerTrackOptions o;
+  o.child_speaker_id = "child";
+  o.child_place_tolerance_deg = 15;
+  auto seen_at = [](UtteranceEvidence u, double child_azimuth) {
+    u.seen_child_offset_deg = std::abs(*u.azimuth_deg - child_azimuth);
+    return u;
+  };
+  // Voice alone: unknown (both LLRs under the threshold), therapist a little ahead.
+  const UtteranceEvidence first = utt(1.0, 90, 36.0, -0.6, -0.4);
+  {
+    SpeakerTracker without({}, kThreshold);  // no cue: today's answer
+    EXPECT_EQ(without.add(first).speaker_id, kUnknownSpeaker);
+  }
+  SpeakerTracker t(o, kThreshold);
+  const auto a = t.add(seen_at(first, 35.0));
+  EXPECT_EQ(a.speaker_id, "child");
+  EXPECT_TRUE(a.by_place);
+  EXPECT_TRUE(a.inherited);
+  // The therapist straight ahead, 35 deg from the seen child: her voice names her.
+  const auto b = t.add(seen_at(utt(4.0, 300, 0.0, -1.2, 0.4), 35.0));
+  EXPECT_EQ(b.speaker_id, "therapist");
+  EXPECT_NE(a.track, b.track);
+  // A voice that fits the child best but comes from 40 deg away from the seen child: the
+  // track's best other speaker if it passes the threshold, else unknown.
+  const auto c = t.add(seen_at(utt(8.0, 120, -40.0, 0.3, -0.1), 0.0));
+  EXPECT_EQ(c.speaker_id, "therapist");
+  EXPECT_TRUE(c.by_place);
+  const auto d = t.add(seen_at(utt(30.0, 120, -80.0, 0.3, -0.9), 0.0));
+  EXPECT_EQ(d.speaker_id, kUnknownSpeaker);
+  // Between one and two tolerances: no decision by place, the voice decides.
+  const auto e = t.add(seen_at(utt(40.0, 200, 60.0, 0.2, -0.5), 40.0));
+  EXPECT_FALSE(e.by_place);
+  EXPECT_EQ(e.speaker_id, "child");
+  // Not seen (no offset): the voice decides.
+  const auto f = t.add(utt(50.0, 200, -20.0, -0.9, 0.3));
+  EXPECT_FALSE(f.by_place);
+  EXPECT_EQ(f.speaker_id, "therapist");
+  // A child id that is not enrolled gives no cue.
+  SpeakerTrackOptions other = o;
+  other.child_speaker_id = "kid";
+  SpeakerTracker u(other, kThreshold);
+  EXPECT_EQ(u.add(seen_at(first, 35.0)).speaker_id, kUnknownSpeaker);
+  other.child_place_tolerance_deg = 0;
+  EXPECT_FALSE(other.check());
+}
+
 }  // namespace
 }  // namespace dreamsense::voice_id

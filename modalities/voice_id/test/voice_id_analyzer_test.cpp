@@ -3,6 +3,7 @@
 
 #include "dreamsense/voice_id/voice_id_analyzer.hpp"
 
+#include "dreamsense/perception/head_pose.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
 #include "dreamsense/perception/voice_id.hpp"
 #include "dreamsense/voice_id/audio_files.hpp"
@@ -51,9 +52,13 @@ using DirectionAt = std::function<std::optional<std::pair<double, double>>(doubl
 
 // Feeds `mono` as 2-channel 40 ms chunks, one per 25 Hz tick, with faint noise; a fake sound
 // direction analyser runs first when `direction` is given. Returns every identity written.
+// World position of the child's head seen by the cameras at a time, or none.
+using HeadAt = std::function<std::optional<cv::Vec3d>(double seconds)>;
+
 std::vector<SpeakerIdentity> run(Analyzer& a, const std::vector<float>& mono,
                                  const DirectionAt& direction = {},
-                                 const std::vector<float>* reference = nullptr) {
+                                 const std::vector<float>* reference = nullptr,
+                                 const HeadAt& child_head = {}) {
   std::mt19937 rng(1);
   std::normal_distribution<float> noise(0.f, 3e-4f);
   Blackboard bb;
@@ -86,6 +91,18 @@ std::vector<SpeakerIdentity> run(Analyzer& a, const std::vector<float>& mono,
         w.set(keys::kSoundDirection, s, mf.stamp, static_cast<float>(d->second));
       } else {
         w.set_absent(keys::kSoundDirection, mf.stamp);
+      }
+      bb.commit(w, mf.stamp);
+    }
+    if (child_head) {  // a fake head pose analyser (it runs after voice_id in the pipeline)
+      BlackboardWriter w("head_pose");
+      if (auto p = child_head(mf.stamp.seconds())) {
+        HeadPose h;
+        h.frame_stamp = mf.stamp;
+        h.position_world_m = *p;
+        w.set(keys::kHeadPose, h, mf.stamp, 1.f);
+      } else {
+        w.set_absent(keys::kHeadPose, mf.stamp);
       }
       bb.commit(w, mf.stamp);
     }
@@ -197,6 +214,50 @@ TEST(VoiceIdAnalyzer, TracksReadTheSoundDirectionAndNameEachPlace) {
   EXPECT_EQ(ids[1].speaker_id, "therapist");
   EXPECT_EQ(ids[2].speaker_id, "child");
   EXPECT_EQ(ids[2].method, "gmm_ubm");
+}
+
+// Issue 16: the child seen by the cameras. The therapist's synthetic voice comes from where the
+// child's head is seen: named the child when the array's extrinsics are known (here the array
+// is turned 30 deg, so the child straight ahead of the world's z axis is at -30 deg in the
+// array frame, where the sound comes from); without extrinsics, or from 50 deg away, the voice
+// decides.
+TEST(VoiceIdAnalyzer, TheChildSeenWhereTheSoundComesFromIsTheSpeaker) {
+  VoiceIdAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.model = shared_model();
+  const double turn = 30 * M_PI / 180;
+  o.array_from_world_R =
+      cv::Matx33d(std::cos(turn), 0, -std::sin(turn), 0, 1, 0, std::sin(turn), 0, std::cos(turn));
+  auto with = make_voice_id_analyzer(o);
+  ASSERT_TRUE(with) << with.error().message;
+  const auto& reads = (*with)->contract().reads_previous;
+  EXPECT_NE(std::find(reads.begin(), reads.end(), keys::kHeadPose.name), reads.end());
+  VoiceIdAnalyzerOptions no_extrinsics = o;
+  no_extrinsics.array_from_world_R.reset();
+  auto without = make_voice_id_analyzer(no_extrinsics);
+  ASSERT_TRUE(without);
+  std::vector<float> s = quiet(0.5);
+  append(s, synth_utterance(kTherapist, 1.2, kAnalyzerRate, 811, 0, 0));  // 0.5 - 1.7 s
+  append(s, quiet(1.0));
+  const auto run_with_sound_at = [&](Analyzer& a, double azimuth) {
+    return run(
+        a, s,
+        [azimuth](double t) -> std::optional<std::pair<double, double>> {
+          if (t >= 0.5 && t < 1.7) return std::pair{azimuth, 0.9};
+          return std::nullopt;
+        },
+        nullptr, [](double) { return std::optional<cv::Vec3d>(cv::Vec3d(0, 0, 1.2)); });
+  };
+  const auto seen = run_with_sound_at(**with, -31.0);
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen[0].speaker_id, "child");
+  const auto blind = run_with_sound_at(**without, -31.0);
+  ASSERT_EQ(blind.size(), 1u);
+  EXPECT_EQ(blind[0].speaker_id, "therapist");
+  (*with)->reset();
+  const auto away = run_with_sound_at(**with, 20.0);
+  ASSERT_EQ(away.size(), 1u);
+  EXPECT_EQ(away[0].speaker_id, "therapist");
 }
 
 // Issue 16: the robot speaks (here with the therapist's synthetic voice) between two child

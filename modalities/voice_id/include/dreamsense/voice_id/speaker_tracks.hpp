@@ -57,6 +57,14 @@ struct SpeakerTrackOptions {
   // Assignment by exhaustive search over speaker subsets: at most this many enrolled speakers
   // (2^speakers states); with more, each track takes its best speaker.
   int max_exclusive_speakers = 12;
+  // The child seen by the cameras (issue 16): the enrolled speaker who is the child (role id
+  // "child"; empty: no such cue). An utterance whose direction is within
+  // child_place_tolerance_deg of where the cameras see the child's head
+  // (UtteranceEvidence::seen_child_offset_deg) is the child's, whatever the voice says; one more
+  // than twice that away is not the child's (its track's best other speaker, or unknown).
+  // Assumes one person at the child's place (DREAM: the therapist sits 30-60 deg aside).
+  std::string child_speaker_id;
+  double child_place_tolerance_deg = 15;
   Status check() const;
 };
 
@@ -66,6 +74,9 @@ struct UtteranceEvidence {
   std::optional<double> azimuth_deg;  // where it came from (none: unknown)
   int frames = 0;                     // speech frames scored (> 0)
   std::vector<SpeakerScore> scores;   // every enrolled speaker (any order)
+  // Angle between azimuth_deg and the azimuth of the child's head seen by the cameras during
+  // the utterance (none: not seen, or no direction).
+  std::optional<double> seen_child_offset_deg;
 };
 
 struct TrackDecision {
@@ -77,6 +88,7 @@ struct TrackDecision {
   double track_frames = 0;           // frames of evidence on the track (after the cap)
   double azimuth_deg = 0;            // the track's direction (NaN without a direction)
   bool inherited = false;            // speaker_id differs from what this utterance alone would say
+  bool by_place = false;             // the seen child's place decided (child_speaker_id)
   std::vector<SpeakerScore> scores;  // the track's mean LLR per speaker, best first
 };
 

@@ -76,6 +76,16 @@ struct VoiceIdAnalyzerOptions {
   //    and distinct places heard in the same stretch get distinct speakers.
   VoiceDecision decision = VoiceDecision::kTracks;
   SpeakerTrackOptions tracks;
+  // kTracks, issue 16: the child seen by the cameras as a cue to who spoke. With the array's
+  // extrinsics (the microphone array's calibration) and a speaker whose role id is "child", the
+  // head positions of keys::kHeadPose (earlier ticks, world) are turned into azimuths in the
+  // array frame; an utterance's offset from the seen child's azimuth (during its speech, or up
+  // to seen_child_lookback_s before it) goes to the tracker (tracks.child_speaker_id,
+  // tracks.child_place_tolerance_deg). Without extrinsics or a head pose: no cue.
+  bool use_seen_child = true;
+  std::optional<cv::Matx33d> array_from_world_R;
+  cv::Vec3d array_from_world_t{0, 0, 0};
+  double seen_child_lookback_s = 1.0;
   Status check() const;
 };
 
