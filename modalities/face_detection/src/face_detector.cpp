@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <tuple>
 
 namespace dreamsense::face_detection {
 namespace {
@@ -76,6 +77,11 @@ std::vector<cv::Rect> raw_windows(cv::CascadeClassifier& cascade, const cv::Mat&
   // outputRejectLevels with minNeighbors 0: every window that passed all stages, ungrouped.
   cascade.detectMultiScale(grey, windows, levels, weights, scale_factor, 0, 0,
                            cv::Size(min_size, min_size), cv::Size(max_size, max_size), true);
+  // OpenCV's parallel search appends windows in the order its threads finish: sorted, the
+  // clusters' sums (and so the boxes, to the last bit) do not depend on the scheduling.
+  std::sort(windows.begin(), windows.end(), [](const cv::Rect& a, const cv::Rect& b) {
+    return std::tie(a.y, a.x, a.width, a.height) < std::tie(b.y, b.x, b.width, b.height);
+  });
   return windows;
 }
 

@@ -56,6 +56,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
                           audio::read_mic_array(s->calibration_file));
       o.array_from_world_R = g.array_from_world_R;
       o.array_from_world_t = g.array_from_world_t;
+      o.array_is_linear = g.rank() == 1;
     }
     if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
       o.reference_sensor = r->id;

@@ -195,7 +195,7 @@ class VoiceIdAnalyzer : public Analyzer {
         for (const EnrolledSpeaker& sp : model_->speakers)
           if (sp.id == "child") t.child_speaker_id = sp.id;
       tracker_ = std::make_unique<SpeakerTracker>(t, model_->threshold);
-      child_cue_ = !t.child_speaker_id.empty();
+      child_cue_ = !t.child_speaker_id.empty() && options_.array_from_world_R.has_value();
     }
   }
   // The seen child is used: tracks, the array's extrinsics and an enrolled child.
@@ -216,8 +216,8 @@ class VoiceIdAnalyzer : public Analyzer {
     while (!heard_.empty() && e->stamp - heard_.front().stamp > keep) heard_.pop_front();
   }
 
-  // The child's head seen by the cameras, as an azimuth in the array frame (the sound
-  // direction's convention: atan2(x, z)).
+  // The child's head seen by the cameras, as an azimuth in the array frame in the sound
+  // direction's convention (atan2(x, z); asin(x / r) for a linear array).
   void remember_child(const BlackboardView& prior) {
     const auto e = prior.get(keys::kHeadPose);
     if (!e || !e->present()) return;
@@ -225,8 +225,13 @@ class VoiceIdAnalyzer : public Analyzer {
     if (!seen_.empty() && seen_.back().stamp >= stamp) return;  // already seen
     const cv::Vec3d a =
         *options_.array_from_world_R * e->value->position_world_m + options_.array_from_world_t;
-    if (!(a[2] > 0 || std::abs(a[0]) > 0)) return;
-    seen_.push_back({stamp, std::atan2(a[0], a[2]) * 180 / M_PI, 1.0});
+    const double r = cv::norm(a);
+    if (!(r > 0) || (!options_.array_is_linear && a[0] == 0 && a[2] == 0)) return;
+    // A linear array (mics on x) measures the angle from its axis, the same for front and back
+    // and for any elevation, and reports it as an azimuth in the front half-plane: asin(x / r).
+    const double azimuth = options_.array_is_linear ? std::asin(std::clamp(a[0] / r, -1.0, 1.0))
+                                                    : std::atan2(a[0], a[2]);
+    seen_.push_back({stamp, azimuth * 180 / M_PI, 1.0});
     const Duration keep = Duration::from_seconds(options_.segmenter.max_utterance_s + 5.0 +
                                                  options_.seen_child_lookback_s);
     while (!seen_.empty() && stamp - seen_.front().stamp > keep) seen_.pop_front();

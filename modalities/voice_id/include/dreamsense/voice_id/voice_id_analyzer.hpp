@@ -85,6 +85,9 @@ struct VoiceIdAnalyzerOptions {
   bool use_seen_child = true;
   std::optional<cv::Matx33d> array_from_world_R;
   cv::Vec3d array_from_world_t{0, 0, 0};
+  // Mics on a line (Kinect, along x): the sound direction is the angle from the axis, reported
+  // in the front half-plane; the head is converted the same way.
+  bool array_is_linear = true;
   double seen_child_lookback_s = 1.0;
   Status check() const;
 };
