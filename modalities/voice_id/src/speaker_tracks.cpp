@@ -22,14 +22,10 @@ Status SpeakerTrackOptions::check() const {
   return ok_status();
 }
 
-namespace {
-
-double angle_between(double a_deg, double b_deg) {
-  double d = std::fmod(std::abs(a_deg - b_deg), 360.0);
+double azimuth_difference_deg(double a_deg, double b_deg) {
+  const double d = std::fmod(std::abs(a_deg - b_deg), 360.0);
   return d > 180 ? 360 - d : d;
 }
-
-}  // namespace
 
 SpeakerTracker::SpeakerTracker(const SpeakerTrackOptions& options, double threshold)
     : options_(options), threshold_(threshold) {
@@ -59,7 +55,7 @@ TrackDecision SpeakerTracker::add(const UtteranceEvidence& u) {
     for (size_t k = 0; k < tracks_.size(); ++k) {
       const VoiceTrack& t = tracks_[k];
       if (!t.has_direction || !live(t, u.start)) continue;
-      const double d = angle_between(t.azimuth_deg, *u.azimuth_deg);
+      const double d = azimuth_difference_deg(t.azimuth_deg, *u.azimuth_deg);
       if (d <= nearest) nearest = d, which = k;
     }
   }

@@ -78,14 +78,14 @@ class VoiceIdAnalyzer : public Analyzer {
       c.reads.push_back(keys::kSoundDirection.name);
     else if (options_.decision == VoiceDecision::kTracks)
       c.reads_previous.push_back(keys::kSoundDirection.name);
-    if (seen_child_enabled()) c.reads_previous.push_back(keys::kHeadPose.name);
+    if (child_cue_) c.reads_previous.push_back(keys::kHeadPose.name);
     return c;
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
                  BlackboardWriter& out) override {
     if (options_.method == VoiceIdMethod::kDirectionRule || tracker_) remember_direction(prior);
-    if (seen_child_enabled()) remember_child(prior);
+    if (child_cue_) remember_child(prior);
     if (gate_)  // the robot's reference first: the gate must know this tick before deciding
       for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
         const AudioChunk* c = f->as<AudioChunk>();
@@ -191,15 +191,15 @@ class VoiceIdAnalyzer : public Analyzer {
     if (model_ && options_.method == VoiceIdMethod::kGmmUbm &&
         options_.decision == VoiceDecision::kTracks) {
       SpeakerTrackOptions t = options_.tracks;
-      if (t.child_speaker_id.empty() && options_.use_seen_child && options_.array_from_world_R)
-        for (const EnrolledSpeaker& sp : model_->speakers)
-          if (sp.id == "child") t.child_speaker_id = sp.id;
+      const bool child_enrolled =
+          std::any_of(model_->speakers.begin(), model_->speakers.end(),
+                      [](const EnrolledSpeaker& sp) { return sp.id == "child"; });
+      if (t.child_speaker_id.empty() && options_.use_seen_child && child_enrolled)
+        t.child_speaker_id = "child";
       tracker_ = std::make_unique<SpeakerTracker>(t, model_->threshold);
       child_cue_ = !t.child_speaker_id.empty() && options_.array_from_world_R.has_value();
     }
   }
-  // The seen child is used: tracks, the array's extrinsics and an enrolled child.
-  bool seen_child_enabled() const { return child_cue_; }
 
   void enable_gate() {
     if (!options_.reference_sensor.empty())
@@ -345,8 +345,7 @@ class VoiceIdAnalyzer : public Analyzer {
         mean_azimuth(seen_, u.speech_start - Duration::from_seconds(options_.seen_child_lookback_s),
                      u.speech_end, 1);
     if (!seen) return std::nullopt;
-    const double d = std::fmod(std::abs(*azimuth - *seen), 360.0);
-    return d > 180 ? 360 - d : d;
+    return azimuth_difference_deg(*azimuth, *seen);
   }
 
   // The decision on the utterance's voice track (speaker_tracks.hpp) replaces its own.
@@ -427,7 +426,8 @@ class VoiceIdAnalyzer : public Analyzer {
   std::vector<audio::Utterance> utterances_;  // scratch
   std::deque<Heard> heard_;  // directions of the last seconds (direction rule, tracks)
   std::deque<Heard> seen_;   // the child's head seen by the cameras: azimuth in the array frame
-  bool child_cue_ = false;   // seen_child_enabled()
+  // The seen child is used: tracks, the array's extrinsics and a speaker to name (enable_tracks).
+  bool child_cue_ = false;
   std::unique_ptr<SpeakerTracker> tracker_;  // decision kTracks
 };
 

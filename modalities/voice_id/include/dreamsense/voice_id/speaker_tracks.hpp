@@ -68,6 +68,9 @@ struct SpeakerTrackOptions {
   Status check() const;
 };
 
+// The smaller angle between two azimuths, in [0, 180] degrees.
+double azimuth_difference_deg(double a_deg, double b_deg);
+
 // One utterance as scored by identify(): per-speaker average LLR (nats per frame).
 struct UtteranceEvidence {
   Timestamp start, end;               // speech part
