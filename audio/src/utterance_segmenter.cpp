@@ -36,6 +36,16 @@ std::vector<float> Utterance::channel(int c) const {
   return out;
 }
 
+void fade_in_pre_roll(std::span<float> mono, const Utterance& u, double max_s) {
+  if (u.sample_rate <= 0 || !(max_s > 0)) return;
+  const int64_t pre_roll = duration_to_frames(u.speech_start - u.start, u.sample_rate);
+  const int64_t n =
+      std::min({pre_roll, duration_to_frames(Duration::from_seconds(max_s), u.sample_rate),
+                static_cast<int64_t>(mono.size())});
+  for (int64_t i = 0; i < n; ++i)
+    mono[static_cast<size_t>(i)] *= static_cast<float>(i) / static_cast<float>(n);
+}
+
 UtteranceSegmenter::UtteranceSegmenter(UtteranceSegmenterOptions options,
                                        std::unique_ptr<VoiceActivityDetector> vad)
     : options_(std::move(options)), vad_(std::move(vad)) {

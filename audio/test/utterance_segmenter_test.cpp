@@ -159,6 +159,32 @@ TEST(UtteranceSegmenter, OpenUtteranceIsClosedByFlushOrByAGap) {
   EXPECT_EQ((*seg)->stamp_of(0), Timestamp::from_seconds(4.0));
 }
 
+TEST(UtteranceSegmenter, FadeInTouchesOnlyThePreRoll) {
+  Utterance u;
+  u.sample_rate = 1000;
+  u.channels = 1;
+  u.start = Timestamp::from_seconds(1.0);
+  u.speech_start = Timestamp::from_seconds(1.05);  // 50 samples of pre-roll
+  std::vector<float> mono(200, 1.0f);
+  fade_in_pre_roll(mono, u, 0.1);  // 100 samples asked, the pre-roll allows 50
+  EXPECT_EQ(mono[0], 0.0f);
+  EXPECT_NEAR(mono[25], 0.5f, 1e-6);
+  EXPECT_LT(mono[49], 1.0f);
+  for (size_t i = 50; i < mono.size(); ++i) ASSERT_EQ(mono[i], 1.0f) << i;
+
+  std::vector<float> shorter(200, 1.0f);
+  fade_in_pre_roll(shorter, u, 0.02);  // 20 samples
+  EXPECT_NEAR(shorter[10], 0.5f, 1e-6);
+  EXPECT_EQ(shorter[20], 1.0f);
+
+  // Speech from the first sample (a cut at the robot's voice) or 0 s: nothing changes.
+  std::vector<float> untouched(200, 1.0f);
+  fade_in_pre_roll(untouched, u, 0.0);
+  u.speech_start = u.start;
+  fade_in_pre_roll(untouched, u, 0.1);
+  EXPECT_EQ(untouched, std::vector<float>(200, 1.0f));
+}
+
 TEST(UtteranceSegmenter, OptionsAreChecked) {
   UtteranceSegmenterOptions o;
   o.channels = 2;

@@ -19,6 +19,9 @@ Status SpeechAnalyzerOptions::check() const {
     return make_error(ErrorCode::kInvalidArgument, "SpeechAnalyzerOptions: no grammar file");
   if (auto s = recognizer.check(); !s) return s;
   if (auto s = robot_gate.check(); !s) return s;
+  if (!(fade_in_s >= 0) || fade_in_s > 1)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "SpeechAnalyzerOptions: fade_in_s must be in [0, 1] s (got {})", fade_in_s);
   if (direction_margin < Duration())
     return make_error(ErrorCode::kInvalidArgument,
                       "SpeechAnalyzerOptions: direction_margin must be >= 0");
@@ -189,6 +192,7 @@ class SpeechAnalyzer : public Analyzer {
     } else {
       mono = u.channel(0);  // no array or no direction: channel 0 (see the header)
     }
+    audio::fade_in_pre_roll(mono, u, options_.fade_in_s);
     if (options_.noise_suppression) {
       auto clean = audio::suppress_noise(mono, rate_);
       if (!clean) return tl::unexpected(clean.error());

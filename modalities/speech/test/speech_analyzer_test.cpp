@@ -198,6 +198,11 @@ TEST(SpeechAnalyzer, OptionsAreChecked) {
   auto a = make_speech_analyzer(o);
   ASSERT_FALSE(a);
   EXPECT_NE(a.error().message.find("/nonexistent.gram"), std::string::npos);
+  o.fade_in_s = -0.1;
+  auto fade = o.check();
+  ASSERT_FALSE(fade);
+  EXPECT_NE(fade.error().message.find("fade_in_s"), std::string::npos);
+  EXPECT_EQ(SpeechAnalyzerOptions{}.recognizer.garbage_phone_weight, 0.5);
 }
 
 }  // namespace

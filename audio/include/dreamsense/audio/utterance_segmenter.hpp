@@ -50,6 +50,13 @@ struct Utterance {
   std::vector<float> channel(int c) const;
 };
 
+// Fades in the start of a mono signal cut from `u` (same rate, same first sample) with a linear
+// ramp over at most `max_s` seconds, never reaching into the speech: only the pre-roll before
+// u.speech_start is touched. Why: a segment cut out of a continuous stream starts abruptly, and
+// PocketSphinx decoded that step in the noise as a word ("eight seven of clubs" on 5 of 36
+// development demo seeds; modalities/speech/README.md).
+void fade_in_pre_roll(std::span<float> mono, const Utterance& u, double max_s);
+
 class UtteranceSegmenter {
  public:
   static Result<std::unique_ptr<UtteranceSegmenter>> create(
