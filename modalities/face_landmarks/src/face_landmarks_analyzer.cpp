@@ -15,7 +15,10 @@ class FaceLandmarksAnalyzer : public Analyzer {
 
   std::string_view name() const override { return "face_landmarks"; }
   AnalyzerContract contract() const override {
-    return {{}, options_.cameras, {keys::kSelectedCamera.name}, {keys::kFaceLandmarks.name}};
+    return {{},
+            options_.cameras,
+            {keys::kSelectedCamera.name, keys::kFaceDetections.name},
+            {keys::kFaceLandmarks.name, keys::kFaceLandmarkViews.name}};
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
@@ -24,6 +27,7 @@ class FaceLandmarksAnalyzer : public Analyzer {
     if (!sel || sel->stamp != in.stamp) return ok_status();  // no camera frame this tick
     if (!sel->present()) {
       out.set_absent(keys::kFaceLandmarks, in.stamp);
+      out.set_absent(keys::kFaceLandmarkViews, in.stamp);
       return ok_status();
     }
     const SelectedCamera& s = *sel->value;
@@ -34,14 +38,19 @@ class FaceLandmarksAnalyzer : public Analyzer {
         return make_error(ErrorCode::kInvalidArgument,
                           "face_landmarks: stream '{}' is not a colour stream", s.camera);
       out.set_absent(keys::kFaceLandmarks, in.stamp);
+      out.set_absent(keys::kFaceLandmarkViews, in.stamp);
       return ok_status();
     }
     auto fit = landmarker_->fit_with_spread(img->image, s.face.box_px);
     if (!fit) return tl::unexpected(fit.error());
     if (!*fit) {
       out.set_absent(keys::kFaceLandmarks, in.stamp);
+      out.set_absent(keys::kFaceLandmarkViews, in.stamp);
       return ok_status();
     }
+    auto others = other_views(in, prior, s.camera);
+    if (!others) return tl::unexpected(others.error());
+    out.set(keys::kFaceLandmarkViews, std::move(*others), in.stamp, sel->confidence);
     FaceLandmarks lm;
     lm.camera = s.camera;
     lm.frame_stamp = f->stamp;
@@ -57,6 +66,34 @@ class FaceLandmarksAnalyzer : public Analyzer {
   }
 
  private:
+  // Landmarks of each other camera's best-scored face this tick (one fit pass each).
+  Result<FaceLandmarkViews> other_views(const MultiFrame& in, const BlackboardView& prior,
+                                        const SensorId& selected) const {
+    FaceLandmarkViews views;
+    if (!options_.other_views) return views;
+    const auto det = prior.get(keys::kFaceDetections);
+    if (!det || det->stamp != in.stamp || !det->present()) return views;
+    for (const auto& [camera, faces] : det->value->cameras) {
+      if (camera == selected || faces.faces.empty()) continue;
+      const FramePtr f = in.frame(camera);
+      const ColorImage* img = f ? f->as<ColorImage>() : nullptr;
+      if (img == nullptr || f->stamp != faces.frame_stamp) continue;
+      const cv::Rect2d box = faces.faces.front().box_px;
+      auto points = landmarker_->fit(img->image, box);
+      if (!points) return tl::unexpected(points.error());
+      if (!*points) continue;
+      FaceLandmarks lm;
+      lm.camera = camera;
+      lm.frame_stamp = f->stamp;
+      lm.frame_sequence = f->sequence;
+      lm.image_size = img->image.size();
+      lm.box_px = box;
+      lm.points_px = std::move(**points);
+      views.others.push_back(std::move(lm));
+    }
+    return views;
+  }
+
   FaceLandmarksAnalyzerOptions options_;
   std::shared_ptr<const Landmarker> landmarker_;
 };

@@ -13,6 +13,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
   f.plan = [](const PlanContext& ctx, OptionsNode& options) -> Result<PlannedAnalyzers> {
     FaceLandmarksAnalyzerOptions o;
     DS_RETURN_IF_ERROR(options.get("model", o.dlib.model));
+    DS_RETURN_IF_ERROR(options.get("other_views", o.other_views));
     const auto cameras = ctx.cameras_with_role(roles::kChildCamera);
     if (cameras.empty())
       return PlannedAnalyzers::skip("no calibrated stream with role child_camera");

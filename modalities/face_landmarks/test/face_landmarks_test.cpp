@@ -297,7 +297,8 @@ MultiFrame one_frame(const SensorId& cam, const cv::Mat& img, Timestamp t) {
 TEST(FaceLandmarksAnalyzer, BlackboardBehaviour) {
   auto a = make_face_landmarks_analyzer({}, shared_landmarker());
   ASSERT_TRUE(a);
-  EXPECT_EQ((*a)->contract().writes, std::vector<std::string>{keys::kFaceLandmarks.name});
+  EXPECT_EQ((*a)->contract().writes,
+            (std::vector<std::string>{keys::kFaceLandmarks.name, keys::kFaceLandmarkViews.name}));
   const Timestamp t = Timestamp::from_seconds(1);
   const MultiFrame mf = one_frame("camera_middle", portrait(), t);
   {  // no selection entry this tick: nothing written
@@ -349,6 +350,48 @@ TEST(FaceLandmarksAnalyzer, BlackboardBehaviour) {
     ASSERT_TRUE(e);
     EXPECT_FALSE(e->present());
   }
+}
+
+// Issue 15: the other cameras' best faces are fitted too (keys::kFaceLandmarkViews); a camera
+// whose detection is of another frame, or that has no frame this tick, is left out; with
+// other_views off the list is empty.
+TEST(FaceLandmarksAnalyzer, OtherCamerasFacesAreFittedForAMultiViewPose) {
+  const Timestamp t = Timestamp::from_seconds(1);
+  MultiFrame mf = one_frame("camera_middle", portrait(), t);
+  mf.frames["camera_left"] = make_frame("camera_left", t, 7, ColorImage{portrait()});
+  mf.frames["camera_right"] = make_frame("camera_right", t, 7, ColorImage{portrait()});
+  FaceDetections det;
+  for (const char* c : {"camera_middle", "camera_left", "camera_right", "camera_top"}) {
+    CameraFaces& cf = det.cameras[c];
+    cf.frame_stamp = t;
+    cf.faces.push_back({kPortrait.face_region_px, 0.9f, FaceView::kFrontal, 1.f});
+  }
+  det.cameras["camera_right"].frame_stamp = t - Duration::from_ms(40);  // an older frame
+  SelectedCamera s;
+  s.camera = "camera_middle";
+  s.face = det.cameras["camera_middle"].faces[0];
+  auto views_with = [&](bool other_views) {
+    FaceLandmarksAnalyzerOptions o;
+    o.other_views = other_views;
+    auto a = make_face_landmarks_analyzer(o, shared_landmarker());
+    EXPECT_TRUE(a);
+    Blackboard bb;
+    BlackboardWriter d("face_detection");
+    d.set(keys::kFaceDetections, det, t, 0.9f);
+    d.set(keys::kSelectedCamera, s, t, 0.9f);
+    bb.commit(d, t);
+    BlackboardWriter w("face_landmarks");
+    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    auto e = bb.snapshot().get(keys::kFaceLandmarkViews);
+    EXPECT_TRUE(e && e->present());
+    return e ? *e->value : FaceLandmarkViews{};
+  };
+  const FaceLandmarkViews on = views_with(true);
+  ASSERT_EQ(on.others.size(), 1u);
+  EXPECT_EQ(on.others[0].camera, "camera_left");
+  EXPECT_EQ(on.others[0].points_px.size(), 68u);
+  EXPECT_TRUE(views_with(false).others.empty());
 }
 
 // ---- Demo session ----

@@ -35,9 +35,12 @@ class GazeAnalyzer : public Analyzer {
     const auto cam = options_.cameras.find(lm->value->camera);
     if (cam == options_.cameras.end())
       return make_error(ErrorCode::kNotFound, "gaze: no camera model for '{}'", lm->value->camera);
-    auto g = estimate_gaze(*lm->value, *eyes->value, *head->value, cam->second, options_.estimator);
+    // The selected image's own head pose: the eye-in-head angles are measured in that image
+    // (HeadPose::image; a multi-view pose made gaze 1-2 degrees worse).
+    const HeadPose image_head = head->value->as_image_pose();
+    auto g = estimate_gaze(*lm->value, *eyes->value, image_head, cam->second, options_.estimator);
     if (!g) return absent(in.stamp, out);
-    smooth(*g, *head->value);
+    smooth(*g, image_head);
 
     double miss = 0;
     bool raw = false;

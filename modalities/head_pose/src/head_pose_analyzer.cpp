@@ -11,11 +11,13 @@ namespace {
 class HeadPoseAnalyzer : public Analyzer {
  public:
   explicit HeadPoseAnalyzer(HeadPoseAnalyzerOptions o)
-      : options_(std::move(o)), filter_(options_.filter) {}
+      : options_(std::move(o)), filter_(options_.filter), image_filter_(options_.filter) {}
 
   std::string_view name() const override { return "head_pose"; }
   AnalyzerContract contract() const override {
-    return {{}, {}, {keys::kFaceLandmarks.name}, {keys::kHeadPose.name}};
+    AnalyzerContract c{{}, {}, {keys::kFaceLandmarks.name}, {keys::kHeadPose.name}};
+    if (options_.multi_view) c.reads.push_back(keys::kFaceLandmarkViews.name);
+    return c;
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
@@ -36,9 +38,21 @@ class HeadPoseAnalyzer : public Analyzer {
       out.set_absent(keys::kHeadPose, in.stamp);
       return ok_status();
     }
+    PnpFit single = **fit;
+    single.camera_from_head = single.camera_from_head * options_.model_from_head;
+    HeadPose image_pose = make_head_pose(single, cam->second, l.camera, l.frame_stamp);
+    image_filter_.apply(image_pose);
+    int views = 1;
+    if (options_.multi_view)
+      views = refine_with_other_views(prior, in.stamp, l, cam->second, **fit);
     (*fit)->camera_from_head = (*fit)->camera_from_head * options_.model_from_head;
     HeadPose pose = make_head_pose(**fit, cam->second, l.camera, l.frame_stamp);
     filter_.apply(pose);
+    pose.views_used = views;
+    // Always with multi_view: the two filters' states differ after a multi-view tick.
+    if (options_.multi_view)
+      pose.image = HeadPose::ImagePose{image_pose.camera_from_head, image_pose.position_camera_m,
+                                       image_pose.world_from_head, image_pose.position_world_m};
     const double iod = cv::norm(l.right_eye_px() - l.left_eye_px());
     const double quality = std::clamp(
         1.0 - pose.reprojection_rms_px / (options_.estimator.max_rms_per_interocular * iod), 0.0,
@@ -48,11 +62,35 @@ class HeadPoseAnalyzer : public Analyzer {
     return ok_status();
   }
 
-  void reset() override { filter_.reset(); }
+  void reset() override {
+    filter_.reset();
+    image_filter_.reset();
+  }
 
  private:
+  // Issue 15: the other cameras that see the face this tick refine the selected camera's fit;
+  // returns the number of views the fit explains.
+  int refine_with_other_views(const BlackboardView& prior, Timestamp tick,
+                              const FaceLandmarks& selected, const CameraModel& camera,
+                              PnpFit& fit) const {
+    const auto views = prior.get(keys::kFaceLandmarkViews);
+    if (!views || views->stamp != tick || !views->present()) return 1;
+    std::vector<PoseView> others;
+    for (const FaceLandmarks& o : views->value->others) {
+      const auto c = options_.cameras.find(o.camera);
+      if (c != options_.cameras.end()) others.push_back({&c->second, &o.points_px});
+    }
+    if (others.empty()) return 1;
+    auto multi = refine_head_pose_multi_view(fit, {&camera, &selected.points_px}, others,
+                                             options_.estimator);
+    if (!multi) return 1;
+    fit = multi->fit;
+    return multi->views_used;
+  }
+
   HeadPoseAnalyzerOptions options_;
   PoseFilter filter_;
+  PoseFilter image_filter_;  // the same filter on the single-view pose (HeadPose::image)
 };
 
 }  // namespace

@@ -16,6 +16,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
   f.plan = [](const PlanContext& ctx, OptionsNode& options) -> Result<PlannedAnalyzers> {
     HeadPoseAnalyzerOptions o;
     DS_RETURN_IF_ERROR(options.get("max_rms_per_interocular", o.estimator.max_rms_per_interocular));
+    DS_RETURN_IF_ERROR(options.get("multi_view", o.multi_view));
     DS_RETURN_IF_ERROR(options.child("filter").get("enabled", o.filter.enabled));
     o.cameras = ctx.cameras_with_role(roles::kChildCamera);
     if (o.cameras.empty())

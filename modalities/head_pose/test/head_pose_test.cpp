@@ -172,6 +172,78 @@ TEST(HeadPoseEstimator, NegativeCases) {
   EXPECT_EQ((*r)->points_used, 50);
 }
 
+// Issue 15: two cameras fix what one trades: with 1 px landmark noise the multi-view pose is
+// closer to the truth than the selected camera's own PnP, above all in pitch.
+TEST(HeadPoseEstimator, MultiViewRefinementBeatsOneView) {
+  HeadPoseEstimatorOptions o;
+  const CameraModel middle = camera_at(0), side = camera_at(0.5);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0, 1.0);
+  std::uniform_real_distribution<double> yaw(-30, 30), pitch(-15, 15), roll(-10, 10);
+  std::vector<double> one, two, one_pitch, two_pitch;
+  for (int i = 0; i < 100; ++i) {
+    const double true_pitch = pitch(rng);
+    const cv::Matx33d R = rotation_from_ypr_deg(yaw(rng), true_pitch, roll(rng));
+    const cv::Vec3d pos(0, -0.05, 1.1);
+    auto a = project(generic_68_points_m(), R, pos, middle);
+    auto b = project(generic_68_points_m(), R, pos, side);
+    for (auto* pts : {&a, &b})
+      for (auto& p : *pts) p += cv::Point2d(noise(rng), noise(rng));
+    auto fit = fit_head_pose(a, middle, o);
+    ASSERT_TRUE(fit && fit->has_value());
+    auto multi = refine_head_pose_multi_view(**fit, {&middle, &a}, {{&side, &b}}, o);
+    ASSERT_TRUE(multi) << i;
+    EXPECT_EQ(multi->views_used, 2);
+    EXPECT_EQ(multi->fit.points_used, 102);
+    const HeadPose p1 = make_head_pose(**fit, middle, "m", {});
+    const HeadPose p2 = make_head_pose(multi->fit, middle, "m", {});
+    one.push_back(rotation_angle_deg(p1.world_from_head, R));
+    two.push_back(rotation_angle_deg(p2.world_from_head, R));
+    one_pitch.push_back(std::abs(p1.pitch_deg - true_pitch));
+    two_pitch.push_back(std::abs(p2.pitch_deg - true_pitch));
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  std::cout << "[synthetic, 1 px noise] rotation error median one view " << median(one)
+            << " deg, two views " << median(two) << " deg; pitch " << median(one_pitch) << " / "
+            << median(two_pitch) << " deg\n";
+  EXPECT_LT(median(two), 0.7 * median(one));
+  EXPECT_LT(median(two_pitch), 0.7 * median(one_pitch));
+}
+
+TEST(HeadPoseEstimator, MultiViewRefinementRecoversAPoseAndLeavesOutAnotherFace) {
+  HeadPoseEstimatorOptions o;
+  const CameraModel middle = camera_at(0), left = camera_at(-0.5), right = camera_at(0.5);
+  const cv::Matx33d R = rotation_from_ypr_deg(15, 8, -3);
+  const cv::Vec3d pos(0.02, -0.04, 1.08);
+  const auto a = project(generic_68_points_m(), R, pos, middle);
+  const auto b = project(generic_68_points_m(), R, pos, right);
+  // A start 6 degrees and 4 cm off (what a biased single view gives): the views pull it back.
+  PnpFit start;
+  start.camera_from_head = middle.R * rotation_from_ypr_deg(15, 14, -3);
+  start.position_camera_m = middle.to_camera(pos + cv::Vec3d(0, 0, 0.04));
+  auto multi = refine_head_pose_multi_view(start, {&middle, &a}, {{&right, &b}}, o);
+  ASSERT_TRUE(multi);
+  const HeadPose p = make_head_pose(multi->fit, middle, "m", {});
+  EXPECT_LT(rotation_angle_deg(p.world_from_head, R), 0.05);
+  EXPECT_LT(cv::norm(p.position_world_m - pos), 1e-4);
+  EXPECT_LT(multi->fit.rms_px, 0.01);
+
+  // The left camera sees somebody else, 40 cm away: gated out, the right camera still used.
+  const auto stranger = project(generic_68_points_m(), R, pos + cv::Vec3d(-0.4, 0, 0.2), left);
+  multi = refine_head_pose_multi_view(start, {&middle, &a}, {{&left, &stranger}, {&right, &b}}, o);
+  ASSERT_TRUE(multi);
+  EXPECT_EQ(multi->views_used, 2);
+  // Only the stranger, no view of the wrong size, no camera: nothing to refine with.
+  EXPECT_FALSE(refine_head_pose_multi_view(start, {&middle, &a}, {{&left, &stranger}}, o));
+  const std::vector<cv::Point2d> few(10);
+  EXPECT_FALSE(refine_head_pose_multi_view(start, {&middle, &a}, {{&right, &few}}, o));
+  EXPECT_FALSE(refine_head_pose_multi_view(start, {&middle, &a}, {{nullptr, &b}}, o));
+  EXPECT_FALSE(refine_head_pose_multi_view(start, {&middle, &a}, {}, o));
+}
+
 HeadPose pose_at(double t, double yaw, cv::Vec3d pos = {0, -0.05, 1.1}) {
   HeadPose p;
   p.frame_stamp = Timestamp::from_seconds(t);
@@ -287,6 +359,66 @@ TEST(HeadPoseAnalyzer, BlackboardBehaviour) {
     ASSERT_FALSE(s);
     EXPECT_NE(s.error().message.find("camera_left"), std::string::npos);
   }
+}
+
+// Issue 15: the same face's landmarks in another camera (keys::kFaceLandmarkViews) make a
+// two-view pose; the selected image's own fit stays in HeadPose::image for gaze. Landmarks of
+// the selected camera carry a pitch bias (a shifted mouth and nose, like a fit pulled by
+// glasses): one view reads it as a tilt, the second view corrects most of it.
+TEST(HeadPoseAnalyzer, SecondCameraGivesAMultiViewPose) {
+  HeadPoseAnalyzerOptions o;
+  const CameraModel middle = camera_at(0), right = camera_at(0.5);
+  o.cameras["camera_middle"] = middle;
+  o.cameras["camera_right"] = right;
+  o.filter.enabled = false;
+  const Timestamp t = Timestamp::from_seconds(2);
+  MultiFrame mf;
+  mf.stamp = t;
+  const cv::Matx33d R = rotation_from_ypr_deg(10, 0, 0);
+  const cv::Vec3d pos(0, -0.05, 1.1);
+  FaceLandmarks selected;
+  selected.camera = "camera_middle";
+  selected.frame_stamp = t;
+  selected.points_px = project(generic_68_points_m(), R, pos, middle);
+  for (size_t i = 27; i < 68; ++i)
+    if (i < 36 || i >= 48) selected.points_px[i].y += 4;  // nose and mouth 4 px low
+  FaceLandmarks other = selected;
+  other.camera = "camera_right";
+  other.points_px = project(generic_68_points_m(), R, pos, right);
+  FaceLandmarks unknown = other;
+  unknown.camera = "camera_top";  // no camera model: ignored
+
+  auto pose_with = [&](bool multi_view, const std::vector<FaceLandmarks>& others) {
+    HeadPoseAnalyzerOptions oo = o;
+    oo.multi_view = multi_view;
+    auto a = make_head_pose_analyzer(oo);
+    EXPECT_TRUE(a);
+    Blackboard bb;
+    BlackboardWriter l("face_landmarks");
+    l.set(keys::kFaceLandmarks, selected, t, 0.8f);
+    l.set(keys::kFaceLandmarkViews, FaceLandmarkViews{others}, t, 0.8f);
+    bb.commit(l, t);
+    BlackboardWriter w("head_pose");
+    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    return *bb.snapshot().get(keys::kHeadPose)->value;
+  };
+  const HeadPose one = pose_with(false, {other});
+  const HeadPose two = pose_with(true, {unknown, other});
+  EXPECT_EQ(one.views_used, 1);
+  EXPECT_FALSE(one.image);
+  EXPECT_EQ(two.views_used, 2);
+  ASSERT_TRUE(two.image);
+  const double one_error = rotation_angle_deg(one.world_from_head, R);
+  const double two_error = rotation_angle_deg(two.world_from_head, R);
+  EXPECT_GT(one_error, 2.0) << "the bias must show in one view";
+  EXPECT_LT(two_error, 0.5 * one_error);
+  // The image pose is the single view's, and gaze gets it from as_image_pose().
+  EXPECT_LT(rotation_angle_deg(two.image->world_from_head, one.world_from_head), 1e-6);
+  EXPECT_LT(rotation_angle_deg(two.as_image_pose().world_from_head, one.world_from_head), 1e-6);
+  EXPECT_FALSE(two.as_image_pose().image);
+  // Without the views key's other cameras: the single view.
+  EXPECT_EQ(pose_with(true, {unknown}).views_used, 1);
 }
 
 // A face shape unlike the generic one (deeper nose, flatter brows, narrower eyes), seen by three

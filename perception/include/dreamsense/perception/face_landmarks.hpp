@@ -40,10 +40,20 @@ struct FaceLandmarks {
   }
 };
 
+// The same face's landmarks in the other cameras at the same tick (issue 15: a multi-view head
+// pose). Each other camera's best-scored detection is fitted; which of them show the selected
+// face is for the reader to check (head_pose drops views that disagree with the others).
+struct FaceLandmarkViews {
+  std::vector<FaceLandmarks> others;  // not the selected camera; empty = one view only
+};
+
 namespace keys {
 // Landmarks on the selected camera's face; absent entry when no face is selected or the
 // landmarker rejected it. Nothing is written in ticks without a selection entry.
 inline constexpr Key<FaceLandmarks> kFaceLandmarks{"face.landmarks"};
+// Written with every kFaceLandmarks entry (present with an empty list when the option
+// face_landmarks.other_views is off or no other camera has a face).
+inline constexpr Key<FaceLandmarkViews> kFaceLandmarkViews{"face.landmark_views"};
 }  // namespace keys
 
 }  // namespace dreamsense

@@ -33,6 +33,29 @@ struct HeadPose {
   double reprojection_rms_px = 0;  // of the raw (unsmoothed) fit
   int points_used = 0;             // landmarks used by the fit
   bool smoothed = false;           // true when a temporal filter changed the raw fit
+  // The selected camera's own single-view fit (smoothed likewise), for measurements made in
+  // that image: gaze's eye-in-head angles need the pose that explains this image's landmarks,
+  // while the multi-view pose above explains every camera at once (measured: gaze 1-2 degrees
+  // worse with it, modalities/head_pose/README.md). Unset: the pose itself (one view).
+  struct ImagePose {
+    cv::Matx33d camera_from_head = cv::Matx33d::eye();
+    cv::Vec3d position_camera_m{0, 0, 1};
+    cv::Matx33d world_from_head = cv::Matx33d::eye();
+    cv::Vec3d position_world_m{0, 0, 1};
+  };
+  std::optional<ImagePose> image;
+  int views_used = 1;  // cameras whose landmarks the pose explains
+  // This pose with the image pose in place of the multi-view one.
+  HeadPose as_image_pose() const {
+    HeadPose p = *this;
+    if (!image) return p;
+    p.camera_from_head = image->camera_from_head;
+    p.position_camera_m = image->position_camera_m;
+    p.world_from_head = image->world_from_head;
+    p.position_world_m = image->position_world_m;
+    p.image.reset();
+    return p;
+  }
 };
 
 namespace keys {

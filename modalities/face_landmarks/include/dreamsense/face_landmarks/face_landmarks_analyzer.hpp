@@ -9,7 +9,10 @@
 //    the selected face's detection score x spread_confidence(fit spread) (a fit whose box
 //    re-derivation passes disagree, e.g. an occluded or strongly turned face, is reported with
 //    low confidence instead of as a confident wrong shape), or absent when the landmarker
-//    rejects the face.
+//    rejects the face;
+//  - with options.other_views, keys::kFaceLandmarkViews: the landmarks of every other camera's
+//    best-scored face this tick (keys::kFaceDetections, one fit pass each), for a multi-view
+//    head pose; written (possibly empty) with every present kFaceLandmarks, absent with it.
 
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/face_landmarks/landmarker.hpp"
@@ -25,6 +28,9 @@ struct FaceLandmarksAnalyzerOptions {
   DlibLandmarkerOptions dlib;  // used by the factory that builds its own landmarker
   // spread_confidence(spread, spread_ok, spread_bad) multiplies the confidence (landmarker.hpp).
   double spread_ok = 0.03, spread_bad = 0.10;
+  // Also fit the other cameras' faces (keys::kFaceLandmarkViews; issue 15's multi-view head
+  // pose). Costs one landmark fit per other camera with a face.
+  bool other_views = true;
   Status check() const;
 };
 

@@ -7,6 +7,8 @@
 //  - otherwise kHeadPose (smoothed unless options.filter.enabled is false), confidence = the
 //    landmarks' confidence * (1 - rms / (max_rms_per_interocular * inter-ocular px)).
 // A landmarks camera without a CameraModel in options.cameras is an error (configuration).
+// With options.multi_view it also reads keys::kFaceLandmarkViews (the same face in the other
+// cameras) and fits one pose to every view that agrees.
 
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/core/camera_model.hpp"
@@ -26,6 +28,10 @@ struct HeadPoseAnalyzerOptions {
   // face model's frame. A generic model's "straight ahead" differs from a given face's by a few
   // to ~15 degrees (face proportions); identity = uncalibrated.
   cv::Matx33d model_from_head = cv::Matx33d::eye();
+  // Issue 15: when other calibrated cameras see the face at the same tick
+  // (keys::kFaceLandmarkViews), one pose is fitted to all views at once
+  // (refine_head_pose_multi_view); the single-view fit stands when no other view agrees.
+  bool multi_view = true;
   Status check() const;
 };
 

@@ -38,6 +38,27 @@ Result<std::optional<PnpFit>> fit_head_pose(const std::vector<cv::Point2d>& land
                                             const CameraModel& camera,
                                             const HeadPoseEstimatorOptions& options);
 
+// One more calibrated camera's landmarks of the same face at the same tick.
+struct PoseView {
+  const CameraModel* camera = nullptr;
+  const std::vector<cv::Point2d>* landmarks_px = nullptr;  // 68, iBUG order
+};
+struct MultiViewFit {
+  PnpFit fit;          // in the first view's camera frame, as fit_head_pose's
+  int views_used = 1;  // the first view and the other views kept
+};
+// Multi-view head pose (issue 15): one rigid pose of options.model that explains the first
+// view and the other views at once (Levenberg-Marquardt on the summed squared reprojection
+// errors of all views, started from `start`, the first view's fit_head_pose). With two or more
+// cameras the depth and pitch that a single view trades against each other are fixed by the
+// baseline. Another view is left out when the start pose reprojects into it beyond
+// `view_gate_per_interocular` of its inter-ocular distance (another face, a failed fit), and
+// after the fit the worst view beyond options.max_rms_per_interocular is dropped and the fit
+// repeated. nullopt when no other view is kept (then the single-view fit stands).
+std::optional<MultiViewFit> refine_head_pose_multi_view(const PnpFit& start, const PoseView& first,
+                                                        const std::vector<PoseView>& others,
+                                                        const HeadPoseEstimatorOptions& options,
+                                                        double view_gate_per_interocular = 0.5);
 // Fills the world-frame fields (rotation, position, yaw/pitch/roll, head-gaze ray) of a HeadPose
 // from a camera-frame fit and the camera's extrinsics.
 HeadPose make_head_pose(const PnpFit& fit, const CameraModel& camera, const SensorId& camera_id,
