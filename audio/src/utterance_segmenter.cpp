@@ -48,7 +48,7 @@ void fade_in_pre_roll(std::span<float> mono, const Utterance& u, double max_s) {
 
 UtteranceSegmenter::UtteranceSegmenter(UtteranceSegmenterOptions options,
                                        std::unique_ptr<VoiceActivityDetector> vad)
-    : options_(std::move(options)), vad_(std::move(vad)) {
+    : options_(options), vad_(std::move(vad)) {
   rate_ = options_.vad.sample_rate;
   frame_len_ = vad_->frame_length();
 }
