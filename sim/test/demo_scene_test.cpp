@@ -83,11 +83,14 @@ TEST(DemoScene, FixationsTileTheSessionAndEveryCycleLooksAtTheRobot) {
       EXPECT_GE(f.back().end_s, duration - 1e-9);
       double robot = 0;
       for (size_t i = 0; i < f.size(); ++i) {
-        if (i > 0) EXPECT_DOUBLE_EQ(f[i].start_s, f[i - 1].end_s);
+        if (i > 0) {
+          EXPECT_DOUBLE_EQ(f[i].start_s, f[i - 1].end_s);
+        }
         EXPECT_GE(f[i].end_s - f[i].start_s, 0.5) << "seed " << seed << " fixation " << i;
         if (f[i].kind == GazeTargetKind::kRobot) robot += f[i].end_s - f[i].start_s;
-        if (i > 0 && f[i].kind == GazeTargetKind::kRobot)
+        if (i > 0 && f[i].kind == GazeTargetKind::kRobot) {
           EXPECT_NE(f[i - 1].kind, GazeTargetKind::kRobot);  // consecutive robot looks merge
+        }
       }
       EXPECT_GE(robot / duration, 0.35) << "seed " << seed;
       EXPECT_LE(robot / duration, 0.45) << "seed " << seed;

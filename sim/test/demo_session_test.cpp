@@ -284,8 +284,11 @@ TEST_F(DemoSessionTest, PlanarFaceOptionStillWorks) {
   o.face_model = DemoOptions::FaceModel::kPlanar;
   auto s = generate_demo_session(o);
   ASSERT_TRUE(s) << s.error().to_string();
-  for (const auto& r : read_jsonl(root_ / "p" / "truth.jsonl"))
-    if (r["type"] == "face") EXPECT_EQ(r["eye_gaze_dir"], r["head_gaze_dir"]);  // painted eyes
+  for (const auto& r : read_jsonl(root_ / "p" / "truth.jsonl")) {
+    if (r["type"] == "face") {
+      EXPECT_EQ(r["eye_gaze_dir"], r["head_gaze_dir"]);  // painted eyes
+    }
+  }
 }
 
 // The same computation as the face truth: script -> face state -> the mesh's eyes.
@@ -316,8 +319,9 @@ TEST(DemoMutualGaze, FractionIsInTheBandAndRunsLastInEverySeed) {
       }
       size_t j = i;
       while (j < mutual.size() && mutual[j]) ++j;
-      if (i > 0 && j < mutual.size())
+      if (i > 0 && j < mutual.size()) {
         EXPECT_GE(j - i, 13u) << "seed " << seed << " run at frame " << i;
+      }
       i = j;
     }
   }

@@ -143,7 +143,6 @@ TEST(MeshFace, LandmarkVerticesLandWhereTheRendererDrewTheirTexturePoint) {
         const cv::Point2d decoded(c[0] / 2 + 170, c[1] / 2 + 80);
         // Error in image pixels: where the mesh maps the decoded texture point (through the
         // landmark's adjacent triangle that contains it in the portrait), to the vertex.
-        const cv::Point2d lm = m.landmarks_px()[static_cast<size_t>(k)];
         double err = 1e9;
         for (const cv::Vec3i& t : m.triangles()) {
           if (t[0] != k && t[1] != k && t[2] != k) continue;

@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <random>
 
@@ -150,8 +149,11 @@ TEST(RoomAcoustics, RejectsBadInput) {
   EXPECT_FALSE(room_impulse_responses(room, {{1, 1, 1}, {}}));
 }
 
-TEST(RoomAcoustics, TwentySecondsOfFourChannelsIsFast) {
-  const auto start = std::chrono::steady_clock::now();
+// Five 3 s utterances at five places mixed into 20 s of 4-channel audio with pink noise, as
+// the demo does: every sample finite and each utterance heard. (Its speed is a benchmark:
+// BM_RoomSimulationOfAThreeSecondUtterance in sound_direction_bench, not a timed test, which
+// failed under ASan on a loaded machine.)
+TEST(RoomAcoustics, TwentySecondsOfFourChannelsMix) {
   RoomOptions room;
   room.rt60_s = 0.4;
   const cv::Vec3d centre(2.5, 2.05, 1.5);
@@ -166,10 +168,20 @@ TEST(RoomAcoustics, TwentySecondsOfFourChannelsIsFast) {
       for (size_t i = 0; i < (*wet)[c].size() && u * 64000 + i < mix[c].size(); ++i)
         mix[c][u * 64000 + i] += (*wet)[c][i];
   }
+  const Channels dry = mix;
   add_noise(mix, 20, NoiseColor::kPink, 7);
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_LT(s, 5.0);
-  RecordProperty("seconds", std::to_string(s));
+  for (const auto& channel : mix)
+    for (double v : channel) ASSERT_TRUE(std::isfinite(v));
+  // Each utterance's first second carries energy well above the 20 dB-down noise.
+  for (int u = 0; u < 5; ++u) {
+    double speech = 0, total = 0;
+    for (size_t i = 0; i < 16000; ++i) {
+      const size_t k = static_cast<size_t>(u) * 64000 + 4000 + i;
+      speech += dry[0][k] * dry[0][k];
+      total += mix[0][k] * mix[0][k];
+    }
+    EXPECT_GT(speech, 0.5 * total) << "utterance " << u;
+  }
 }
 
 }  // namespace

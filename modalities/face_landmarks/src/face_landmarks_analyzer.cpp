@@ -74,7 +74,9 @@ class FaceLandmarksAnalyzer : public Analyzer {
     const auto det = prior.get(keys::kFaceDetections);
     if (!det || det->stamp != in.stamp || !det->present()) return views;
     for (const auto& [camera, faces] : det->value->cameras) {
-      if (camera == selected || faces.faces.empty()) continue;
+      if (camera == selected || faces.faces.empty() ||
+          faces.faces.front().frontalness < options_.other_view_min_frontalness)
+        continue;
       const FramePtr f = in.frame(camera);
       const ColorImage* img = f ? f->as<ColorImage>() : nullptr;
       if (img == nullptr || f->stamp != faces.frame_stamp) continue;
@@ -109,6 +111,9 @@ Status FaceLandmarksAnalyzerOptions::check() const {
   if (!(spread_ok >= 0 && spread_bad > spread_ok))
     return make_error(ErrorCode::kInvalidArgument,
                       "FaceLandmarksAnalyzerOptions: need 0 <= spread_ok < spread_bad");
+  if (!(other_view_min_frontalness >= 0 && other_view_min_frontalness <= 1))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "FaceLandmarksAnalyzerOptions: other_view_min_frontalness must be in [0, 1]");
   return dlib.check();
 }
 

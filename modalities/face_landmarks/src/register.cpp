@@ -14,6 +14,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
     FaceLandmarksAnalyzerOptions o;
     DS_RETURN_IF_ERROR(options.get("model", o.dlib.model));
     DS_RETURN_IF_ERROR(options.get("other_views", o.other_views));
+    DS_RETURN_IF_ERROR(options.get("other_view_min_frontalness", o.other_view_min_frontalness));
     const auto cameras = ctx.cameras_with_role(roles::kChildCamera);
     if (cameras.empty())
       return PlannedAnalyzers::skip("no calibrated stream with role child_camera");

@@ -353,8 +353,8 @@ TEST(FaceLandmarksAnalyzer, BlackboardBehaviour) {
 }
 
 // Issue 15: the other cameras' best faces are fitted too (keys::kFaceLandmarkViews); a camera
-// whose detection is of another frame, or that has no frame this tick, is left out; with
-// other_views off the list is empty.
+// whose detection is of another frame, that has no frame this tick, or that sees the face turned
+// away is left out; with other_views off the list is empty.
 TEST(FaceLandmarksAnalyzer, OtherCamerasFacesAreFittedForAMultiViewPose) {
   const Timestamp t = Timestamp::from_seconds(1);
   MultiFrame mf = one_frame("camera_middle", portrait(), t);
@@ -392,6 +392,12 @@ TEST(FaceLandmarksAnalyzer, OtherCamerasFacesAreFittedForAMultiViewPose) {
   EXPECT_EQ(on.others[0].camera, "camera_left");
   EXPECT_EQ(on.others[0].points_px.size(), 68u);
   EXPECT_TRUE(views_with(false).others.empty());
+  // A camera that sees the head turned more than 45 degrees away is not fitted (default 0.5).
+  det.cameras["camera_left"].faces[0].frontalness = 0.3f;
+  EXPECT_TRUE(views_with(true).others.empty());
+  FaceLandmarksAnalyzerOptions bad;
+  bad.other_view_min_frontalness = 1.5;
+  EXPECT_FALSE(bad.check());
 }
 
 // ---- Demo session ----

@@ -31,6 +31,9 @@ struct FaceLandmarksAnalyzerOptions {
   // Also fit the other cameras' faces (keys::kFaceLandmarkViews; issue 15's multi-view head
   // pose). Costs one landmark fit per other camera with a face.
   bool other_views = true;
+  // Other cameras whose face is less frontal than this (DetectedFace::frontalness, 1 - |yaw| / 90
+  // from the last head pose) are not fitted: dlib's fits break on strongly turned faces.
+  double other_view_min_frontalness = 0.5;
   Status check() const;
 };
 
