@@ -66,7 +66,8 @@ class FaceLandmarksAnalyzer : public Analyzer {
   }
 
  private:
-  // Landmarks of each other camera's best-scored face this tick (one fit pass each).
+  // Landmarks of each other camera's best-scored face this tick (one landmark fit each, only
+  // where that face is frontal enough).
   Result<FaceLandmarkViews> other_views(const MultiFrame& in, const BlackboardView& prior,
                                         const SensorId& selected) const {
     FaceLandmarkViews views;
