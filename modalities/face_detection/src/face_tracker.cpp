@@ -76,7 +76,6 @@ TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontaln
         turned_away ? std::max(options_.lost_search_interval, options_.turned_away_search_interval)
                     : options_.lost_search_interval;
     full = index == 0 || frames_since_full_ >= interval;
-    out.searched = full;
   } else {
     full = (index + options_.full_search_phase) % options_.full_search_interval == 0;
   }

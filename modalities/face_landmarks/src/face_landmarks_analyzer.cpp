@@ -26,9 +26,7 @@ class FaceLandmarksAnalyzer : public Analyzer {
     const auto sel = prior.get(keys::kSelectedCamera);
     if (!sel || sel->stamp != in.stamp) return ok_status();  // no camera frame this tick
     if (!sel->present()) {
-      out.set_absent(keys::kFaceLandmarks, in.stamp);
-      out.set_absent(keys::kFaceLandmarkViews, in.stamp);
-      return ok_status();
+      return absent(in.stamp, out);
     }
     const SelectedCamera& s = *sel->value;
     const FramePtr f = in.frame(s.camera);
@@ -37,35 +35,44 @@ class FaceLandmarksAnalyzer : public Analyzer {
       if (f)
         return make_error(ErrorCode::kInvalidArgument,
                           "face_landmarks: stream '{}' is not a colour stream", s.camera);
-      out.set_absent(keys::kFaceLandmarks, in.stamp);
-      out.set_absent(keys::kFaceLandmarkViews, in.stamp);
-      return ok_status();
+      return absent(in.stamp, out);
     }
     auto fit = landmarker_->fit_with_spread(img->image, s.face.box_px);
     if (!fit) return tl::unexpected(fit.error());
     if (!*fit) {
-      out.set_absent(keys::kFaceLandmarks, in.stamp);
-      out.set_absent(keys::kFaceLandmarkViews, in.stamp);
-      return ok_status();
+      return absent(in.stamp, out);
     }
     auto others = other_views(in, prior, s.camera);
     if (!others) return tl::unexpected(others.error());
     out.set(keys::kFaceLandmarkViews, std::move(*others), in.stamp, sel->confidence);
-    FaceLandmarks lm;
-    lm.camera = s.camera;
-    lm.frame_stamp = f->stamp;
-    lm.frame_sequence = f->sequence;
-    lm.image_size = img->image.size();
-    lm.box_px = s.face.box_px;
-    lm.points_px = std::move((*fit)->points);
     const double fit_confidence =
         spread_confidence((*fit)->spread, options_.spread_ok, options_.spread_bad);
-    out.set(keys::kFaceLandmarks, std::move(lm), in.stamp,
-            static_cast<float>(sel->confidence * fit_confidence));
+    out.set(keys::kFaceLandmarks,
+            landmarks_of(s.camera, *f, img->image, s.face.box_px, std::move((*fit)->points)),
+            in.stamp, static_cast<float>(sel->confidence * fit_confidence));
     return ok_status();
   }
 
  private:
+  static Status absent(Timestamp tick, BlackboardWriter& out) {
+    out.set_absent(keys::kFaceLandmarks, tick);
+    out.set_absent(keys::kFaceLandmarkViews, tick);
+    return ok_status();
+  }
+
+  static FaceLandmarks landmarks_of(const SensorId& camera, const SensorFrame& frame,
+                                    const cv::Mat& image, const cv::Rect2d& box,
+                                    std::vector<cv::Point2d> points) {
+    FaceLandmarks lm;
+    lm.camera = camera;
+    lm.frame_stamp = frame.stamp;
+    lm.frame_sequence = frame.sequence;
+    lm.image_size = image.size();
+    lm.box_px = box;
+    lm.points_px = std::move(points);
+    return lm;
+  }
+
   // Landmarks of each other camera's best-scored face this tick (one landmark fit each, only
   // where that face is frontal enough).
   Result<FaceLandmarkViews> other_views(const MultiFrame& in, const BlackboardView& prior,
@@ -85,14 +92,7 @@ class FaceLandmarksAnalyzer : public Analyzer {
       auto points = landmarker_->fit(img->image, box);
       if (!points) return tl::unexpected(points.error());
       if (!*points) continue;
-      FaceLandmarks lm;
-      lm.camera = camera;
-      lm.frame_stamp = f->stamp;
-      lm.frame_sequence = f->sequence;
-      lm.image_size = img->image.size();
-      lm.box_px = box;
-      lm.points_px = std::move(**points);
-      views.others.push_back(std::move(lm));
+      views.others.push_back(landmarks_of(camera, *f, img->image, box, std::move(**points)));
     }
     return views;
   }

@@ -4,6 +4,7 @@
 #include "dreamsense/perception/head_pose.hpp"
 
 #include <algorithm>
+#include <optional>
 
 namespace dreamsense::head_pose {
 namespace {
@@ -38,21 +39,25 @@ class HeadPoseAnalyzer : public Analyzer {
       out.set_absent(keys::kHeadPose, in.stamp);
       return ok_status();
     }
-    PnpFit single = **fit;
-    single.camera_from_head = single.camera_from_head * options_.model_from_head;
-    HeadPose image_pose = make_head_pose(single, cam->second, l.camera, l.frame_stamp);
-    image_filter_.apply(image_pose);
+    // The fit is in the face model's frame; the subject calibration turns it into the head's.
+    auto pose_of = [&](PnpFit f) {
+      f.camera_from_head = f.camera_from_head * options_.model_from_head;
+      return make_head_pose(f, cam->second, l.camera, l.frame_stamp);
+    };
+    std::optional<HeadPose::ImagePose> image;
     int views = 1;
-    if (options_.multi_view)
+    if (options_.multi_view) {
+      // Kept on every tick: the two filters' states differ after a multi-view tick.
+      HeadPose single = pose_of(**fit);
+      image_filter_.apply(single);
+      image = HeadPose::ImagePose{single.camera_from_head, single.position_camera_m,
+                                  single.world_from_head, single.position_world_m};
       views = refine_with_other_views(prior, in.stamp, l, cam->second, **fit);
-    (*fit)->camera_from_head = (*fit)->camera_from_head * options_.model_from_head;
-    HeadPose pose = make_head_pose(**fit, cam->second, l.camera, l.frame_stamp);
+    }
+    HeadPose pose = pose_of(**fit);
     filter_.apply(pose);
     pose.views_used = views;
-    // Always with multi_view: the two filters' states differ after a multi-view tick.
-    if (options_.multi_view)
-      pose.image = HeadPose::ImagePose{image_pose.camera_from_head, image_pose.position_camera_m,
-                                       image_pose.world_from_head, image_pose.position_world_m};
+    pose.image = image;
     const double iod = cv::norm(l.right_eye_px() - l.left_eye_px());
     const double quality = std::clamp(
         1.0 - pose.reprojection_rms_px / (options_.estimator.max_rms_per_interocular * iod), 0.0,
@@ -90,7 +95,8 @@ class HeadPoseAnalyzer : public Analyzer {
 
   HeadPoseAnalyzerOptions options_;
   PoseFilter filter_;
-  PoseFilter image_filter_;  // the same filter on the single-view pose (HeadPose::image)
+  PoseFilter
+      image_filter_;  // with multi_view: the same filter on the single view (HeadPose::image)
 };
 
 }  // namespace

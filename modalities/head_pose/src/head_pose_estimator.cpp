@@ -17,6 +17,31 @@ cv::Point2d centroid6(const std::vector<cv::Point2d>& p, size_t first) {
   for (size_t i = first; i < first + 6; ++i) c += p[i];
   return c * (1.0 / 6);
 }
+
+// The model points and their landmarks in one view (finite landmarks only).
+struct ViewPoints {
+  const CameraModel* camera = nullptr;
+  std::vector<cv::Point3d> model;
+  std::vector<cv::Point2d> image;
+  double iod_px = 0;
+};
+
+std::optional<ViewPoints> view_points(const PoseView& v, const FaceModel3d& m) {
+  if (v.camera == nullptr || v.landmarks_px == nullptr ||
+      v.landmarks_px->size() != static_cast<size_t>(kFaceLandmarkCount))
+    return std::nullopt;
+  ViewPoints out;
+  out.camera = v.camera;
+  for (size_t i = 0; i < m.landmark_index.size(); ++i) {
+    const cv::Point2d& p = (*v.landmarks_px)[static_cast<size_t>(m.landmark_index[i])];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
+    out.model.push_back(m.points_m[i]);
+    out.image.push_back(p);
+  }
+  out.iod_px = cv::norm(centroid6(*v.landmarks_px, 36) - centroid6(*v.landmarks_px, 42));
+  if (out.model.size() < 4 || !(out.iod_px > 1)) return std::nullopt;
+  return out;
+}
 }  // namespace
 
 Status HeadPoseEstimatorOptions::check() const {
@@ -37,18 +62,11 @@ Result<std::optional<PnpFit>> fit_head_pose(const std::vector<cv::Point2d>& land
     return make_error(ErrorCode::kInvalidArgument, "fit_head_pose: {} landmarks (need {})",
                       landmarks_px.size(), kFaceLandmarkCount);
   using Out = std::optional<PnpFit>;
-  std::vector<cv::Point3d> obj;
-  std::vector<cv::Point2d> img;
-  const FaceModel3d& m = options.model;
-  for (size_t i = 0; i < m.landmark_index.size(); ++i) {
-    const cv::Point2d& p = landmarks_px[static_cast<size_t>(m.landmark_index[i])];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
-    obj.push_back(m.points_m[i]);
-    img.push_back(p);
-  }
-  if (obj.size() < 4) return Out{};
-  const double iod_px = cv::norm(centroid6(landmarks_px, 36) - centroid6(landmarks_px, 42));
-  if (!(iod_px > 1)) return Out{};
+  const auto view = view_points({&camera, &landmarks_px}, options.model);
+  if (!view) return Out{};  // < 4 finite points, or no inter-ocular distance
+  const std::vector<cv::Point3d>& obj = view->model;
+  const std::vector<cv::Point2d>& img = view->image;
+  const double iod_px = view->iod_px;
 
   cv::Mat rvec, tvec;
   const cv::Mat K(camera.K);
@@ -85,31 +103,6 @@ Result<std::optional<PnpFit>> fit_head_pose(const std::vector<cv::Point2d>& land
 
 namespace {
 
-// The model points and their landmarks in one view (finite landmarks only).
-struct ViewPoints {
-  const CameraModel* camera = nullptr;
-  std::vector<cv::Point3d> model;
-  std::vector<cv::Point2d> image;
-  double iod_px = 0;
-};
-
-std::optional<ViewPoints> view_points(const PoseView& v, const FaceModel3d& m) {
-  if (v.camera == nullptr || v.landmarks_px == nullptr ||
-      v.landmarks_px->size() != static_cast<size_t>(kFaceLandmarkCount))
-    return std::nullopt;
-  ViewPoints out;
-  out.camera = v.camera;
-  for (size_t i = 0; i < m.landmark_index.size(); ++i) {
-    const cv::Point2d& p = (*v.landmarks_px)[static_cast<size_t>(m.landmark_index[i])];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
-    out.model.push_back(m.points_m[i]);
-    out.image.push_back(p);
-  }
-  out.iod_px = cv::norm(centroid6(*v.landmarks_px, 36) - centroid6(*v.landmarks_px, 42));
-  if (out.model.size() < 4 || !(out.iod_px > 1)) return std::nullopt;
-  return out;
-}
-
 // Reprojection residuals (x, y per point) of the pose world_from_model = (R, t) in one view.
 void add_residuals(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t,
                    std::vector<double>& r) {
@@ -125,12 +118,16 @@ void add_residuals(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t
   }
 }
 
+double sum_squares(const std::vector<double>& r) {
+  double s = 0;
+  for (double x : r) s += x * x;
+  return s;
+}
+
 double view_rms(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t) {
   std::vector<double> r;
   add_residuals(v, R, t, r);
-  double ss = 0;
-  for (double x : r) ss += x * x;
-  return std::sqrt(2 * ss / static_cast<double>(r.size()));
+  return std::sqrt(2 * sum_squares(r) / static_cast<double>(r.size()));
 }
 
 // The pose after a step: a rotation vector applied on the world side, and a translation.
@@ -146,12 +143,6 @@ std::vector<double> all_residuals(const std::vector<ViewPoints>& views, const cv
   std::vector<double> r;
   for (const auto& v : views) add_residuals(v, R, t, r);
   return r;
-}
-
-double sum_squares(const std::vector<double>& r) {
-  double s = 0;
-  for (double x : r) s += x * x;
-  return s;
 }
 
 // Levenberg-Marquardt over the 6 pose parameters, forward-difference Jacobian.

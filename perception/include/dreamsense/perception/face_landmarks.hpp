@@ -41,8 +41,9 @@ struct FaceLandmarks {
 };
 
 // The same face's landmarks in the other cameras at the same tick (issue 15: a multi-view head
-// pose). Each other camera's best-scored detection is fitted; which of them show the selected
-// face is for the reader to check (head_pose drops views that disagree with the others).
+// pose). Each other camera's best-scored detection is fitted when it is frontal enough
+// (face_landmarks.other_view_min_frontalness); which of them show the selected face is for the
+// reader to check (head_pose drops views that disagree with the others).
 struct FaceLandmarkViews {
   std::vector<FaceLandmarks> others;  // not the selected camera; empty = one view only
 };

@@ -45,7 +45,8 @@ struct HeadPose {
   };
   std::optional<ImagePose> image;
   int views_used = 1;  // cameras whose landmarks the pose explains
-  // This pose with the image pose in place of the multi-view one.
+  // This pose with the image pose's rotation and positions in place of the multi-view ones
+  // (yaw/pitch/roll and the head-gaze ray stay the multi-view pose's).
   HeadPose as_image_pose() const {
     HeadPose p = *this;
     if (!image) return p;

@@ -57,7 +57,6 @@ struct FaceTrackerOptions {
 struct TrackedFrameFaces {
   std::vector<DetectedFace> faces;  // best score first; empty = nothing found
   bool full_search = false;         // the full frame was searched for this frame
-  bool searched = true;             // false: skipped (lost, head turned away; faces empty)
 };
 
 // Frontalness known without the proxy, e.g. from a head pose: called for each frontal-cascade
