@@ -377,6 +377,14 @@ TEST_F(Cli, BenchPipelineReportsTheContractKeys) {
   EXPECT_GT(j["metrics"]["fps"].get<double>(), 0.0);
   EXPECT_EQ(j["metrics"]["ticks"], 100);
   EXPECT_FALSE(j["stages"].empty());
+  for (const json& stage : j["stages"]) {
+    // Every call takes time, so the total is at least the calls times the fastest of them.
+    EXPECT_GE(stage["latency_ms_total"].get<double>(),
+              0.5 * stage["calls"].get<double>() * stage["latency_ms_median"].get<double>())
+        << stage["name"];
+    EXPECT_GE(stage["latency_ms_total"].get<double>(), stage["latency_ms_p95"].get<double>())
+        << stage["name"];
+  }
   // The configuration measured can be changed (A/B of an option in one build).
   const fs::path off = root() / "bench_off.json";
   r = run("bench pipeline " + demo().string() +

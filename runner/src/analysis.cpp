@@ -13,6 +13,7 @@
 #include "dreamsense/sources/video_file.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <sys/resource.h>
 
 namespace dreamsense::runner {
@@ -76,7 +77,10 @@ nlohmann::json AnalysisSummary::to_json() const {
                       {"calls", a.calls},
                       {"errors", a.errors},
                       {"latency_ms_median", v.empty() ? 0.0 : v[v.size() / 2]},
-                      {"latency_ms_p95", v.empty() ? 0.0 : v[v.size() * 95 / 100]}});
+                      {"latency_ms_p95", v.empty() ? 0.0 : v[v.size() * 95 / 100]},
+                      // The total decides throughput: a stage that is slow only now and then
+                      // shows in neither the median nor the p95.
+                      {"latency_ms_total", std::accumulate(v.begin(), v.end(), 0.0)}});
   }
   nlohmann::json outs = nlohmann::json::array();
   for (const auto& o : outputs) outs.push_back(o.filename().string());
