@@ -110,7 +110,10 @@ class FaceDetectionAnalyzer : public Analyzer {
     float best_score = 0.f;
     for (size_t w = 0; w < work.size(); ++w) {
       for (const DetectedFace& f : results[w].faces) best_score = std::max(best_score, f.score);
-      detections.cameras.emplace(cameras_[work[w].first].id, std::move(results[w]));
+      const SensorId& id = cameras_[work[w].first].id;
+      if (const auto h = heads.find(id); h != heads.end())
+        results[w].head_face = face_of_head(results[w].faces, h->second.head_px);
+      detections.cameras.emplace(id, std::move(results[w]));
     }
     const std::optional<SelectedCamera> selected =
         selector_.update(detections, yaw_hints(detections, heads));

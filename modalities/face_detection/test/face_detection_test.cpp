@@ -482,6 +482,11 @@ TEST(FaceDetectionAnalyzer, HeadYawHintReplacesTheProxyWithoutChangingDetections
     ASSERT_TRUE(d1 && d1->present());
     for (const auto& [id, cam] : d2->value->cameras) {
       const auto& faces = d1->value->cameras.at(id).faces;
+      // The child's face is marked where the pose projects (the calibrated camera only).
+      EXPECT_EQ(d1->value->cameras.at(id).head_face,
+                id == "camera_middle" ? std::optional<size_t>(0) : std::nullopt)
+          << id << " tick " << i;
+      EXPECT_FALSE(cam.head_face) << "no pose, no head face: " << id;
       ASSERT_EQ(faces.size(), cam.faces.size()) << id << " tick " << i;
       for (size_t k = 0; k < faces.size(); ++k) {
         EXPECT_EQ(faces[k].box_px, cam.faces[k].box_px) << id << " tick " << i;

@@ -73,8 +73,8 @@ class FaceLandmarksAnalyzer : public Analyzer {
     return lm;
   }
 
-  // Landmarks of each other camera's best-scored face this tick (one landmark fit each, only
-  // where that face is frontal enough).
+  // Landmarks of each other camera's face of the child this tick (CameraFaces::head_face, else
+  // the best-scored face; one landmark fit each, only where that face is frontal enough).
   Result<FaceLandmarkViews> other_views(const MultiFrame& in, const BlackboardView& prior,
                                         const SensorId& selected) const {
     FaceLandmarkViews views;
@@ -82,13 +82,16 @@ class FaceLandmarksAnalyzer : public Analyzer {
     const auto det = prior.get(keys::kFaceDetections);
     if (!det || det->stamp != in.stamp || !det->present()) return views;
     for (const auto& [camera, faces] : det->value->cameras) {
-      if (camera == selected || faces.faces.empty() ||
-          faces.faces.front().frontalness < options_.other_view_min_frontalness)
+      // The child's face in that camera where the last head pose says which it is (another
+      // person may score higher), else the best-scored one.
+      const size_t i = faces.head_face.value_or(0);
+      if (camera == selected || i >= faces.faces.size() ||
+          faces.faces[i].frontalness < options_.other_view_min_frontalness)
         continue;
       const FramePtr f = in.frame(camera);
       const ColorImage* img = f ? f->as<ColorImage>() : nullptr;
       if (img == nullptr || f->stamp != faces.frame_stamp) continue;
-      const cv::Rect2d box = faces.faces.front().box_px;
+      const cv::Rect2d box = faces.faces[i].box_px;
       auto points = landmarker_->fit(img->image, box);
       if (!points) return tl::unexpected(points.error());
       if (!*points) continue;

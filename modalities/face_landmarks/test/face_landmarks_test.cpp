@@ -398,6 +398,24 @@ TEST(FaceLandmarksAnalyzer, OtherCamerasFacesAreFittedForAMultiViewPose) {
   FaceLandmarksAnalyzerOptions bad;
   bad.other_view_min_frontalness = 1.5;
   EXPECT_FALSE(bad.check());
+  // Two people in camera_left: another face scores higher, but the last head pose projects into
+  // the child's (head_face): the child's is fitted; without a pose, the best-scored one.
+  det.cameras["camera_left"].faces[0].frontalness = 1.f;
+  const cv::Rect2d child = kPortrait.face_region_px;
+  const cv::Rect2d other(child.x + 0.3 * child.width, child.y, 0.9 * child.width,
+                         0.9 * child.height);
+  det.cameras["camera_left"].faces.insert(det.cameras["camera_left"].faces.begin(),
+                                          {other, 0.95f, FaceView::kFrontal, 1.f});
+  det.cameras["camera_left"].head_face = 1;
+  FaceLandmarkViews two = views_with(true);
+  ASSERT_EQ(two.others.size(), 1u);
+  EXPECT_EQ(two.others[0].box_px, child);
+  det.cameras["camera_left"].head_face.reset();
+  two = views_with(true);
+  ASSERT_EQ(two.others.size(), 1u);
+  EXPECT_EQ(two.others[0].box_px, other);
+  det.cameras["camera_left"].head_face = 5;  // out of range (a broken writer): not fitted
+  EXPECT_TRUE(views_with(true).others.empty());
 }
 
 // ---- Demo session ----

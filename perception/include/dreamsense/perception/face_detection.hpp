@@ -33,6 +33,10 @@ struct CameraFaces {
   uint64_t frame_sequence = 0;
   cv::Size image_size;              // of that frame (the box coordinates refer to it)
   std::vector<DetectedFace> faces;  // best score first
+  // Index in `faces` of the face that holds the projection of the last head pose (calibrated
+  // cameras and a recent pose): the tracked child's face in this camera, whatever its score (a
+  // therapist in view may score higher). nullopt when no pose is known or no face holds it.
+  std::optional<size_t> head_face;
 };
 
 // Faces in every camera that had a frame in this tick (cameras without a frame in this

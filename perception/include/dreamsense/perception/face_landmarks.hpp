@@ -41,7 +41,8 @@ struct FaceLandmarks {
 };
 
 // The same face's landmarks in the other cameras at the same tick (issue 15: a multi-view head
-// pose). Each other camera's best-scored detection is fitted when it is frontal enough
+// pose). Each other camera's face of the child (CameraFaces::head_face, else its best-scored
+// detection) is fitted when it is frontal enough
 // (face_landmarks.other_view_min_frontalness); which of them show the selected face is for the
 // reader to check (head_pose drops views that disagree with the others).
 struct FaceLandmarkViews {

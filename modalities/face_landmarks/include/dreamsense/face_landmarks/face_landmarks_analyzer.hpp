@@ -11,7 +11,8 @@
 //    low confidence instead of as a confident wrong shape), or absent when the landmarker
 //    rejects the face;
 //  - with options.other_views, keys::kFaceLandmarkViews: the landmarks of every other camera's
-//    best-scored face this tick (keys::kFaceDetections, one fit pass each), for a multi-view
+//    face of the child this tick (keys::kFaceDetections: the face holding the last head pose's
+//    projection, else the best-scored one; one landmark fit each), for a multi-view
 //    head pose; written (possibly empty) with every present kFaceLandmarks, absent with it.
 
 #include "dreamsense/core/analyzer.hpp"
