@@ -171,16 +171,13 @@ class FaceDetectionAnalyzer : public Analyzer {
   }
 
   // Head yaw relative to each camera, for the face (per camera) whose box holds the projected
-  // head position.
+  // head position (CameraFaces::head_face, set only where `heads` has the camera).
   static std::vector<HeadYawHint> yaw_hints(const FaceDetections& detections,
                                             const std::map<SensorId, CameraHeadView>& heads) {
     std::vector<HeadYawHint> hints;
-    for (const auto& [id, cam] : detections.cameras) {
-      const auto h = heads.find(id);
-      if (h == heads.end()) continue;
-      if (const auto i = face_of_head(cam.faces, h->second.head_px))
-        hints.push_back({id, cam.faces[*i].box_px, h->second.yaw_deg});
-    }
+    for (const auto& [id, cam] : detections.cameras)
+      if (cam.head_face)
+        hints.push_back({id, cam.faces[*cam.head_face].box_px, heads.at(id).yaw_deg});
     return hints;
   }
 
