@@ -68,6 +68,9 @@ void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--ssd-min-score", o.ssd_min_score,
                   "Minimum confidence of the SSD detector (the package's default 0.5)")
       ->default_val(o.ssd_min_score);
+  cmd->add_flag("--ssd-tiles,!--no-ssd-tiles", o.ssd_tiles,
+                "Also run the SSD detector on 2 x 2 overlapping tiles of images over 768 px, for "
+                "small faces (default on; --no-ssd-tiles: the whole image only)");
   cmd->add_option("--stride", o.stride, "Every K-th face (by name) only")->default_val(o.stride);
   cmd->add_option("--max-items", o.max_items, "At most N faces (0 = all)")
       ->default_val(o.max_items);

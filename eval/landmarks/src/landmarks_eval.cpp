@@ -154,6 +154,41 @@ double iou(const cv::Rect2d& a, const cv::Rect2d& b) {
   return uni > 0 ? inter / uni : 0.0;
 }
 
+// The SSD on the whole image, and with LandmarksEvalOptions::ssd_tiles also on 2 x 2 tiles
+// (see there), merged by greedy suppression in score order.
+std::vector<vision::FaceApiDetection> ssd_detect(vision::FaceApiSsdDetector& ssd,
+                                                 const cv::Mat& image,
+                                                 const LandmarksEvalOptions& o) {
+  std::vector<vision::FaceApiDetection> all = ssd.detect(image, o.ssd_min_score);
+  const int side = std::max(image.cols, image.rows);
+  if (!o.ssd_tiles || side <= 3 * vision::kFaceApiSsdInputPx / 2) return all;
+  const int tw = static_cast<int>(std::ceil(o.ssd_tile_fraction * image.cols));
+  const int th = static_cast<int>(std::ceil(o.ssd_tile_fraction * image.rows));
+  constexpr double kBorderPx = 2;  // a box this close to an inner tile border is cut by it
+  for (const int x0 : {0, image.cols - tw})
+    for (const int y0 : {0, image.rows - th}) {
+      const cv::Rect tile(x0, y0, tw, th);
+      for (vision::FaceApiDetection d : ssd.detect(image(tile), o.ssd_min_score)) {
+        const cv::Rect2d& b = d.box;
+        const bool cut = (x0 > 0 && b.x < kBorderPx) || (y0 > 0 && b.y < kBorderPx) ||
+                         (x0 + tw < image.cols && b.x + b.width > tw - kBorderPx) ||
+                         (y0 + th < image.rows && b.y + b.height > th - kBorderPx);
+        if (cut || std::max(b.width, b.height) > 0.5 * std::min(tw, th)) continue;
+        d.box.x += x0;
+        d.box.y += y0;
+        all.push_back(d);
+      }
+    }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const auto& a, const auto& b) { return a.score > b.score; });
+  std::vector<vision::FaceApiDetection> kept;
+  for (const vision::FaceApiDetection& d : all)
+    if (std::none_of(kept.begin(), kept.end(),
+                     [&](const auto& k) { return iou(k.box, d.box) > 0.5; }))
+      kept.push_back(d);
+  return kept;
+}
+
 FaceResult score(const std::vector<cv::Rect2d>& boxes, const std::vector<const Fit*>& fits,
                  double detect_ms, const std::vector<cv::Point2d>& truth,
                  const cv::Rect2d& truth_box, double min_iou) {
@@ -215,6 +250,8 @@ Status LandmarksEvalOptions::check() const {
   if (!(failure_nme > 0)) add("failure_nme must be > 0");
   if (stride < 1) add("stride must be >= 1");
   if (!(ssd_min_score > 0 && ssd_min_score < 1)) add("ssd_min_score must be in (0, 1)");
+  if (!(ssd_tile_fraction > 0.5 && ssd_tile_fraction < 1))
+    add("ssd_tile_fraction must be in (0.5, 1)");
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "eval landmarks: " + bad);
   return ok_status();
 }
@@ -346,7 +383,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     DetectorOutput haar_out, hog_out, wide_out, tiny_out, ssd_out;
     if (ssd) {
       const auto t0 = std::chrono::steady_clock::now();
-      for (const auto& d : ssd->detect(image, o.ssd_min_score)) ssd_out.boxes.push_back(d.box);
+      for (const auto& d : ssd_detect(*ssd, image, o)) ssd_out.boxes.push_back(d.box);
       ssd_out.ms = ms_since(t0);
     }
     if (tiny) {
@@ -557,9 +594,13 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
       "68-point dlib landmarks (refit_passes {}; +tta: median of fits from box scales and the "
       "mirrored face) on the matched detection; NME = mean point error / outer-eye-corner "
       "distance (points 37, 46); failure = NME > {}; from_box = the top chain's landmarker "
-      "from the annotated points' box (from_box_plain: the pipeline's landmarker)",
+      "from the annotated points' box (from_box_plain: the pipeline's landmarker); SSD {}",
       o.stride > 1 ? fmt::format(", every {}th", o.stride) : "", names, o.min_iou,
-      o.landmark_refit_passes, o.failure_nme);
+      o.landmark_refit_passes, o.failure_nme,
+      o.ssd_tiles ? fmt::format("on the whole image and on 2 x 2 tiles of {} of it (images over "
+                                "768 px)",
+                                o.ssd_tile_fraction)
+                  : std::string("on the whole image only"));
   const ChainScores& top = scores.at(top_chain.name);
   report.metrics = top.metrics(o.failure_nme, true);
   report.metrics["from_box"] = from_box.metrics(o.failure_nme, false);

@@ -169,6 +169,14 @@ TEST(Options, SsdChainsAndScoreAreChecked) {
   bad = o.check();
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("ssd_min_score"), std::string::npos);
+  o.ssd_min_score = 0.5;
+  EXPECT_TRUE(o.ssd_tiles);  // the default since issue 20's third round
+  for (double fraction : {0.5, 1.0}) {
+    o.ssd_tile_fraction = fraction;  // tiles must overlap and be smaller than the image
+    bad = o.check();
+    ASSERT_FALSE(bad) << fraction;
+    EXPECT_NE(bad.error().message.find("ssd_tile_fraction"), std::string::npos);
+  }
 }
 
 TEST(Run, GreyFacelessImageIsNotDetectedAndBadFilesAreErrors) {
