@@ -5,6 +5,9 @@
 
 #include "dreamsense/eval/landmarks/landmarks_eval.hpp"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include <cstdio>
 
 #include "commands.hpp"
@@ -43,19 +46,15 @@ void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
                   "ssd (face-api's SSD MobileNet v1), union_ssd (union + ssd), union_tiny_ssd "
                   "(union_tiny + ssd), ssd_union (the boxes of union_ssd, SSD's kept where "
                   "boxes overlap), ssd_hybrid (ssd_union's boxes, landmarks started from the "
-                  "overlapping union box); a "
+                  "overlapping union box), ssd_paired (ssd_hybrid, face-api's CNN started from "
+                  "the SSD box); a "
                   "suffix: +tta landmarks with test-time augmentation, +cnn face-api's 68-point "
                   "CNN, +mean the mean of +tta and +cnn, +cnn_dlib +tta from the CNN's points, "
                   "+switch +tta where the dlib passes agree (confident), else +cnn, "
                   "+cnn_switch +switch with dlib started from the box of the CNN's points on "
                   "face-api's (tiny, ssd) boxes")
       ->delimiter(',')
-      ->default_str(
-          "union_ssd+switch,ssd_hybrid+switch,ssd_hybrid+cnn_switch,ssd_hybrid,"
-          "ssd_union+cnn_switch,ssd_union+switch,union_tiny_ssd+switch,"
-          "union_ssd+cnn_switch,union_ssd,ssd+cnn_switch,ssd+switch,ssd+cnn,ssd,"
-          "union_tiny+switch,union_tiny+tta,union_tiny,tiny,union+switch,union+tta,"
-          "union+cnn,union+mean,union+cnn_dlib,union,hog_haar,hog,haar");
+      ->default_str(fmt::format("{}", fmt::join(o.detectors, ",")));
   cmd->add_option("--hog-min-face", o.hog_min_face_px,
                   "Smallest face the HOG detector searches (px)")
       ->default_val(o.hog_min_face_px);

@@ -22,8 +22,8 @@ namespace fd = dreamsense::face_detection;
 namespace fl = dreamsense::face_landmarks;
 
 const std::set<std::string> kDetectors{
-    "haar",       "hog", "hog_haar",  "union",          "tiny",      "union_tiny",
-    "tiny_union", "ssd", "union_ssd", "union_tiny_ssd", "ssd_union", "ssd_hybrid"};
+    "haar", "hog",       "hog_haar",       "union",     "tiny",       "union_tiny", "tiny_union",
+    "ssd",  "union_ssd", "union_tiny_ssd", "ssd_union", "ssd_hybrid", "ssd_paired"};
 using LandmarkFitResult = face_landmarks::LandmarkFit;
 
 std::optional<double> mean(const std::vector<double>& v) {
@@ -243,7 +243,7 @@ Status LandmarksEvalOptions::check() const {
       add(
           fmt::format("unknown detector chain '{}' (known: haar, hog, hog_haar, union, tiny, "
                       "union_tiny, tiny_union, ssd, union_ssd, union_tiny_ssd, ssd_union, "
-                      "ssd_hybrid, each optionally "
+                      "ssd_hybrid, ssd_paired, each optionally "
                       "with +tta, +cnn, +mean, +cnn_dlib, +switch or +cnn_switch)",
                       d));
   if (!(min_iou > 0 && min_iou <= 1)) add("min_iou must be in (0, 1]");
@@ -307,7 +307,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   // Chains built on union (HOG + the wider Haar search).
   auto on_union = [](const std::string& d) {
     return d == "union" || d == "union_tiny" || d == "tiny_union" || d == "union_ssd" ||
-           d == "union_tiny_ssd" || d == "ssd_union" || d == "ssd_hybrid";
+           d == "union_tiny_ssd" || d == "ssd_union" || d == "ssd_hybrid" || d == "ssd_paired";
   };
   auto uses = [&](const std::string& detector) {
     return std::any_of(chains.begin(), chains.end(), [&](const Chain& c) {
@@ -316,7 +316,8 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
              (detector == "tiny" && (c.detector == "union_tiny" || c.detector == "tiny_union" ||
                                      c.detector == "union_tiny_ssd")) ||
              (detector == "ssd" && (c.detector == "union_ssd" || c.detector == "union_tiny_ssd" ||
-                                    c.detector == "ssd_union" || c.detector == "ssd_hybrid"));
+                                    c.detector == "ssd_union" || c.detector == "ssd_hybrid" ||
+                                    c.detector == "ssd_paired"));
     });
   };
   std::optional<fd::FaceDetector> haar;
@@ -410,20 +411,25 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
       hog_out.boxes = boxes_of(hog->detect(image));
       hog_out.ms = ms_since(t0);
     }
-    std::map<std::tuple<int, double, double, double, double>, Fit> cache;
-    std::function<Result<const Fit*>(int, const cv::Rect2d&)> fit;
-    fit = [&](int which, const cv::Rect2d& b) -> Result<const Fit*> {
-      const auto key = std::make_tuple(which, b.x, b.y, b.width, b.height);
+    // fit(which, b, cnn_b): landmarker `which` from box b; in the +switch family face-api's CNN
+    // starts from cnn_b (ssd_paired: the SSD's box, in the CNN's own convention), dlib from b.
+    std::map<std::tuple<int, double, double, double, double, double, double, double, double>, Fit>
+        cache;
+    std::function<Result<const Fit*>(int, const cv::Rect2d&, const cv::Rect2d&)> fit;
+    fit = [&](int which, const cv::Rect2d& b, const cv::Rect2d& cnn_b) -> Result<const Fit*> {
+      const auto key = std::make_tuple(which, b.x, b.y, b.width, b.height, cnn_b.x, cnn_b.y,
+                                       cnn_b.width, cnn_b.height);
       if (auto f = cache.find(key); f != cache.end()) return &f->second;
       const auto t0 = std::chrono::steady_clock::now();
       Fit f;
       if (which <= 2) {
-        auto p = (which == 2 ? cnn.get() : landmarkers[which])->fit_with_spread(image, b);
+        auto p = which == 2 ? cnn->fit_with_spread(image, cnn_b)
+                            : landmarkers[which]->fit_with_spread(image, b);
         if (!p) return tl::unexpected(p.error());
         f.fit = std::move(*p);
         f.ms = ms_since(t0);
       } else {
-        auto c = fit(2, b);
+        auto c = fit(2, cnn_b, cnn_b);
         if (!c) return tl::unexpected(c.error());
         f.ms = (*c)->ms;
         if (which == 5 || which == 6) {
@@ -432,9 +438,9 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
               which == 6 && (*c)->fit
                   ? landmarkers[0]->box_for_extent(points_box((*c)->fit->points))
                   : b;
-          auto plain_fit = fit(0, dlib_box);
+          auto plain_fit = fit(0, dlib_box, dlib_box);
           if (!plain_fit) return tl::unexpected(plain_fit.error());
-          auto d = fit(1, dlib_box);
+          auto d = fit(1, dlib_box, dlib_box);
           if (!d) return tl::unexpected(d.error());
           f.ms += (*plain_fit)->ms + (*d)->ms;
           const bool confident =
@@ -451,7 +457,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
             f.fit->spread = dist > 0 ? sum / static_cast<double>(a.size()) / dist : f.fit->spread;
           }
         } else if (which == 3) {  // mean of dlib+tta and the CNN; spread = their disagreement
-          auto d = fit(1, b);
+          auto d = fit(1, b, b);
           if (!d) return tl::unexpected(d.error());
           f.ms += (*d)->ms;
           if ((*c)->fit && (*d)->fit) {
@@ -515,9 +521,11 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         boxes = merge(merge(merge(hog_out.boxes, wide_out.boxes), tiny_out.boxes), ssd_out.boxes);
         detect_ms = hog_out.ms + wide_out.ms + tiny_out.ms + ssd_out.ms;
       }
-      // Where the landmarker starts: the reported box, except in ssd_hybrid (below).
+      // Where the landmarker starts: the reported box, except in ssd_hybrid and ssd_paired
+      // (below); cnn_starts: where face-api's CNN starts (ssd_paired: the reported box).
       std::vector<cv::Rect2d> starts = boxes;
-      if (c.detector == "ssd_hybrid") {  // ssd_union's boxes; dlib starts from a union box
+      if (c.detector == "ssd_hybrid" || c.detector == "ssd_paired") {
+        // ssd_union's boxes; dlib starts from a union box
         const std::vector<cv::Rect2d> union_boxes = merge(hog_out.boxes, wide_out.boxes);
         boxes = merge(ssd_out.boxes, union_boxes);
         detect_ms = hog_out.ms + wide_out.ms + ssd_out.ms;
@@ -528,14 +536,16 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
             if (const double v = iou(boxes[k], u); v >= best) best = v, starts[k] = u;
         }
       }
+      const std::vector<cv::Rect2d>& cnn_starts = c.detector == "ssd_paired" ? boxes : starts;
       std::vector<const Fit*> fits;
-      for (const cv::Rect2d& b : starts) {
+      for (size_t k = 0; k < starts.size(); ++k) {
+        const cv::Rect2d& b = starts[k];
         // +cnn_switch: only face-api's boxes reach dlib through the CNN; HOG/Haar boxes are
         // dlib's convention (or near it) and go to it directly, as +switch.
         const bool face_api_box =
             std::find(tiny_out.boxes.begin(), tiny_out.boxes.end(), b) != tiny_out.boxes.end() ||
             std::find(ssd_out.boxes.begin(), ssd_out.boxes.end(), b) != ssd_out.boxes.end();
-        auto f = fit(c.landmarker == 6 && !face_api_box ? 5 : c.landmarker, b);
+        auto f = fit(c.landmarker == 6 && !face_api_box ? 5 : c.landmarker, b, cnn_starts[k]);
         if (!f) return tl::unexpected(f.error());
         fits.push_back(*f);
       }

@@ -157,8 +157,8 @@ TEST(Dataset, ListingErrorsNameTheFile) {
 
 TEST(Options, SsdChainsAndScoreAreChecked) {
   LandmarksEvalOptions o;
-  o.detectors = {"ssd",     "union_ssd+switch",     "ssd_union+cnn_switch", "union_tiny_ssd",
-                 "ssd+cnn", "union_tiny+cnn_switch"};
+  o.detectors = {"ssd",     "union_ssd+switch",      "ssd_union+cnn_switch", "union_tiny_ssd",
+                 "ssd+cnn", "union_tiny+cnn_switch", "ssd_paired+switch"};
   EXPECT_TRUE(o.check());
   o.detectors = {"ssd+bogus"};
   auto bad = o.check();

@@ -79,7 +79,9 @@ struct LandmarksEvalOptions {
   //  CNN's mean distance from dlib's points); "+cnn_switch": as +switch, except that on the boxes
   //  of face-api's detectors (tiny, ssd) both dlib fits start from the box of the CNN's points
   //  (dlib's box convention derived through the CNN; the CNN's own points from the detector box).
-  std::vector<std::string> detectors{"union_ssd+switch",
+  std::vector<std::string> detectors{"ssd_paired+switch",
+                                     "ssd_paired+cnn_switch",
+                                     "union_ssd+switch",
                                      "ssd_hybrid+switch",
                                      "ssd_hybrid+cnn_switch",
                                      "ssd_hybrid",
@@ -135,7 +137,10 @@ struct LandmarksEvalOptions {
   // "ssd_union": the boxes of union_ssd, SSD's kept where boxes overlap (SSD's boxes match the
   // annotated points' box best of all detectors: README "Real faces"); "ssd_hybrid": the boxes
   // of ssd_union, but the landmarker starts from the union box that overlaps an SSD box most
-  // (IoU >= 0.3: dlib's own detector's box convention), from the SSD box where none does.
+  // (IoU >= 0.3: dlib's own detector's box convention), from the SSD box where none does;
+  // "ssd_paired": ssd_hybrid, but face-api's CNN (+cnn, +switch, ...) always starts from the SSD
+  // box: each landmarker from the box in its own convention (the CNN's is the points' extent,
+  // which the SSD's boxes match; a HOG/Haar box can put it on the wrong region: README).
   double ssd_min_score = 0.5;
   // Also run the SSD on 2 x 2 overlapping tiles (each ssd_tile_fraction of the image's width and
   // height) when the image's longest side exceeds 1.5 x its 512 px input: a face smaller than the
