@@ -122,7 +122,8 @@ struct Chain {
 };
 
 const std::map<std::string, int> kLandmarkerSuffixes{
-    {"+tta", 1}, {"+cnn", 2}, {"+mean", 3}, {"+cnn_dlib", 4}, {"+switch", 5}, {"+cnn_switch", 6}};
+    {"+tta", 1},    {"+cnn", 2},        {"+mean", 3},        {"+cnn_dlib", 4},
+    {"+switch", 5}, {"+cnn_switch", 6}, {"+plain_switch", 7}};
 
 std::optional<Chain> parse_chain(const std::string& name) {
   Chain c{name, name, false, 0};
@@ -244,7 +245,8 @@ Status LandmarksEvalOptions::check() const {
           fmt::format("unknown detector chain '{}' (known: haar, hog, hog_haar, union, tiny, "
                       "union_tiny, tiny_union, ssd, union_ssd, union_tiny_ssd, ssd_union, "
                       "ssd_hybrid, ssd_paired, each optionally "
-                      "with +tta, +cnn, +mean, +cnn_dlib, +switch or +cnn_switch)",
+                      "with +tta, +cnn, +mean, +cnn_dlib, +switch, +cnn_switch or "
+                      "+plain_switch)",
                       d));
   if (!(min_iou > 0 && min_iou <= 1)) add("min_iou must be in (0, 1]");
   if (!(failure_nme > 0)) add("failure_nme must be > 0");
@@ -432,7 +434,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         auto c = fit(2, cnn_b, cnn_b);
         if (!c) return tl::unexpected(c.error());
         f.ms = (*c)->ms;
-        if (which == 5 || which == 6) {
+        if (which == 5 || which == 6 || which == 7) {
           // 6: dlib's box from the CNN's points (the detector's box in dlib's convention).
           const cv::Rect2d dlib_box =
               which == 6 && (*c)->fit
@@ -446,7 +448,8 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
           const bool confident =
               (*plain_fit)->fit && (*d)->fit &&
               fl::spread_confidence((*plain_fit)->fit->spread) >= o.switch_min_confidence;
-          f.fit = confident ? (*d)->fit : (*c)->fit;
+          // 7: the pipeline's rule (face_landmarks' cnn_fallback): the plain fit when confident.
+          f.fit = confident ? (which == 7 ? (*plain_fit)->fit : (*d)->fit) : (*c)->fit;
           if (confident || !f.fit) {
           } else if ((*plain_fit)->fit) {  // the CNN's points; spread = its distance from dlib's
             const auto& a = f.fit->points;

@@ -3,6 +3,7 @@
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 
+#include <limits>
 #include <set>
 
 namespace dreamsense::face_landmarks {
@@ -10,8 +11,9 @@ namespace {
 
 class FaceLandmarksAnalyzer : public Analyzer {
  public:
-  FaceLandmarksAnalyzer(FaceLandmarksAnalyzerOptions o, std::shared_ptr<const Landmarker> l)
-      : options_(std::move(o)), landmarker_(std::move(l)) {}
+  FaceLandmarksAnalyzer(FaceLandmarksAnalyzerOptions o, std::shared_ptr<const Landmarker> l,
+                        std::shared_ptr<const Landmarker> cnn)
+      : options_(std::move(o)), landmarker_(std::move(l)), cnn_(std::move(cnn)) {}
 
   std::string_view name() const override { return "face_landmarks"; }
   AnalyzerContract contract() const override {
@@ -45,11 +47,21 @@ class FaceLandmarksAnalyzer : public Analyzer {
     auto others = other_views(in, prior, s.camera);
     if (!others) return tl::unexpected(others.error());
     out.set(keys::kFaceLandmarkViews, std::move(*others), in.stamp, sel->confidence);
-    const double fit_confidence =
+    double fit_confidence =
         spread_confidence((*fit)->spread, options_.spread_ok, options_.spread_bad);
+    std::vector<cv::Point2d> points = std::move((*fit)->points);
+    if (cnn_ && fit_confidence < options_.cnn_fallback_below) {
+      auto cnn_fit = cnn_->fit(img->image, s.face.box_px);
+      if (!cnn_fit) return tl::unexpected(cnn_fit.error());
+      if (*cnn_fit && (*cnn_fit)->size() == points.size()) {
+        fit_confidence = spread_confidence(mean_distance(**cnn_fit, points), options_.spread_ok,
+                                           options_.spread_bad);
+        points = std::move(**cnn_fit);
+      }
+    }
     out.set(keys::kFaceLandmarks,
-            landmarks_of(s.camera, *f, img->image, s.face.box_px, std::move((*fit)->points)),
-            in.stamp, static_cast<float>(sel->confidence * fit_confidence));
+            landmarks_of(s.camera, *f, img->image, s.face.box_px, std::move(points)), in.stamp,
+            static_cast<float>(sel->confidence * fit_confidence));
     return ok_status();
   }
 
@@ -58,6 +70,16 @@ class FaceLandmarksAnalyzer : public Analyzer {
     out.set_absent(keys::kFaceLandmarks, tick);
     out.set_absent(keys::kFaceLandmarkViews, tick);
     return ok_status();
+  }
+
+  // Mean point distance of a from b over the outer eye corners' distance in a (the spread's unit).
+  static double mean_distance(const std::vector<cv::Point2d>& a,
+                              const std::vector<cv::Point2d>& b) {
+    const double corners = cv::norm(a[36] - a[45]);
+    if (!(corners > 0)) return std::numeric_limits<double>::infinity();
+    double sum = 0;
+    for (size_t i = 0; i < a.size(); ++i) sum += cv::norm(a[i] - b[i]);
+    return sum / static_cast<double>(a.size()) / corners;
   }
 
   static FaceLandmarks landmarks_of(const SensorId& camera, const SensorFrame& frame,
@@ -102,6 +124,7 @@ class FaceLandmarksAnalyzer : public Analyzer {
 
   FaceLandmarksAnalyzerOptions options_;
   std::shared_ptr<const Landmarker> landmarker_;
+  std::shared_ptr<const Landmarker> cnn_;  // null: no fallback
 };
 
 }  // namespace
@@ -118,19 +141,28 @@ Status FaceLandmarksAnalyzerOptions::check() const {
   if (!(other_view_min_frontalness >= 0 && other_view_min_frontalness <= 1))
     return make_error(ErrorCode::kInvalidArgument,
                       "FaceLandmarksAnalyzerOptions: other_view_min_frontalness must be in [0, 1]");
+  if (!(cnn_fallback_below >= 0 && cnn_fallback_below <= 1))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "FaceLandmarksAnalyzerOptions: cnn_fallback_below must be in [0, 1]");
+  if (cnn_fallback)
+    if (auto s = cnn.check(); !s) return s;
   return dlib.check();
 }
 
 Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
-    const FaceLandmarksAnalyzerOptions& options, std::shared_ptr<const Landmarker> landmarker) {
+    const FaceLandmarksAnalyzerOptions& options, std::shared_ptr<const Landmarker> landmarker,
+    std::shared_ptr<const Landmarker> cnn) {
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
   if (!landmarker)
     return make_error(ErrorCode::kInvalidArgument, "make_face_landmarks_analyzer: no landmarker");
-  if (landmarker->point_count() != kFaceLandmarkCount)
-    return make_error(ErrorCode::kInvalidArgument,
-                      "make_face_landmarks_analyzer: landmarker '{}' gives {} points, need {}",
-                      landmarker->name(), landmarker->point_count(), kFaceLandmarkCount);
-  return std::unique_ptr<Analyzer>(new FaceLandmarksAnalyzer(options, std::move(landmarker)));
+  for (const Landmarker* l : {landmarker.get(), cnn.get()})
+    if (l && l->point_count() != kFaceLandmarkCount)
+      return make_error(ErrorCode::kInvalidArgument,
+                        "make_face_landmarks_analyzer: landmarker '{}' gives {} points, need {}",
+                        l->name(), l->point_count(), kFaceLandmarkCount);
+  if (!options.cnn_fallback) cnn.reset();
+  return std::unique_ptr<Analyzer>(
+      new FaceLandmarksAnalyzer(options, std::move(landmarker), std::move(cnn)));
 }
 
 Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
@@ -138,7 +170,14 @@ Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
   auto l = make_dlib_landmarker(options.dlib);
   if (!l) return tl::unexpected(l.error());
-  return make_face_landmarks_analyzer(options, std::shared_ptr<const Landmarker>(std::move(*l)));
+  std::shared_ptr<const Landmarker> cnn;
+  if (options.cnn_fallback) {
+    auto c = make_face_api_landmarker(options.cnn);
+    if (!c) return tl::unexpected(c.error());
+    cnn = std::move(*c);
+  }
+  return make_face_landmarks_analyzer(options, std::shared_ptr<const Landmarker>(std::move(*l)),
+                                      std::move(cnn));
 }
 
 }  // namespace dreamsense::face_landmarks

@@ -15,14 +15,25 @@ void register_analyzers(AnalyzerRegistry& registry) {
     DS_RETURN_IF_ERROR(options.get("model", o.dlib.model));
     DS_RETURN_IF_ERROR(options.get("other_views", o.other_views));
     DS_RETURN_IF_ERROR(options.get("other_view_min_frontalness", o.other_view_min_frontalness));
+    DS_RETURN_IF_ERROR(options.get("cnn_fallback", o.cnn_fallback));
+    DS_RETURN_IF_ERROR(options.get("cnn_fallback_below", o.cnn_fallback_below));
     const auto cameras = ctx.cameras_with_role(roles::kChildCamera);
     if (cameras.empty())
       return PlannedAnalyzers::skip("no calibrated stream with role child_camera");
     o.cameras.clear();
     for (const auto& [id, m] : cameras) o.cameras.push_back(id);
-    DS_ASSIGN_OR_RETURN(auto analyzer, make_face_landmarks_analyzer(o));
     PlannedAnalyzers p;
-    p.analyzers.push_back(std::move(analyzer));
+    auto analyzer = make_face_landmarks_analyzer(o);
+    // face-api's weights not installed: dlib alone, with the reason (--print-pipeline); the
+    // fallback only matters on faces dlib cannot fit (modalities/face_landmarks/README.md).
+    if (!analyzer && o.cnn_fallback && analyzer.error().code == ErrorCode::kNotFound) {
+      p.notes.push_back("CNN fallback off: " + analyzer.error().message);
+      o.cnn_fallback = false;
+      analyzer = make_face_landmarks_analyzer(o);
+    }
+    if (!analyzer) return tl::unexpected(analyzer.error());
+    if (o.cnn_fallback) p.notes.push_back("face-api's CNN where dlib's passes disagree");
+    p.analyzers.push_back(std::move(*analyzer));
     return p;
   };
   registry.add(std::move(f));

@@ -418,6 +418,94 @@ TEST(FaceLandmarksAnalyzer, OtherCamerasFacesAreFittedForAMultiViewPose) {
   EXPECT_TRUE(views_with(true).others.empty());
 }
 
+// A landmarker that returns fixed points (a grid over the box, shifted right by offset_px, outer
+// eye corners the box's width apart) with a fixed spread, and counts its calls.
+class FixedLandmarker final : public Landmarker {
+ public:
+  FixedLandmarker(double offset_px, double spread) : offset_(offset_px), spread_(spread) {}
+  std::string_view name() const override { return "fixed"; }
+  int point_count() const override { return kFaceLandmarkCount; }
+  Result<std::optional<std::vector<cv::Point2d>>> fit(const cv::Mat&,
+                                                      const cv::Rect2d& box) const override {
+    ++calls;
+    std::vector<cv::Point2d> p;
+    for (int i = 0; i < kFaceLandmarkCount; ++i)
+      p.emplace_back(box.x + offset_ + box.width * (i % 9) / 8.0,
+                     box.y + box.height * (i / 9) / 8.0);
+    p[36] = {box.x + offset_, box.y + 0.4 * box.height};  // outer eye corners a box width apart
+    p[45] = {box.x + offset_ + box.width, box.y + 0.4 * box.height};
+    return std::optional<std::vector<cv::Point2d>>{std::move(p)};
+  }
+  Result<std::optional<LandmarkFit>> fit_with_spread(const cv::Mat& image,
+                                                     const cv::Rect2d& box) const override {
+    auto p = fit(image, box);
+    if (!p) return tl::unexpected(p.error());
+    return std::optional<LandmarkFit>{LandmarkFit{std::move(**p), spread_}};
+  }
+  mutable int calls = 0;
+
+ private:
+  double offset_, spread_;
+};
+
+// cnn_fallback: a dlib fit whose passes disagree (spread 0.2: confidence 0) is replaced by the
+// CNN's points, with the confidence of their distance from dlib's; a confident dlib fit is kept
+// and the CNN not run; cnn_fallback = false or no CNN: dlib's points whatever their spread.
+TEST(FaceLandmarksAnalyzer, CnnReplacesAFitWhosePassesDisagree) {
+  const Timestamp t = Timestamp::from_seconds(1);
+  const MultiFrame mf = one_frame("camera_middle", portrait(), t);
+  SelectedCamera s;
+  s.camera = "camera_middle";
+  s.face.box_px = cv::Rect2d(100, 100, 80, 80);
+  auto run = [&](const FaceLandmarksAnalyzerOptions& o, double dlib_spread,
+                 const std::shared_ptr<const FixedLandmarker>& cnn) {
+    auto dlib = std::make_shared<const FixedLandmarker>(0.0, dlib_spread);
+    auto a = make_face_landmarks_analyzer(o, dlib, cnn);
+    EXPECT_TRUE(a);
+    Blackboard bb;
+    BlackboardWriter d("face_detection");
+    d.set(keys::kSelectedCamera, s, t, 1.f);
+    bb.commit(d, t);
+    BlackboardWriter w("face_landmarks");
+    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    auto e = bb.snapshot().get(keys::kFaceLandmarks);
+    EXPECT_TRUE(e && e->present());
+    return std::make_pair(e->value->points_px[0].x, e->confidence);
+  };
+  FaceLandmarksAnalyzerOptions o;
+  o.other_views = false;
+  // The CNN's points lie 1 px right of dlib's; the outer eye corners are 80 px apart: spread
+  // 1 / 80 = 0.0125 < spread_ok, confidence 1.
+  auto cnn = std::make_shared<const FixedLandmarker>(1.0, 0.0);
+  auto [x, conf] = run(o, 0.2, cnn);
+  EXPECT_DOUBLE_EQ(x, 101.0);
+  EXPECT_FLOAT_EQ(conf, 1.f);
+  EXPECT_EQ(cnn->calls, 1);
+  // Far from dlib's (8 px = 0.1 of the corner distance = spread_bad): confidence 0.
+  auto far = std::make_shared<const FixedLandmarker>(8.0, 0.0);
+  std::tie(x, conf) = run(o, 0.2, far);
+  EXPECT_DOUBLE_EQ(x, 108.0);
+  EXPECT_NEAR(conf, 0.f, 1e-6);
+  // A confident dlib fit (spread 0.01): kept, the CNN not asked.
+  std::tie(x, conf) = run(o, 0.01, cnn);
+  EXPECT_DOUBLE_EQ(x, 100.0);
+  EXPECT_FLOAT_EQ(conf, 1.f);
+  EXPECT_EQ(cnn->calls, 1);
+  // Fallback off, or no CNN given: dlib's points with dlib's confidence (0 at spread 0.2).
+  o.cnn_fallback = false;
+  std::tie(x, conf) = run(o, 0.2, cnn);
+  EXPECT_DOUBLE_EQ(x, 100.0);
+  EXPECT_NEAR(conf, 0.f, 1e-6);
+  EXPECT_EQ(cnn->calls, 1);
+  o.cnn_fallback = true;
+  std::tie(x, conf) = run(o, 0.2, nullptr);
+  EXPECT_DOUBLE_EQ(x, 100.0);
+  FaceLandmarksAnalyzerOptions bad;
+  bad.cnn_fallback_below = 1.5;
+  EXPECT_FALSE(bad.check());
+}
+
 // ---- Demo session ----
 
 TEST(FaceLandmarksDemo, EyeLandmarksNearTruthEyes) {

@@ -10,6 +10,11 @@
 //    re-derivation passes disagree, e.g. an occluded or strongly turned face, is reported with
 //    low confidence instead of as a confident wrong shape), or absent when the landmarker
 //    rejects the face;
+//  - with options.cnn_fallback, a dlib fit whose confidence (spread_confidence) is below
+//    cnn_fallback_below is replaced by face-api's 68-point CNN fitted from the same face box
+//    (the +switch rule of `eval landmarks`: on AFW mean NME 0.0667 -> 0.0393, failures 14 % ->
+//    7 %); its confidence is then spread_confidence of its mean distance from dlib's points, so a
+//    face the two landmarkers see differently stays low-confidence;
 //  - with options.other_views, keys::kFaceLandmarkViews: the landmarks of every other camera's
 //    face of the child this tick (keys::kFaceDetections: the face holding the last head pose's
 //    projection, else the best-scored one; one landmark fit each), for a multi-view
@@ -35,14 +40,23 @@ struct FaceLandmarksAnalyzerOptions {
   // Other cameras whose face is less frontal than this (DetectedFace::frontalness, 1 - |yaw| / 90
   // from the last head pose) are not fitted: dlib's fits break on strongly turned faces.
   double other_view_min_frontalness = 0.5;
+  // face-api's CNN where dlib's own passes disagree (header comment); the weights come from the
+  // npm package @vladmandic/face-api (tools/setup.sh); make_face_landmarks_analyzer fails
+  // (kNotFound, naming the file) without it, and the pipeline's plan then runs dlib alone.
+  bool cnn_fallback = true;
+  double cnn_fallback_below = 0.5;  // spread_confidence of dlib's fit
+  FaceApiLandmarkerOptions cnn;
   Status check() const;
 };
 
-// Builds a dlib landmarker from options.dlib (loads the model).
+// Builds a dlib landmarker from options.dlib (loads the model), and face-api's CNN from
+// options.cnn when options.cnn_fallback.
 Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
     const FaceLandmarksAnalyzerOptions& options = {});
-// Uses a landmarker created elsewhere (shared: load the model once, e.g. in tests).
+// Uses landmarkers created elsewhere (shared: load the models once, e.g. in tests); without
+// `cnn` there is no fallback whatever options.cnn_fallback says.
 Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
-    const FaceLandmarksAnalyzerOptions& options, std::shared_ptr<const Landmarker> landmarker);
+    const FaceLandmarksAnalyzerOptions& options, std::shared_ptr<const Landmarker> landmarker,
+    std::shared_ptr<const Landmarker> cnn = nullptr);
 
 }  // namespace dreamsense::face_landmarks

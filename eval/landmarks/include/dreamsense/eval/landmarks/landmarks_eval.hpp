@@ -78,7 +78,9 @@ struct LandmarksEvalOptions {
   //  switch_min_confidence (the analyser's "confident" threshold), else the CNN (spread = the
   //  CNN's mean distance from dlib's points); "+cnn_switch": as +switch, except that on the boxes
   //  of face-api's detectors (tiny, ssd) both dlib fits start from the box of the CNN's points
-  //  (dlib's box convention derived through the CNN; the CNN's own points from the detector box).
+  //  (dlib's box convention derived through the CNN; the CNN's own points from the detector box);
+  //  "+plain_switch": the pipeline's rule (FaceLandmarksAnalyzerOptions::cnn_fallback): the
+  //  pipeline landmarker's own fit when confident, else the CNN.
   std::vector<std::string> detectors{"ssd_paired+switch",
                                      "ssd_paired+cnn_switch",
                                      "union_ssd+switch",
