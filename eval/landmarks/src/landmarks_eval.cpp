@@ -442,14 +442,19 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
                   : b;
           auto plain_fit = fit(0, dlib_box, dlib_box);
           if (!plain_fit) return tl::unexpected(plain_fit.error());
-          auto d = fit(1, dlib_box, dlib_box);
-          if (!d) return tl::unexpected(d.error());
-          f.ms += (*plain_fit)->ms + (*d)->ms;
+          // The fit kept where dlib is confident: +tta's, or with 7 (the pipeline's rule,
+          // face_landmarks' cnn_fallback) the plain fit itself.
+          const Fit* kept = *plain_fit;
+          if (which != 7) {
+            auto d = fit(1, dlib_box, dlib_box);
+            if (!d) return tl::unexpected(d.error());
+            kept = *d;
+          }
+          f.ms += (*plain_fit)->ms + (kept != *plain_fit ? kept->ms : 0.0);
           const bool confident =
-              (*plain_fit)->fit && (*d)->fit &&
+              (*plain_fit)->fit && kept->fit &&
               fl::spread_confidence((*plain_fit)->fit->spread) >= o.switch_min_confidence;
-          // 7: the pipeline's rule (face_landmarks' cnn_fallback): the plain fit when confident.
-          f.fit = confident ? (which == 7 ? (*plain_fit)->fit : (*d)->fit) : (*c)->fit;
+          f.fit = confident ? kept->fit : (*c)->fit;
           if (confident || !f.fit) {
           } else if ((*plain_fit)->fit) {  // the CNN's points; spread = its distance from dlib's
             const auto& a = f.fit->points;
