@@ -419,14 +419,15 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         cache;
     std::function<Result<const Fit*>(int, const cv::Rect2d&, const cv::Rect2d&)> fit;
     fit = [&](int which, const cv::Rect2d& b, const cv::Rect2d& cnn_b) -> Result<const Fit*> {
+      // The CNN alone depends on its own box only: one cache entry per box for every chain.
+      if (which == 2 && b != cnn_b) return fit(2, cnn_b, cnn_b);
       const auto key = std::make_tuple(which, b.x, b.y, b.width, b.height, cnn_b.x, cnn_b.y,
                                        cnn_b.width, cnn_b.height);
       if (auto f = cache.find(key); f != cache.end()) return &f->second;
       const auto t0 = std::chrono::steady_clock::now();
       Fit f;
       if (which <= 2) {
-        auto p = which == 2 ? cnn->fit_with_spread(image, cnn_b)
-                            : landmarkers[which]->fit_with_spread(image, b);
+        auto p = (which == 2 ? cnn.get() : landmarkers[which])->fit_with_spread(image, b);
         if (!p) return tl::unexpected(p.error());
         f.fit = std::move(*p);
         f.ms = ms_since(t0);
@@ -457,12 +458,8 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
           f.fit = confident ? kept->fit : (*c)->fit;
           if (confident || !f.fit) {
           } else if ((*plain_fit)->fit) {  // the CNN's points; spread = its distance from dlib's
-            const auto& a = f.fit->points;
-            const auto& e = (*plain_fit)->fit->points;
-            double sum = 0;
-            for (size_t k = 0; k < a.size(); ++k) sum += cv::norm(a[k] - e[k]);
-            const double dist = cv::norm(a[36] - a[45]);
-            f.fit->spread = dist > 0 ? sum / static_cast<double>(a.size()) / dist : f.fit->spread;
+            const double d = fl::mean_point_distance(f.fit->points, (*plain_fit)->fit->points);
+            if (std::isfinite(d)) f.fit->spread = d;
           }
         } else if (which == 3) {  // mean of dlib+tta and the CNN; spread = their disagreement
           auto d = fit(1, b, b);

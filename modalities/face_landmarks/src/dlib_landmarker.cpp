@@ -244,6 +244,16 @@ double spread_confidence(double spread, double spread_ok, double spread_bad) {
   return std::clamp((spread_bad - spread) / (spread_bad - spread_ok), 0.0, 1.0);
 }
 
+double mean_point_distance(const std::vector<cv::Point2d>& points,
+                           const std::vector<cv::Point2d>& other) {
+  DS_CHECK_EQ(points.size(), other.size());
+  const double corners = cv::norm(points[36] - points[45]);
+  if (!(corners > 0)) return std::numeric_limits<double>::infinity();
+  double sum = 0;
+  for (size_t i = 0; i < points.size(); ++i) sum += cv::norm(points[i] - other[i]);
+  return sum / static_cast<double>(points.size()) / corners;
+}
+
 Result<std::optional<LandmarkFit>> Landmarker::fit_with_spread(const cv::Mat& image,
                                                                const cv::Rect2d& box_px) const {
   auto p = fit(image, box_px);

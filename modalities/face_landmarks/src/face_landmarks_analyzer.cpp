@@ -3,7 +3,6 @@
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 
-#include <limits>
 #include <set>
 
 namespace dreamsense::face_landmarks {
@@ -54,8 +53,8 @@ class FaceLandmarksAnalyzer : public Analyzer {
       auto cnn_fit = cnn_->fit(img->image, s.face.box_px);
       if (!cnn_fit) return tl::unexpected(cnn_fit.error());
       if (*cnn_fit && (*cnn_fit)->size() == points.size()) {
-        fit_confidence = spread_confidence(mean_distance(**cnn_fit, points), options_.spread_ok,
-                                           options_.spread_bad);
+        fit_confidence = spread_confidence(mean_point_distance(**cnn_fit, points),
+                                           options_.spread_ok, options_.spread_bad);
         points = std::move(**cnn_fit);
       }
     }
@@ -70,16 +69,6 @@ class FaceLandmarksAnalyzer : public Analyzer {
     out.set_absent(keys::kFaceLandmarks, tick);
     out.set_absent(keys::kFaceLandmarkViews, tick);
     return ok_status();
-  }
-
-  // Mean point distance of a from b over the outer eye corners' distance in a (the spread's unit).
-  static double mean_distance(const std::vector<cv::Point2d>& a,
-                              const std::vector<cv::Point2d>& b) {
-    const double corners = cv::norm(a[36] - a[45]);
-    if (!(corners > 0)) return std::numeric_limits<double>::infinity();
-    double sum = 0;
-    for (size_t i = 0; i < a.size(); ++i) sum += cv::norm(a[i] - b[i]);
-    return sum / static_cast<double>(a.size()) / corners;
   }
 
   static FaceLandmarks landmarks_of(const SensorId& camera, const SensorFrame& frame,

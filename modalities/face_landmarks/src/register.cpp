@@ -22,18 +22,21 @@ void register_analyzers(AnalyzerRegistry& registry) {
       return PlannedAnalyzers::skip("no calibrated stream with role child_camera");
     o.cameras.clear();
     for (const auto& [id, m] : cameras) o.cameras.push_back(id);
+    if (auto s = o.check(); !s) return tl::unexpected(s.error());
     PlannedAnalyzers p;
-    auto analyzer = make_face_landmarks_analyzer(o);
-    // face-api's weights not installed: dlib alone, with the reason (--print-pipeline); the
-    // fallback only matters on faces dlib cannot fit (modalities/face_landmarks/README.md).
-    if (!analyzer && o.cnn_fallback && analyzer.error().code == ErrorCode::kNotFound) {
-      p.notes.push_back("CNN fallback off: " + analyzer.error().message);
-      o.cnn_fallback = false;
-      analyzer = make_face_landmarks_analyzer(o);
+    DS_ASSIGN_OR_RETURN(std::shared_ptr<const Landmarker> dlib, make_dlib_landmarker(o.dlib));
+    std::shared_ptr<const Landmarker> cnn;
+    if (o.cnn_fallback) {
+      auto c = make_face_api_landmarker(o.cnn);
+      // face-api's weights not installed: dlib alone, with the reason (--print-pipeline); the
+      // fallback only matters on faces dlib cannot fit (modalities/face_landmarks/README.md).
+      if (!c && c.error().code != ErrorCode::kNotFound) return tl::unexpected(c.error());
+      p.notes.push_back(c ? "face-api's CNN where dlib's passes disagree"
+                          : "CNN fallback off: " + c.error().message);
+      if (c) cnn = std::move(*c);
     }
-    if (!analyzer) return tl::unexpected(analyzer.error());
-    if (o.cnn_fallback) p.notes.push_back("face-api's CNN where dlib's passes disagree");
-    p.analyzers.push_back(std::move(*analyzer));
+    DS_ASSIGN_OR_RETURN(auto analyzer, make_face_landmarks_analyzer(o, dlib, cnn));
+    p.analyzers.push_back(std::move(analyzer));
     return p;
   };
   registry.add(std::move(f));

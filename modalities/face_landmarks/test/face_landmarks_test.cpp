@@ -7,6 +7,7 @@
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/sim/face_renderer.hpp"
+#include "dreamsense/testing/analyzer_runner.hpp"
 #include "dreamsense/vision/face_api_net.hpp"
 
 #include <gtest/gtest.h>
@@ -459,17 +460,13 @@ TEST(FaceLandmarksAnalyzer, CnnReplacesAFitWhosePassesDisagree) {
   s.face.box_px = cv::Rect2d(100, 100, 80, 80);
   auto run = [&](const FaceLandmarksAnalyzerOptions& o, double dlib_spread,
                  const std::shared_ptr<const FixedLandmarker>& cnn) {
-    auto dlib = std::make_shared<const FixedLandmarker>(0.0, dlib_spread);
-    auto a = make_face_landmarks_analyzer(o, dlib, cnn);
+    auto a = make_face_landmarks_analyzer(
+        o, std::make_shared<const FixedLandmarker>(0.0, dlib_spread), cnn);
     EXPECT_TRUE(a);
-    Blackboard bb;
-    BlackboardWriter d("face_detection");
-    d.set(keys::kSelectedCamera, s, t, 1.f);
-    bb.commit(d, t);
-    BlackboardWriter w("face_landmarks");
-    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
-    bb.commit(w, t);
-    auto e = bb.snapshot().get(keys::kFaceLandmarks);
+    testing::AnalyzerRunner runner(std::move(*a));
+    runner.preset(keys::kSelectedCamera, s, t);
+    EXPECT_TRUE(runner.run(mf));
+    auto e = runner.output(keys::kFaceLandmarks);
     EXPECT_TRUE(e && e->present());
     return std::make_pair(e->value->points_px[0].x, e->confidence);
   };

@@ -32,6 +32,12 @@ struct LandmarkFit {
 // 0.98, and no fit with spread <= 0.03 failed (README "Real faces").
 double spread_confidence(double spread, double spread_ok = 0.03, double spread_bad = 0.10);
 
+// Mean distance of `points` from `other` (same size, 68 points), over the distance of points'
+// outer eye corners (36, 45): a spread of two landmarkers' fits of one face. +inf when the
+// corners coincide.
+double mean_point_distance(const std::vector<cv::Point2d>& points,
+                           const std::vector<cv::Point2d>& other);
+
 // Fits landmarks to one face. fit() is const and may be called from several threads at once.
 class Landmarker {
  public:
