@@ -149,7 +149,9 @@ TEST(Pipeline, LivePolicyPacedByStampsKeepsUpWithAFastAnalyser) {
   ASSERT_TRUE(p);
   ASSERT_TRUE((*p)->run(src, nullptr));
   EXPECT_EQ((*p)->stats().frames, 30u);
-  EXPECT_GE((*p)->stats().ticks, 20u);
+  // 25 slots of 40 ms; a tick is missed only when the main thread sleeps through a whole slot,
+  // which a loaded 2-core machine does now and then.
+  EXPECT_GE((*p)->stats().ticks, 18u);
   EXPECT_LE((*p)->stats().ticks, 26u);
 }
 
