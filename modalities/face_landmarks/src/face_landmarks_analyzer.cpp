@@ -3,6 +3,9 @@
 #include "dreamsense/perception/face_detection.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 
+#include <opencv2/core/utility.hpp>
+
+#include <optional>
 #include <set>
 
 namespace dreamsense::face_landmarks {
@@ -38,14 +41,40 @@ class FaceLandmarksAnalyzer : public Analyzer {
                           "face_landmarks: stream '{}' is not a colour stream", s.camera);
       return absent(in.stamp, out);
     }
-    auto fit = landmarker_->fit_with_spread(img->image, s.face.box_px);
+    // The selected face and the other views are independent fits: with options_.parallel they
+    // run at once (each result in its own slot, so the output does not depend on scheduling).
+    const std::vector<OtherView> views = other_view_faces(in, prior, s.camera);
+    Result<std::optional<LandmarkFit>> fit = std::optional<LandmarkFit>{};
+    std::vector<Result<std::optional<std::vector<cv::Point2d>>>> view_fits(views.size());
+    auto run = [&](size_t job) {
+      if (job == 0)
+        fit = landmarker_->fit_with_spread(img->image, s.face.box_px);
+      else
+        view_fits[job - 1] = landmarker_->fit(views[job - 1].image->image, views[job - 1].box);
+    };
+    const size_t jobs = 1 + views.size();
+    if (options_.parallel && jobs > 1) {
+      cv::parallel_for_(
+          cv::Range(0, static_cast<int>(jobs)),
+          [&](const cv::Range& r) {
+            for (int j = r.start; j < r.end; ++j) run(static_cast<size_t>(j));
+          },
+          static_cast<double>(jobs));
+    } else {
+      for (size_t j = 0; j < jobs; ++j) run(j);
+    }
     if (!fit) return tl::unexpected(fit.error());
     if (!*fit) {
       return absent(in.stamp, out);
     }
-    auto others = other_views(in, prior, s.camera);
-    if (!others) return tl::unexpected(others.error());
-    out.set(keys::kFaceLandmarkViews, std::move(*others), in.stamp, sel->confidence);
+    FaceLandmarkViews others;
+    for (size_t v = 0; v < views.size(); ++v) {
+      if (!view_fits[v]) return tl::unexpected(view_fits[v].error());
+      if (!*view_fits[v]) continue;
+      others.others.push_back(landmarks_of(views[v].camera, *views[v].frame, views[v].image->image,
+                                           views[v].box, std::move(**view_fits[v])));
+    }
+    out.set(keys::kFaceLandmarkViews, std::move(others), in.stamp, sel->confidence);
     double fit_confidence =
         spread_confidence((*fit)->spread, options_.spread_ok, options_.spread_bad);
     std::vector<cv::Point2d> points = std::move((*fit)->points);
@@ -84,11 +113,18 @@ class FaceLandmarksAnalyzer : public Analyzer {
     return lm;
   }
 
-  // Landmarks of each other camera's face of the child this tick (CameraFaces::head_face, else
-  // the best-scored face; one landmark fit each, only where that face is frontal enough).
-  Result<FaceLandmarkViews> other_views(const MultiFrame& in, const BlackboardView& prior,
-                                        const SensorId& selected) const {
-    FaceLandmarkViews views;
+  struct OtherView {
+    SensorId camera;
+    FramePtr frame;
+    const ColorImage* image = nullptr;
+    cv::Rect2d box;
+  };
+
+  // Each other camera's face of the child this tick, to be fitted (CameraFaces::head_face, else
+  // the best-scored face; only where that face is frontal enough), in the detections' order.
+  std::vector<OtherView> other_view_faces(const MultiFrame& in, const BlackboardView& prior,
+                                          const SensorId& selected) const {
+    std::vector<OtherView> views;
     if (!options_.other_views) return views;
     const auto det = prior.get(keys::kFaceDetections);
     if (!det || det->stamp != in.stamp || !det->present()) return views;
@@ -99,14 +135,10 @@ class FaceLandmarksAnalyzer : public Analyzer {
       if (camera == selected || i >= faces.faces.size() ||
           faces.faces[i].frontalness < options_.other_view_min_frontalness)
         continue;
-      const FramePtr f = in.frame(camera);
+      FramePtr f = in.frame(camera);
       const ColorImage* img = f ? f->as<ColorImage>() : nullptr;
       if (img == nullptr || f->stamp != faces.frame_stamp) continue;
-      const cv::Rect2d box = faces.faces[i].box_px;
-      auto points = landmarker_->fit(img->image, box);
-      if (!points) return tl::unexpected(points.error());
-      if (!*points) continue;
-      views.others.push_back(landmarks_of(camera, *f, img->image, box, std::move(**points)));
+      views.push_back(OtherView{camera, std::move(f), img, faces.faces[i].box_px});
     }
     return views;
   }

@@ -17,6 +17,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
     DS_RETURN_IF_ERROR(options.get("other_view_min_frontalness", o.other_view_min_frontalness));
     DS_RETURN_IF_ERROR(options.get("cnn_fallback", o.cnn_fallback));
     DS_RETURN_IF_ERROR(options.get("cnn_fallback_below", o.cnn_fallback_below));
+    DS_RETURN_IF_ERROR(options.get("parallel", o.parallel));
     const auto cameras = ctx.cameras_with_role(roles::kChildCamera);
     if (cameras.empty())
       return PlannedAnalyzers::skip("no calibrated stream with role child_camera");

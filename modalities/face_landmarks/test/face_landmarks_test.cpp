@@ -14,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <atomic>
 #include <dlib/image_processing/shape_predictor.h>
 #include <dlib/opencv/cv_image.h>
 #include <fstream>
@@ -371,9 +372,10 @@ TEST(FaceLandmarksAnalyzer, OtherCamerasFacesAreFittedForAMultiViewPose) {
   SelectedCamera s;
   s.camera = "camera_middle";
   s.face = det.cameras["camera_middle"].faces[0];
-  auto views_with = [&](bool other_views) {
+  auto views_with = [&](bool other_views, bool parallel = true) {
     FaceLandmarksAnalyzerOptions o;
     o.other_views = other_views;
+    o.parallel = parallel;
     auto a = make_face_landmarks_analyzer(o, shared_landmarker());
     EXPECT_TRUE(a);
     Blackboard bb;
@@ -393,6 +395,17 @@ TEST(FaceLandmarksAnalyzer, OtherCamerasFacesAreFittedForAMultiViewPose) {
   EXPECT_EQ(on.others[0].camera, "camera_left");
   EXPECT_EQ(on.others[0].points_px.size(), 68u);
   EXPECT_TRUE(views_with(false).others.empty());
+  // The fits run at once by default; one after the other they give the same points.
+  det.cameras["camera_right"].frame_stamp = t;  // now two other views
+  const FaceLandmarkViews parallel = views_with(true, true);
+  const FaceLandmarkViews serial = views_with(true, false);
+  ASSERT_EQ(parallel.others.size(), 2u);
+  ASSERT_EQ(serial.others.size(), 2u);
+  for (size_t v = 0; v < 2; ++v) {
+    EXPECT_EQ(parallel.others[v].camera, serial.others[v].camera);
+    EXPECT_EQ(parallel.others[v].points_px, serial.others[v].points_px);
+  }
+  det.cameras["camera_right"].frame_stamp = t - Duration::from_ms(40);
   // A camera that sees the head turned more than 45 degrees away is not fitted (default 0.5).
   det.cameras["camera_left"].faces[0].frontalness = 0.3f;
   EXPECT_TRUE(views_with(true).others.empty());
@@ -443,7 +456,7 @@ class FixedLandmarker final : public Landmarker {
     if (!p) return tl::unexpected(p.error());
     return std::optional<LandmarkFit>{LandmarkFit{std::move(**p), spread_}};
   }
-  mutable int calls = 0;
+  mutable std::atomic<int> calls{0};  // fits may run on several threads
 
  private:
   double offset_, spread_;

@@ -46,6 +46,9 @@ struct FaceLandmarksAnalyzerOptions {
   bool cnn_fallback = true;
   double cnn_fallback_below = 0.5;  // spread_confidence of dlib's fit
   FaceApiLandmarkerOptions cnn;
+  // true: the selected face's fit and the other views' fits run at once (cv::parallel_for_, one
+  // task per face); false: one after the other. Same output either way.
+  bool parallel = true;
   Status check() const;
 };
 
