@@ -185,8 +185,8 @@ class WaitForDrainAnalyzer : public CountingAnalyzer {
 };
 
 TEST(Pipeline, LivePolicyUnpacedTakesOnlyTheNewestFrames) {
-  DrainSignallingSource src(
-      1);  // all frames arrive at once: live keeps the newest, counts the rest
+  // All frames arrive at once: live keeps the newest, counts the rest.
+  DrainSignallingSource src(1);
   std::vector<std::unique_ptr<Analyzer>> a;
   a.push_back(std::make_unique<WaitForDrainAnalyzer>(src.drained));
   PipelineOptions o;
