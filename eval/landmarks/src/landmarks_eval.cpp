@@ -7,6 +7,8 @@
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/vision/face_api_net.hpp"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
@@ -21,9 +23,32 @@ namespace {
 namespace fd = dreamsense::face_detection;
 namespace fl = dreamsense::face_landmarks;
 
-const std::set<std::string> kDetectors{
-    "haar", "hog",       "hog_haar",       "union",     "tiny",       "union_tiny", "tiny_union",
-    "ssd",  "union_ssd", "union_tiny_ssd", "ssd_union", "ssd_hybrid", "ssd_paired"};
+// Each detector chain and the detectors it runs ("wide": the wider Haar search of hog_haar and
+// union, with smaller faces and the profile cascades). A new chain is one line here (and its box
+// rule in run_landmarks_eval).
+struct DetectorChain {
+  std::string name;
+  std::set<std::string> runs;
+};
+const std::vector<DetectorChain> kDetectors{{"haar", {"haar"}},
+                                            {"hog", {"hog"}},
+                                            {"hog_haar", {"hog", "wide"}},
+                                            {"union", {"hog", "wide"}},
+                                            {"tiny", {"tiny"}},
+                                            {"union_tiny", {"hog", "wide", "tiny"}},
+                                            {"tiny_union", {"hog", "wide", "tiny"}},
+                                            {"ssd", {"ssd"}},
+                                            {"union_ssd", {"hog", "wide", "ssd"}},
+                                            {"union_tiny_ssd", {"hog", "wide", "tiny", "ssd"}},
+                                            {"ssd_union", {"hog", "wide", "ssd"}},
+                                            {"ssd_hybrid", {"hog", "wide", "ssd"}},
+                                            {"ssd_paired", {"hog", "wide", "ssd"}}};
+
+const DetectorChain* detector_chain(const std::string& name) {
+  const auto d = std::find_if(kDetectors.begin(), kDetectors.end(),
+                              [&](const DetectorChain& c) { return c.name == name; });
+  return d == kDetectors.end() ? nullptr : &*d;
+}
 using LandmarkFitResult = face_landmarks::LandmarkFit;
 
 std::optional<double> mean(const std::vector<double>& v) {
@@ -134,7 +159,7 @@ std::optional<Chain> parse_chain(const std::string& name) {
     c.landmarker = s->second;
     c.tta = c.landmarker == 1;
   }
-  if (!kDetectors.count(c.detector)) return std::nullopt;
+  if (!detector_chain(c.detector)) return std::nullopt;
   return c;
 }
 
@@ -239,15 +264,13 @@ Status LandmarksEvalOptions::check() const {
   auto add = [&](const std::string& s) { bad += (bad.empty() ? "" : "; ") + s; };
   if (dataset != "300w") add(fmt::format("unknown dataset '{}' (known: 300w)", dataset));
   if (detectors.empty()) add("no detector chain");
+  std::vector<std::string> chain_names, suffixes;
+  for (const DetectorChain& c : kDetectors) chain_names.push_back(c.name);
+  for (const auto& [suffix, landmarker] : kLandmarkerSuffixes) suffixes.push_back(suffix);
   for (const std::string& d : detectors)
     if (!parse_chain(d))
-      add(
-          fmt::format("unknown detector chain '{}' (known: haar, hog, hog_haar, union, tiny, "
-                      "union_tiny, tiny_union, ssd, union_ssd, union_tiny_ssd, ssd_union, "
-                      "ssd_hybrid, ssd_paired, each optionally "
-                      "with +tta, +cnn, +mean, +cnn_dlib, +switch, +cnn_switch or "
-                      "+plain_switch)",
-                      d));
+      add(fmt::format("unknown detector chain '{}' (known: {}, each optionally with one of {})", d,
+                      fmt::join(chain_names, ", "), fmt::join(suffixes, ", ")));
   if (!(min_iou > 0 && min_iou <= 1)) add("min_iou must be in (0, 1]");
   if (!(failure_nme > 0)) add("failure_nme must be > 0");
   if (stride < 1) add("stride must be >= 1");
@@ -306,20 +329,10 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
     cnn = std::move(*c);
   }
 
-  // Chains built on union (HOG + the wider Haar search).
-  auto on_union = [](const std::string& d) {
-    return d == "union" || d == "union_tiny" || d == "tiny_union" || d == "union_ssd" ||
-           d == "union_tiny_ssd" || d == "ssd_union" || d == "ssd_hybrid" || d == "ssd_paired";
-  };
+  // Whether any chain runs `detector` (kDetectors).
   auto uses = [&](const std::string& detector) {
     return std::any_of(chains.begin(), chains.end(), [&](const Chain& c) {
-      return c.detector == detector ||
-             (detector == "hog" && (c.detector == "hog_haar" || on_union(c.detector))) ||
-             (detector == "tiny" && (c.detector == "union_tiny" || c.detector == "tiny_union" ||
-                                     c.detector == "union_tiny_ssd")) ||
-             (detector == "ssd" && (c.detector == "union_ssd" || c.detector == "union_tiny_ssd" ||
-                                    c.detector == "ssd_union" || c.detector == "ssd_hybrid" ||
-                                    c.detector == "ssd_paired"));
+      return detector_chain(c.detector)->runs.count(detector) > 0;
     });
   };
   std::optional<fd::FaceDetector> haar;
@@ -330,9 +343,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   }
   // The Haar search of hog_haar and union: also smaller faces and the profile cascades.
   std::optional<fd::FaceDetector> haar_wide;
-  if (std::any_of(chains.begin(), chains.end(), [&](const Chain& c) {
-        return c.detector == "hog_haar" || on_union(c.detector);
-      })) {
+  if (uses("wide")) {
     fd::FaceDetectorOptions w;
     w.min_face_px = o.wide_haar_min_face_px;
     w.use_profile = o.wide_haar_profile;

@@ -50,7 +50,7 @@ class FaceLandmarksAnalyzer : public Analyzer {
       if (job == 0)
         fit = landmarker_->fit_with_spread(img->image, s.face.box_px);
       else
-        view_fits[job - 1] = landmarker_->fit(views[job - 1].image->image, views[job - 1].box);
+        view_fits[job - 1] = landmarker_->fit(views[job - 1].image(), views[job - 1].box);
     };
     const size_t jobs = 1 + views.size();
     if (options_.parallel && jobs > 1) {
@@ -71,7 +71,7 @@ class FaceLandmarksAnalyzer : public Analyzer {
     for (size_t v = 0; v < views.size(); ++v) {
       if (!view_fits[v]) return tl::unexpected(view_fits[v].error());
       if (!*view_fits[v]) continue;
-      others.others.push_back(landmarks_of(views[v].camera, *views[v].frame, views[v].image->image,
+      others.others.push_back(landmarks_of(views[v].camera, *views[v].frame, views[v].image(),
                                            views[v].box, std::move(**view_fits[v])));
     }
     out.set(keys::kFaceLandmarkViews, std::move(others), in.stamp, sel->confidence);
@@ -115,9 +115,9 @@ class FaceLandmarksAnalyzer : public Analyzer {
 
   struct OtherView {
     SensorId camera;
-    FramePtr frame;
-    const ColorImage* image = nullptr;
+    FramePtr frame;  // a colour frame (other_view_faces checks)
     cv::Rect2d box;
+    const cv::Mat& image() const { return frame->as<ColorImage>()->image; }
   };
 
   // Each other camera's face of the child this tick, to be fitted (CameraFaces::head_face, else
@@ -138,7 +138,7 @@ class FaceLandmarksAnalyzer : public Analyzer {
       FramePtr f = in.frame(camera);
       const ColorImage* img = f ? f->as<ColorImage>() : nullptr;
       if (img == nullptr || f->stamp != faces.frame_stamp) continue;
-      views.push_back(OtherView{camera, std::move(f), img, faces.faces[i].box_px});
+      views.push_back(OtherView{camera, std::move(f), faces.faces[i].box_px});
     }
     return views;
   }
