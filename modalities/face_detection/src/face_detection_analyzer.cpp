@@ -1,6 +1,7 @@
 #include "dreamsense/face_detection/face_detection_analyzer.hpp"
 
 #include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/perception/head_pose.hpp"
 
 #include <opencv2/core/utility.hpp>
@@ -29,12 +30,27 @@ std::optional<size_t> face_of_head(const std::vector<DetectedFace>& faces, cv::P
   return std::nullopt;
 }
 
+// The bounding box of fitted points (empty for none).
+cv::Rect2d extent_of(const std::vector<cv::Point2d>& points) {
+  if (points.empty()) return {};
+  double x0 = points[0].x, y0 = points[0].y, x1 = x0, y1 = y0;
+  for (const cv::Point2d& p : points) {
+    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
+    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+  }
+  return {x0, y0, x1 - x0, y1 - y0};
+}
+
 class FaceDetectionAnalyzer : public Analyzer {
  public:
   struct Camera {
     SensorId id;
     FaceTracker tracker;
     std::optional<CameraFaces> last;  // result of the last frame searched (reused for repeats)
+    bool last_guided = false;         // `last` was placed from landmarks, not searched
+    // How the cascade's box sat on the landmarks fitted from it, at the last searched frame
+    // whose fit came back (guides of landmark-guided frames are placed with it).
+    std::optional<BoxOnExtent> box_on_fit;
   };
 
   FaceDetectionAnalyzer(FaceDetectionAnalyzerOptions o, std::vector<Camera> cameras)
@@ -45,6 +61,10 @@ class FaceDetectionAnalyzer : public Analyzer {
     AnalyzerContract c{
         {}, options_.cameras, {}, {keys::kFaceDetections.name, keys::kSelectedCamera.name}};
     if (!options_.camera_models.empty()) c.reads_previous = {keys::kHeadPose.name};
+    if (options_.tracker.cascade_interval > 1) {
+      c.reads_previous.push_back(keys::kFaceLandmarks.name);
+      c.reads_previous.push_back(keys::kFaceLandmarkViews.name);
+    }
     return c;
   }
 
@@ -66,6 +86,7 @@ class FaceDetectionAnalyzer : public Analyzer {
     // the face it will rate in camera selection skips the frontalness proxy: selection rates that
     // face by the yaw, and its frontalness is set from the yaw.
     const std::map<SensorId, CameraHeadView> heads = head_views(prior, in.stamp);
+    const std::vector<std::shared_ptr<const FaceLandmarks>> fits = previous_fits(prior);
     std::vector<CameraFaces> results(work.size());
     auto run = [&](size_t w) {
       Camera& cam = cameras_[work[w].first];
@@ -89,8 +110,10 @@ class FaceDetectionAnalyzer : public Analyzer {
         };
         head_yaw_deg = h->second.yaw_deg;
       }
-      r.faces = cam.tracker.process(image, known, head_yaw_deg).faces;
+      TrackedFrameFaces t = cam.tracker.process(image, known, head_yaw_deg, guides(cam, fits));
+      r.faces = std::move(t.faces);
       cam.last = r;
+      cam.last_guided = t.guided;
       results[w] = std::move(r);
     };
     if (options_.parallel && work.size() > 1) {
@@ -170,6 +193,38 @@ class FaceDetectionAnalyzer : public Analyzer {
     return views;
   }
 
+  // The landmark fits of the last tick, all cameras (empty unless landmark-guided frames are on).
+  std::vector<std::shared_ptr<const FaceLandmarks>> previous_fits(
+      const BlackboardView& prior) const {
+    std::vector<std::shared_ptr<const FaceLandmarks>> fits;
+    if (options_.tracker.cascade_interval <= 1) return fits;
+    if (const auto lm = prior.get(keys::kFaceLandmarks); lm && lm->present())
+      fits.push_back(lm->value);
+    if (const auto views = prior.get(keys::kFaceLandmarkViews); views && views->present())
+      for (const FaceLandmarks& v : views->value->others)
+        fits.push_back(std::shared_ptr<const FaceLandmarks>(views->value, &v));
+    return fits;
+  }
+
+  // Guides for this camera's next frame: the fits of its last frame. A fit of a searched frame
+  // first teaches how the cascade box sits on the fitted points (cam.box_on_fit).
+  static std::vector<FaceGuide> guides(
+      Camera& cam, const std::vector<std::shared_ptr<const FaceLandmarks>>& fits) {
+    std::vector<FaceGuide> out;
+    if (!cam.last) return out;
+    for (const auto& fit : fits) {
+      if (fit->camera != cam.id || fit->frame_sequence != cam.last->frame_sequence ||
+          fit->frame_stamp != cam.last->frame_stamp)
+        continue;
+      const cv::Rect2d extent = extent_of(fit->points_px);
+      if (!cam.last_guided)
+        if (auto r = box_on_extent(fit->box_px, extent)) cam.box_on_fit = r;
+      if (cam.box_on_fit && extent.area() > 0)
+        out.push_back({fit->box_px, place_box(*cam.box_on_fit, extent)});
+    }
+    return out;
+  }
+
   // Head yaw relative to each camera, for the face (per camera) whose box holds the projected
   // head position (CameraFaces::head_face, set only where `heads` has the camera).
   static std::vector<HeadYawHint> yaw_hints(const FaceDetections& detections,
@@ -187,6 +242,8 @@ class FaceDetectionAnalyzer : public Analyzer {
     for (Camera& c : cameras_) {
       c.tracker.reset();
       c.last.reset();
+      c.last_guided = false;
+      c.box_on_fit.reset();
     }
     selector_.reset();
   }
@@ -236,7 +293,8 @@ Result<std::unique_ptr<Analyzer>> make_face_detection_analyzer(
     // Spread the periodic full searches of the cameras over the interval.
     t.full_search_phase = options.tracker.full_search_phase +
                           i * options.tracker.full_search_interval / std::max(1, n);
-    cameras.push_back({options.cameras[i], FaceTracker(std::move(*detector), t), std::nullopt});
+    cameras.push_back(
+        {options.cameras[i], FaceTracker(std::move(*detector), t), std::nullopt, false, {}});
   }
   return std::unique_ptr<Analyzer>(new FaceDetectionAnalyzer(options, std::move(cameras)));
 }

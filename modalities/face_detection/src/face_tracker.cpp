@@ -48,8 +48,25 @@ Status FaceTrackerOptions::check() const {
   if (turned_away_search_interval < 1)
     add(fmt::format("turned_away_search_interval {} < 1", turned_away_search_interval));
   if (!(merge_iou >= 0 && merge_iou < 1)) add(fmt::format("merge_iou {} not in [0, 1)", merge_iou));
+  if (cascade_interval < 1) add(fmt::format("cascade_interval {} < 1", cascade_interval));
+  if (!(guide_min_iou > 0 && guide_min_iou <= 1))
+    add(fmt::format("guide_min_iou {} not in (0, 1]", guide_min_iou));
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "FaceTrackerOptions: " + bad);
   return ok_status();
+}
+
+std::optional<BoxOnExtent> box_on_extent(const cv::Rect2d& box, const cv::Rect2d& extent) {
+  if (!(extent.width > 0 && extent.height > 0)) return std::nullopt;
+  return BoxOnExtent{(box.x + box.width / 2 - (extent.x + extent.width / 2)) / extent.width,
+                     (box.y + box.height / 2 - (extent.y + extent.height / 2)) / extent.height,
+                     box.width / extent.width, box.height / extent.height};
+}
+
+cv::Rect2d place_box(const BoxOnExtent& r, const cv::Rect2d& extent) {
+  const double w = r.sx * extent.width, h = r.sy * extent.height;
+  const double cx = extent.x + extent.width / 2 + r.dx * extent.width;
+  const double cy = extent.y + extent.height / 2 + r.dy * extent.height;
+  return {cx - w / 2, cy - h / 2, w, h};
 }
 
 FaceTracker::FaceTracker(FaceDetector detector, FaceTrackerOptions options)
@@ -60,10 +77,25 @@ FaceTracker::FaceTracker(FaceDetector detector, FaceTrackerOptions options)
 void FaceTracker::reset() {
   tracked_.clear();
   frames_since_full_ = 0;
+  guided_in_a_row_ = 0;
+}
+
+std::vector<DetectedFace> FaceTracker::guided_faces(const std::vector<FaceGuide>& guides) const {
+  std::vector<DetectedFace> faces;
+  for (const Track& t : tracked_) {
+    // The guide of this face: the one made from the box this tracker returned for it.
+    const auto g = std::find_if(guides.begin(), guides.end(), [&](const FaceGuide& c) {
+      return box_iou(c.tracked_box, t.box) > 0.999;
+    });
+    if (g == guides.end() || !(box_iou(g->box, t.box) >= options_.guide_min_iou)) return {};
+    faces.push_back(DetectedFace{g->box, t.score, t.view, t.frontalness});
+  }
+  return faces;
 }
 
 TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontalness& known,
-                                       std::optional<double> head_yaw_deg) {
+                                       std::optional<double> head_yaw_deg,
+                                       const std::vector<FaceGuide>& guides) {
   TrackedFrameFaces out;
   const int64_t index = frame_index_++;
   if (image.size() != last_size_) tracked_.clear();  // a new geometry: old boxes mean nothing
@@ -81,7 +113,12 @@ TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontaln
   }
 
   std::vector<DetectedFace> faces;
-  if (!full && !tracked_.empty()) {
+  if (!full && !tracked_.empty() && guided_in_a_row_ + 1 < options_.cascade_interval) {
+    faces = guided_faces(guides);
+    out.guided = !faces.empty();
+  }
+  guided_in_a_row_ = out.guided ? guided_in_a_row_ + 1 : 0;
+  if (!full && !tracked_.empty() && !out.guided) {
     // Around each tracked face: the narrow size range first, the wide one if that finds nothing.
     for (const Track& track : tracked_) {
       const cv::Rect2d& t = track.box;
@@ -125,7 +162,7 @@ TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontaln
   const bool estimate = detector_.options().estimate_frontalness;
   for (size_t i = 0; i < out.faces.size(); ++i) {
     DetectedFace& f = out.faces[i];
-    Track t{f.box_px, f.frontalness, 0};
+    Track t{f.box_px, f.frontalness, 0, f.score, f.view};
     const std::optional<float> given =
         known && f.view == FaceView::kFrontal ? known(out.faces, i) : std::nullopt;
     if (given) {

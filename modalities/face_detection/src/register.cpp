@@ -31,6 +31,8 @@ void register_analyzers(AnalyzerRegistry& registry) {
     DS_RETURN_IF_ERROR(options.get("turned_away_yaw_deg", o.tracker.turned_away_yaw_deg));
     DS_RETURN_IF_ERROR(
         options.get("turned_away_search_interval", o.tracker.turned_away_search_interval));
+    DS_RETURN_IF_ERROR(options.get("cascade_interval", o.tracker.cascade_interval));
+    DS_RETURN_IF_ERROR(options.get("guide_min_iou", o.tracker.guide_min_iou));
     DS_RETURN_IF_ERROR(options.get("parallel", o.parallel));
     PlannedAnalyzers p;
     // The calibrations give the faces' 3-D positions and the yaw-based camera selection.

@@ -5,6 +5,7 @@
 #include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/face_detection/face_tracker.hpp"
 #include "dreamsense/face_detection/hog_face_detector.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/perception/head_pose.hpp"
 #include "dreamsense/testing/demo_cache.hpp"
 
@@ -285,6 +286,94 @@ TEST(FaceTracker, LostFaceTurnedAwaySearchesTheFullFrameLessOften) {
   EXPECT_EQ(searches(170.0), 3);
   o.turned_away_search_interval = 1;  // the baseline
   EXPECT_EQ(searches(-80.0), 12);
+}
+
+TEST(FaceTracker, BoxOnExtentPlacesTheBoxItWasLearnedFrom) {
+  const cv::Rect2d box(100, 80, 60, 70), extent(104, 95, 50, 52);
+  const auto r = box_on_extent(box, extent);
+  ASSERT_TRUE(r);
+  const cv::Rect2d back = place_box(*r, extent);
+  EXPECT_NEAR(back.x, box.x, 1e-9);
+  EXPECT_NEAR(back.y, box.y, 1e-9);
+  EXPECT_NEAR(back.width, box.width, 1e-9);
+  EXPECT_NEAR(back.height, box.height, 1e-9);
+  // The same relation on an extent moved by (10, -5) and twice as large: the box is twice as
+  // large, and its offset from the extent's centre, (1, -6) px, doubles too.
+  const cv::Rect2d moved = place_box(*r, cv::Rect2d(139 - 50, 116 - 52, 100, 104));
+  EXPECT_NEAR(moved.width, 120, 1e-9);
+  EXPECT_NEAR(moved.height, 140, 1e-9);
+  EXPECT_NEAR(moved.x + moved.width / 2, 139 + 2, 1e-9);
+  EXPECT_NEAR(moved.y + moved.height / 2, 116 - 12, 1e-9);
+  EXPECT_FALSE(box_on_extent(box, cv::Rect2d(1, 1, 0, 5)));
+}
+
+// The guide a landmark fit of the previous frame would give: the face's last box moved by `shift`.
+std::vector<FaceGuide> moved_guides(const TrackedFrameFaces& last, cv::Point2d shift) {
+  std::vector<FaceGuide> g;
+  for (const DetectedFace& f : last.faces) g.push_back({f.box_px, f.box_px + shift});
+  return g;
+}
+
+TEST(FaceTracker, GuidedFramesSkipTheCascadeBetweenSearches) {
+  FaceTrackerOptions o;
+  o.cascade_interval = 3;
+  o.full_search_interval = 7;  // a periodic full search at frame 7 (a guided frame otherwise)
+  FaceTracker tracker(make_detector(), o);
+  TrackedFrameFaces last;
+  std::string pattern;
+  for (size_t i = 0; i < 10; ++i) {
+    const cv::Mat& image = image_of(demo().ticks[i], "camera_middle");
+    const std::vector<FaceGuide> guides = moved_guides(last, {2, -1});
+    const TrackedFrameFaces r = tracker.process(image, {}, std::nullopt, guides);
+    ASSERT_FALSE(r.faces.empty()) << "frame " << i;
+    pattern += r.full_search ? 'F' : r.guided ? 'G' : 'S';
+    if (r.guided) {
+      // Placed where the guide says, with the face's last score and view.
+      ASSERT_EQ(r.faces.size(), last.faces.size());
+      EXPECT_EQ(r.faces[0].box_px, guides[0].box) << "frame " << i;
+      EXPECT_EQ(r.faces[0].score, last.faces[0].score) << "frame " << i;
+      EXPECT_EQ(r.faces[0].view, last.faces[0].view) << "frame " << i;
+    }
+    last = r;
+  }
+  // A cascade search at least every third frame; the periodic full search is never skipped.
+  EXPECT_EQ(pattern, "FGGSGGSFGG");
+}
+
+TEST(FaceTracker, UnusableGuidesLeaveTheCascadeSearching) {
+  FaceTrackerOptions o;
+  o.cascade_interval = 4;
+  auto searched = [&](auto make_guides) {
+    FaceTracker tracker(make_detector(), o);
+    TrackedFrameFaces last;
+    int guided = 0;
+    for (size_t i = 0; i < 6; ++i) {
+      last = tracker.process(image_of(demo().ticks[i], "camera_middle"), {}, std::nullopt,
+                             make_guides(last));
+      EXPECT_FALSE(last.faces.empty()) << "frame " << i;
+      guided += last.guided;
+    }
+    return guided;
+  };
+  EXPECT_EQ(searched([](const TrackedFrameFaces& l) { return moved_guides(l, {3, 3}); }), 4);
+  // No guide (no landmarks), one far from the face (IoU < guide_min_iou), one made from
+  // another box than the tracker returned: every frame is searched.
+  EXPECT_EQ(searched([](const TrackedFrameFaces&) { return std::vector<FaceGuide>{}; }), 0);
+  EXPECT_EQ(searched([](const TrackedFrameFaces& l) { return moved_guides(l, {80, 0}); }), 0);
+  EXPECT_EQ(searched([](const TrackedFrameFaces& l) {
+              auto g = moved_guides(l, {0, 0});
+              for (FaceGuide& x : g) x.tracked_box.x += 20;
+              return g;
+            }),
+            0);
+  // The baseline interval 1 ignores guides.
+  o.cascade_interval = 1;
+  EXPECT_EQ(searched([](const TrackedFrameFaces& l) { return moved_guides(l, {3, 3}); }), 0);
+  o.cascade_interval = 0;
+  EXPECT_FALSE(o.check());
+  o.cascade_interval = 2;
+  o.guide_min_iou = 0;
+  EXPECT_FALSE(o.check());
 }
 
 TEST(FaceTracker, KnownFrontalnessSkipsTheProxyOnlyForThatFace) {
@@ -608,6 +697,71 @@ TEST(FaceDetectionAnalyzer, MissingCameraNoFramesAndNoFaces) {
   auto s = (*a)->process(wrong, bb.snapshot(), w);
   ASSERT_FALSE(s);
   EXPECT_EQ(s.error().code, ErrorCode::kInvalidArgument);
+}
+
+TEST(FaceDetectionAnalyzer, LandmarkFitsOfTheLastFramePlaceTheFaceBetweenSearches) {
+  // cascade_interval 3. After each tick a "fit" of camera_middle's face is put on the
+  // blackboard: points around the box's centre (moved by `shift` in frame 1). The fit of a
+  // searched frame teaches how the box sits on the points, so the next frame gets the same box;
+  // the fit of a guided frame moves the next box by the points' motion. Tick 4's fit names
+  // another frame, so tick 5 is searched. Ticks: 0 full, 1 guided (= box 0), 2 guided (box 1 +
+  // shift), 3 searched, 4 guided (= box 3), 5 searched.
+  FaceDetectionAnalyzerOptions o;
+  o.tracker.cascade_interval = 3;
+  auto a = make_face_detection_analyzer(o);
+  ASSERT_TRUE(a);
+  const auto contract = (*a)->contract();
+  EXPECT_NE(std::find(contract.reads_previous.begin(), contract.reads_previous.end(),
+                      keys::kFaceLandmarks.name),
+            contract.reads_previous.end());
+  const cv::Point2d shift(3.25, 2.5);  // fractions: a cascade box never lands on it
+  Blackboard bb;
+  cv::Rect2d previous;
+  for (size_t i = 0; i < 6; ++i) {
+    const MultiFrame& mf = demo().ticks[i];
+    BlackboardWriter w("face_detection");
+    ASSERT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, mf.stamp);
+    const auto d = bb.snapshot().get(keys::kFaceDetections);
+    ASSERT_TRUE(d && d->present());
+    const CameraFaces& middle = d->value->cameras.at("camera_middle");
+    ASSERT_FALSE(middle.faces.empty());
+    const cv::Rect2d box = middle.faces[0].box_px;
+    auto near = [](const cv::Rect2d& x, const cv::Rect2d& y) {
+      return std::abs(x.x - y.x) + std::abs(x.y - y.y) + std::abs(x.width - y.width) +
+                 std::abs(x.height - y.height) <
+             1e-6;
+    };
+    if (i == 1 || i == 4) {
+      EXPECT_TRUE(near(box, previous)) << "tick " << i << ": " << box << " " << previous;
+    }
+    if (i == 2) {
+      EXPECT_TRUE(near(box, previous + shift)) << box << " " << previous;
+    }
+    if (i == 5) {
+      EXPECT_FALSE(near(box, previous))
+          << "tick 5 must be searched (tick 4's fit is of another frame)";
+    }
+    previous = box;
+    // The fit of this frame, as face_landmarks would write it.
+    FaceLandmarks fit;
+    fit.camera = "camera_middle";
+    fit.frame_stamp = middle.frame_stamp;
+    fit.frame_sequence = i == 4 ? middle.frame_sequence + 100 : middle.frame_sequence;
+    fit.box_px = box;
+    // The face moved by `shift` since frame 1 was placed (and nowhere else).
+    const cv::Point2d c = cv::Point2d(box.x + box.width / 2, box.y + box.height / 2) +
+                          (i == 1 ? shift : cv::Point2d());
+    for (int k = 0; k < 68; ++k) {
+      const double t = 2 * CV_PI * k / 68;
+      fit.points_px.push_back(
+          c + cv::Point2d(0.4 * box.width * std::cos(t), 0.4 * box.height * std::sin(t)));
+    }
+    BlackboardWriter lw("face_landmarks");
+    lw.set(keys::kFaceLandmarks, fit, mf.stamp, 1.f);
+    lw.set(keys::kFaceLandmarkViews, FaceLandmarkViews{}, mf.stamp, 1.f);
+    bb.commit(lw, mf.stamp);
+  }
 }
 
 TEST(FaceDetectionAnalyzer, RepeatedFrameIsNotSearchedAgain) {
