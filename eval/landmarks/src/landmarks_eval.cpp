@@ -311,6 +311,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
   fl::DlibLandmarkerOptions lo;
   lo.model = o.landmark_model;
   lo.refit_passes = o.landmark_refit_passes;
+  lo.quantized_leaves = o.landmark_quantized_leaves;
   auto plain = fl::make_dlib_landmarker(lo);
   if (!plain) return tl::unexpected(plain.error());
   lo.box_scales = o.tta_box_scales;

@@ -31,7 +31,27 @@ struct TreeLevel {
   };
   size_t trees = 0, splits_per_tree = 0, leaves_per_tree = 0;
   std::vector<Split> splits;  // trees x splits_per_tree, dlib's node order
-  std::vector<float> leaves;  // trees x leaves_per_tree x shape size
+  std::vector<float> leaves;  // trees x leaves_per_tree x shape size (empty when quantised)
+  // DlibLandmarkerOptions::quantized_leaves: the same leaves as int16, one scale per leaf (its
+  // largest |value| maps to 32767): value = quantized x leaf_scales[leaf].
+  std::vector<int16_t> quantized;
+  std::vector<float> leaf_scales;  // trees x leaves_per_tree
+
+  // Replaces `leaves` by `quantized` and `leaf_scales`.
+  void quantize(size_t n) {
+    quantized.resize(leaves.size());
+    leaf_scales.resize(leaves.size() / n);
+    for (size_t l = 0; l < leaf_scales.size(); ++l) {
+      const float* v = &leaves[l * n];
+      float largest = 0;
+      for (size_t j = 0; j < n; ++j) largest = std::max(largest, std::abs(v[j]));
+      const float scale = largest > 0 ? largest / 32767.f : 1.f;
+      leaf_scales[l] = scale;
+      for (size_t j = 0; j < n; ++j)
+        quantized[l * n + j] = static_cast<int16_t>(std::lround(v[j] / scale));
+    }
+    std::vector<float>().swap(leaves);
+  }
 };
 
 struct ShapeModel {
@@ -41,38 +61,54 @@ struct ShapeModel {
   std::vector<std::vector<dlib::vector<float, 2>>> deltas;
   cv::Rect2d mean_extent;  // bounding box of the mean shape (box-normalised)
 
+  bool quantized = false;  // levels hold int16 leaves (TreeLevel::quantize)
+
   // dlib's shape_predictor::operator() without the rounding, on the flattened trees. The trees of
   // one level depend only on that level's feature pixels, so all of them are walked first (the
   // same comparisons as dlib's regression_tree::operator()) and their leaves prefetched, then the
   // leaves are added in tree order: the same float additions in the same order as dlib's
   // `shape += tree(...)`, i.e. identical output, but the leaf loads (~65 MB of leaves, nearly
-  // every one a cache miss) overlap instead of stalling one after the other.
+  // every one a cache miss) overlap instead of stalling one after the other. Quantised leaves
+  // (half the bytes to load) are scaled and added in the same order.
   template <typename Image>
   std::vector<cv::Point2d> predict(const Image& img, const dlib::rectangle& rect) const {
     dlib::matrix<float, 0, 1> shape = initial_shape;
     const size_t n = static_cast<size_t>(shape.size());
     std::vector<float> feature_pixel_values;
-    std::vector<const float*> leaves;
+    std::vector<size_t> leaf_offsets;  // of each tree's leaf in the level, in values
     for (size_t iter = 0; iter < levels.size(); ++iter) {
       dlib::impl::extract_feature_pixel_values(img, rect, shape, initial_shape, anchor_idx[iter],
                                                deltas[iter], feature_pixel_values);
       const TreeLevel& level = levels[iter];
       const float* values = feature_pixel_values.data();
-      leaves.resize(level.trees);
+      leaf_offsets.resize(level.trees);
       for (size_t t = 0; t < level.trees; ++t) {
         const TreeLevel::Split* split = &level.splits[t * level.splits_per_tree];
         size_t i = 0;
         while (i < level.splits_per_tree)
           i = values[split[i].idx1] - values[split[i].idx2] > split[i].thresh ? 2 * i + 1
                                                                               : 2 * i + 2;
-        const float* leaf =
-            &level.leaves[(t * level.leaves_per_tree + (i - level.splits_per_tree)) * n];
-        leaves[t] = leaf;
-        for (size_t j = 0; j < n; j += 16) __builtin_prefetch(leaf + j);
+        const size_t offset = (t * level.leaves_per_tree + (i - level.splits_per_tree)) * n;
+        leaf_offsets[t] = offset;
+        if (quantized) {
+          for (size_t j = 0; j < n; j += 32) __builtin_prefetch(&level.quantized[offset + j]);
+        } else {
+          for (size_t j = 0; j < n; j += 16) __builtin_prefetch(&level.leaves[offset + j]);
+        }
       }
       float* __restrict s = &shape(0);
-      for (const float* __restrict leaf : leaves)
-        for (size_t j = 0; j < n; ++j) s[j] += leaf[j];
+      if (quantized) {
+        for (size_t offset : leaf_offsets) {
+          const int16_t* __restrict leaf = &level.quantized[offset];
+          const float scale = level.leaf_scales[offset / n];
+          for (size_t j = 0; j < n; ++j) s[j] += scale * static_cast<float>(leaf[j]);
+        }
+      } else {
+        for (size_t offset : leaf_offsets) {
+          const float* __restrict leaf = &level.leaves[offset];
+          for (size_t j = 0; j < n; ++j) s[j] += leaf[j];
+        }
+      }
     }
     const dlib::point_transform_affine to_img = dlib::impl::unnormalizing_tform(rect);
     std::vector<cv::Point2d> out(shape.size() / 2);
@@ -334,6 +370,7 @@ Result<std::unique_ptr<Landmarker>> make_dlib_landmarker(const DlibLandmarkerOpt
       }
     }
     std::vector<dlib::impl::regression_tree>().swap(forests[iter]);  // free as we go
+    if (consistent && options.quantized_leaves) level.quantize(n);
     m.levels.push_back(std::move(level));
   }
   if (!consistent)
@@ -347,6 +384,7 @@ Result<std::unique_ptr<Landmarker>> make_dlib_landmarker(const DlibLandmarkerOpt
     y1 = std::max<double>(y1, m.initial_shape(2 * i + 1));
   }
   m.mean_extent = cv::Rect2d(x0, y0, x1 - x0, y1 - y0);
+  m.quantized = options.quantized_leaves;
   return std::unique_ptr<Landmarker>(new DlibLandmarker(options, std::move(m)));
 }
 

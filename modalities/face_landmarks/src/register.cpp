@@ -13,6 +13,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
   f.plan = [](const PlanContext& ctx, OptionsNode& options) -> Result<PlannedAnalyzers> {
     FaceLandmarksAnalyzerOptions o;
     DS_RETURN_IF_ERROR(options.get("model", o.dlib.model));
+    DS_RETURN_IF_ERROR(options.get("quantized_leaves", o.dlib.quantized_leaves));
     DS_RETURN_IF_ERROR(options.get("other_views", o.other_views));
     DS_RETURN_IF_ERROR(options.get("other_view_min_frontalness", o.other_view_min_frontalness));
     DS_RETURN_IF_ERROR(options.get("cnn_fallback", o.cnn_fallback));

@@ -121,6 +121,9 @@ struct LandmarksEvalOptions {
   double wide_haar_min_face_px = 40;
   bool wide_haar_profile = true;
   int landmark_refit_passes = 1;  // DlibLandmarkerOptions::refit_passes (all chains)
+  // DlibLandmarkerOptions::quantized_leaves (all chains; the pipeline's default; false = dlib's
+  // float leaves).
+  bool landmark_quantized_leaves = true;
   // iBUG .pts coordinates are 1-based (Matlab): subtract 1 to compare with 0-based pixels.
   bool one_based_annotations = true;
   // from_box_cnn (the CNN from the annotated box) also when no chain uses the CNN.
