@@ -1,6 +1,7 @@
 // 300-W .pts reader, folder listing and the landmark metrics.
 
 #include "dreamsense/eval/landmarks/landmarks_eval.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -139,15 +140,7 @@ Result<std::vector<LandmarkItem>> list_300w(const std::filesystem::path& dir) {
   return items;
 }
 
-cv::Rect2d points_box(const std::vector<cv::Point2d>& points) {
-  if (points.empty()) return {};
-  double x0 = points[0].x, y0 = points[0].y, x1 = x0, y1 = y0;
-  for (const cv::Point2d& p : points) {
-    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
-    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
-  }
-  return {x0, y0, x1 - x0, y1 - y0};
-}
+cv::Rect2d points_box(const std::vector<cv::Point2d>& points) { return points_extent(points); }
 
 double outer_corner_distance(const std::vector<cv::Point2d>& truth) {
   if (truth.size() != 68) return 0;

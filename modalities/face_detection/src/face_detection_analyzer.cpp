@@ -30,17 +30,6 @@ std::optional<size_t> face_of_head(const std::vector<DetectedFace>& faces, cv::P
   return std::nullopt;
 }
 
-// The bounding box of fitted points (empty for none).
-cv::Rect2d extent_of(const std::vector<cv::Point2d>& points) {
-  if (points.empty()) return {};
-  double x0 = points[0].x, y0 = points[0].y, x1 = x0, y1 = y0;
-  for (const cv::Point2d& p : points) {
-    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
-    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
-  }
-  return {x0, y0, x1 - x0, y1 - y0};
-}
-
 class FaceDetectionAnalyzer : public Analyzer {
  public:
   struct Camera {
@@ -216,7 +205,7 @@ class FaceDetectionAnalyzer : public Analyzer {
       if (fit->camera != cam.id || fit->frame_sequence != cam.last->frame_sequence ||
           fit->frame_stamp != cam.last->frame_stamp)
         continue;
-      const cv::Rect2d extent = extent_of(fit->points_px);
+      const cv::Rect2d extent = points_extent(fit->points_px);
       if (!cam.last_guided)
         if (auto r = box_on_extent(fit->box_px, extent)) cam.box_on_fit = r;
       if (cam.box_on_fit && extent.area() > 0)

@@ -6,6 +6,7 @@
 #include "dreamsense/core/blackboard.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
 
+#include <algorithm>
 #include <map>
 #include <optional>
 #include <string>
@@ -15,6 +16,17 @@ namespace dreamsense {
 
 // Number of landmarks in the iBUG 300-W / dlib-68 mark-up.
 inline constexpr int kFaceLandmarkCount = 68;
+
+// The bounding box (extent) of points; empty for none.
+inline cv::Rect2d points_extent(const std::vector<cv::Point2d>& points) {
+  if (points.empty()) return {};
+  double x0 = points[0].x, y0 = points[0].y, x1 = x0, y1 = y0;
+  for (const cv::Point2d& p : points) {
+    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
+    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+  }
+  return {x0, y0, x1 - x0, y1 - y0};
+}
 
 // 68 facial landmarks of the selected face in the selected camera's image, iBUG 300-W order as
 // seen in the image: 0-16 jaw contour (image left to right), 17-21 and 22-26 brows, 27-30 nose
