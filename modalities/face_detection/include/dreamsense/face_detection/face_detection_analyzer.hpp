@@ -5,6 +5,9 @@
 // Per tick: every listed camera that has a frame in the MultiFrame is searched (one FaceTracker
 // each; optionally in parallel over cameras; results do not depend on the thread count). A frame
 // already searched in an earlier tick (same sequence) is not searched again: its result is reused.
+// Between cascade searches, a tracked face is placed from the landmarks face_landmarks fitted to it
+// in that camera's previous frame (keys::kFaceLandmarks / kFaceLandmarkViews of the last tick;
+// FaceTrackerOptions::cascade_interval).
 // Writes, stamped with the tick:
 //  - no camera frame at all: nothing;
 //  - frames but no face in any: absent entries for both keys;
