@@ -7,6 +7,7 @@
 // public impl:: functions and the same arithmetic as operator(), without the final rounding.
 
 #include "dreamsense/face_landmarks/landmarker.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -253,15 +254,9 @@ class DlibLandmarker final : public Landmarker {
     before_last->clear();
     for (int pass = 0; pass < options_.refit_passes; ++pass) {
       // The box that maps the mean shape's extent onto the fitted points' extent.
-      double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-      for (const cv::Point2d& p : pts) {
-        x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
-        x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
-      }
-      const cv::Rect2d& m = model_.mean_extent;
-      const double w = (x1 - x0) / m.width, h = (y1 - y0) / m.height;
-      if (!(w >= options_.min_box_px) || !(h > 0)) break;
-      box = cv::Rect2d(x0 - m.x * w, y0 - m.y * h, w, h);
+      const cv::Rect2d next = box_for_extent(points_extent(pts));
+      if (!(next.width >= options_.min_box_px) || !(next.height > 0)) break;
+      box = next;
       *before_last = std::move(pts);
       pts = model_.predict(img, to_dlib(box));
     }
