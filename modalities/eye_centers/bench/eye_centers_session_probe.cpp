@@ -32,6 +32,20 @@ namespace ec = dreamsense::eye_centers;
 
 namespace {
 
+nlohmann::json location_json(const ec::EyeLocation& r) {
+  return {{"found", r.found},
+          {"x", r.center_px.x},
+          {"y", r.center_px.y},
+          {"ix", r.iris_center_px.x},
+          {"iy", r.iris_center_px.y},
+          {"radius", r.radius_px},
+          {"score", r.score},
+          {"pupil_found", r.pupil_found},
+          {"pupil_radius", r.pupil_radius_px},
+          {"pupil_score", r.pupil_score},
+          {"rejection", std::string(ec::to_string(r.rejection))}};
+}
+
 std::vector<std::pair<std::string, ec::EyeCenterLocatorOptions>> variants() {
   std::vector<std::pair<std::string, ec::EyeCenterLocatorOptions>> v;
   ec::EyeCenterLocatorOptions o;
@@ -160,17 +174,19 @@ int run(const std::string& session, const std::string& out_path) {
       for (const auto& [name, loc] : locators) {
         auto r = loc.locate(img, contour);
         if (!r) return tl::unexpected(r.error());
-        e[name] = {{"found", r->found},
-                   {"x", r->center_px.x},
-                   {"y", r->center_px.y},
-                   {"ix", r->iris_center_px.x},
-                   {"iy", r->iris_center_px.y},
-                   {"radius", r->radius_px},
-                   {"score", r->score},
-                   {"pupil_found", r->pupil_found},
-                   {"pupil_radius", r->pupil_radius_px},
-                   {"pupil_score", r->pupil_score},
-                   {"rejection", std::string(ec::to_string(r->rejection))}};
+        e[name] = location_json(*r);
+      }
+      // The default locator as the analyser runs it with a head pose: the iris sized from the
+      // head's depth in this camera (the probe's own pose of this tick; analyze uses the last
+      // tick's, from the self-calibrated or subject model).
+      const auto hp = view.get(ds::keys::kHeadPose);
+      if (hp && hp->stamp == tick.stamp && hp->present()) {
+        const double depth_m = cams.at(f.camera).to_camera(hp->value->position_world_m)[2];
+        auto r = locators.front().second.locate(img, contour,
+                                                cams.at(f.camera).K(0, 0) / (1000 * depth_m));
+        if (!r) return tl::unexpected(r.error());
+        e["improved_iris_sized"] = location_json(*r);
+        e["improved_iris_sized"]["depth_m"] = depth_m;
       }
       rec[eye] = e;
     }

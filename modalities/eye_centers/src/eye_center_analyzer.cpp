@@ -2,6 +2,7 @@
 
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <set>
 
@@ -15,7 +16,9 @@ class EyeCenterAnalyzer : public Analyzer {
 
   std::string_view name() const override { return "eye_centers"; }
   AnalyzerContract contract() const override {
-    return {{}, options_.cameras, {keys::kFaceLandmarks.name}, {keys::kEyeCenters.name}};
+    AnalyzerContract c{{}, options_.cameras, {keys::kFaceLandmarks.name}, {keys::kEyeCenters.name}};
+    if (uses_depth()) c.reads_previous = {keys::kHeadPose.name};
+    return c;
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
@@ -44,7 +47,7 @@ class EyeCenterAnalyzer : public Analyzer {
                         "eye_centers: frame of '{}' is {}x{}, landmarks were fitted on {}x{}",
                         l.camera, img->image.cols, img->image.rows, l.image_size.width,
                         l.image_size.height);
-    auto eyes = locator_.locate_both(img->image, l);
+    auto eyes = locator_.locate_both(img->image, l, pixels_per_mm(prior, l.camera, in.stamp));
     if (!eyes) return tl::unexpected(eyes.error());
     const double eye_conf = 0.5 * (eyes->right.confidence + eyes->left.confidence);
     out.set(keys::kEyeCenters, std::move(*eyes), in.stamp,
@@ -53,6 +56,25 @@ class EyeCenterAnalyzer : public Analyzer {
   }
 
  private:
+  bool uses_depth() const {
+    return options_.iris_size_from_depth && !options_.camera_models.empty();
+  }
+
+  // The image scale at the head in `camera` (focal length / depth of the head's origin) from the
+  // last tick's head pose; nullopt without a recent pose or a model of that camera.
+  std::optional<double> pixels_per_mm(const BlackboardView& prior, const SensorId& camera,
+                                      Timestamp now) const {
+    if (!uses_depth()) return std::nullopt;
+    const auto model = options_.camera_models.find(camera);
+    const auto pose = prior.get(keys::kHeadPose);
+    if (model == options_.camera_models.end() || !pose || !pose->present() ||
+        !(now - pose->stamp <= options_.head_pose_max_age))
+      return std::nullopt;
+    const double depth_m = model->second.to_camera(pose->value->position_world_m)[2];
+    if (!(depth_m > 0.05)) return std::nullopt;
+    return model->second.K(0, 0) / (1000.0 * depth_m);
+  }
+
   EyeCenterAnalyzerOptions options_;
   EyeCenterLocator locator_;
 };
@@ -65,6 +87,13 @@ Status EyeCenterAnalyzerOptions::check() const {
     if (c.empty() || !seen.insert(c).second)
       return make_error(ErrorCode::kInvalidArgument,
                         "EyeCenterAnalyzerOptions: empty or repeated camera id '{}'", c);
+  if (!(head_pose_max_age > Duration::from_ns(0)))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "EyeCenterAnalyzerOptions: head_pose_max_age must be > 0");
+  for (const auto& [id, m] : camera_models)
+    if (auto s = m.check(); !s)
+      return make_error(ErrorCode::kInvalidArgument, "EyeCenterAnalyzerOptions: camera '{}': {}",
+                        id, s.error().message);
   return locator.check();
 }
 

@@ -3,6 +3,9 @@
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace dreamsense::eye_centers {
 
 std::string_view to_string(EyeCenterMethod method) {
@@ -41,10 +44,38 @@ std::string_view to_string(EyeRejection rejection) {
   return "unknown";
 }
 
+Status IrisSizePrior::check() const {
+  if (!(diameter_mm > 0) || !std::isfinite(diameter_mm))
+    return make_error(ErrorCode::kInvalidArgument, "IrisSizePrior: diameter_mm {} must be > 0",
+                      diameter_mm);
+  if (!(min_ratio > 0) || !(max_ratio > min_ratio) || !std::isfinite(max_ratio))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "IrisSizePrior: need 0 < min_ratio < max_ratio (are {}, {})", min_ratio,
+                      max_ratio);
+  return ok_status();
+}
+
+EyeRegionOptions with_expected_iris_radius(const EyeRegionOptions& region,
+                                           std::span<const cv::Point2d> contour,
+                                           double expected_radius_px, const IrisSizePrior& prior) {
+  DS_CHECK_EQ(contour.size(), size_t{6});
+  const double width = cv::norm(contour[0] - contour[3]);
+  if (!(expected_radius_px > 0) || !std::isfinite(expected_radius_px) || !(width > 0))
+    return region;
+  const double lo = std::max(region.min_iris_radius, prior.min_ratio * expected_radius_px / width);
+  const double hi = std::min(region.max_iris_radius, prior.max_ratio * expected_radius_px / width);
+  if (!(hi > lo)) return region;
+  EyeRegionOptions out = region;
+  out.min_iris_radius = lo;
+  out.max_iris_radius = hi;
+  return out;
+}
+
 Status EyeCenterLocatorOptions::check() const {
   if (to_string(method) == "unknown")
     return make_error(ErrorCode::kInvalidArgument, "EyeCenterLocatorOptions: unknown method");
   if (auto s = region.check(); !s) return s;
+  if (auto s = iris_size.check(); !s) return s;
   if (auto s = improved.check(); !s) return s;
   if (auto s = daugman.check(); !s) return s;
   return timm_barth.check();
@@ -56,27 +87,44 @@ Result<EyeCenterLocator> EyeCenterLocator::create(const EyeCenterLocatorOptions&
 }
 
 Result<EyeLocation> EyeCenterLocator::locate(const cv::Mat& image,
-                                             std::span<const cv::Point2d> contour) const {
+                                             std::span<const cv::Point2d> contour,
+                                             std::optional<double> pixels_per_mm) const {
   DS_CHECK_EQ(contour.size(), size_t{6});
+  if (pixels_per_mm) {
+    const EyeRegionOptions sized = with_expected_iris_radius(
+        options_.region, contour, 0.5 * options_.iris_size.diameter_mm * *pixels_per_mm,
+        options_.iris_size);
+    auto r = locate_in(image, contour, sized);
+    if (!r || !options_.iris_size.fall_back_without_pupil || (r->found && r->pupil_found)) return r;
+    auto plain = locate_in(image, contour, options_.region);
+    if (!plain || plain->found || !r->found) return plain;
+    return r;
+  }
+  return locate_in(image, contour, options_.region);
+}
+
+Result<EyeLocation> EyeCenterLocator::locate_in(const cv::Mat& image,
+                                                std::span<const cv::Point2d> contour,
+                                                const EyeRegionOptions& region) const {
   switch (options_.method) {
     case EyeCenterMethod::kImprovedIntegroDifferential:
-      return locate_improved_integro_differential(image, contour, options_.region,
-                                                  options_.improved);
+      return locate_improved_integro_differential(image, contour, region, options_.improved);
     case EyeCenterMethod::kDaugman:
-      return locate_daugman(image, contour, options_.region, options_.daugman);
+      return locate_daugman(image, contour, region, options_.daugman);
     case EyeCenterMethod::kTimmBarth:
-      return locate_timm_barth(image, contour, options_.region, options_.timm_barth);
+      return locate_timm_barth(image, contour, region, options_.timm_barth);
   }
   return make_error(ErrorCode::kInternal, "EyeCenterLocator: unknown method");
 }
 
 Result<EyeCenters> EyeCenterLocator::locate_both(const cv::Mat& image,
-                                                 const FaceLandmarks& landmarks) const {
+                                                 const FaceLandmarks& landmarks,
+                                                 std::optional<double> pixels_per_mm) const {
   DS_CHECK_EQ(landmarks.points_px.size(), static_cast<size_t>(kFaceLandmarkCount));
   const std::span<const cv::Point2d> pts(landmarks.points_px);
-  auto right = locate(image, pts.subspan(36, 6));
+  auto right = locate(image, pts.subspan(36, 6), pixels_per_mm);
   if (!right) return tl::unexpected(right.error());
-  auto left = locate(image, pts.subspan(42, 6));
+  auto left = locate(image, pts.subspan(42, 6), pixels_per_mm);
   if (!left) return tl::unexpected(left.error());
   EyeCenters out;
   out.camera = landmarks.camera;

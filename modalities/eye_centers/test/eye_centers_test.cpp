@@ -6,6 +6,7 @@
 #include "dreamsense/eye_centers/eye_center_analyzer.hpp"
 #include "dreamsense/eye_centers/eye_center_locator.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -27,6 +28,11 @@ struct EyeSpec {
   double upper = 0.20, lower = 0.12;  // lid heights at the middle, x width
   double skin = 150, sclera = 210, iris = 70, pupil = 20, lash = 45;
   cv::Point2d pupil_offset{0, 0};  // pupil centre from the iris centre, eye frame, x width
+  // An inner disc of the iris (a dark collarette in a light iris), 0 = none: radius x width,
+  // centre from the iris centre (eye frame, x width), grey level.
+  double inner_radius = 0;
+  cv::Point2d inner_offset{0, 0};
+  double inner = 40;
 };
 
 struct RenderedEye {
@@ -72,7 +78,12 @@ RenderedEye render_eye(cv::Mat& img, const EyeSpec& s) {
           if (std::abs(ex) < hw && ey > up && ey < lo) {
             const double d = std::hypot(ex - ic.x, ey - ic.y);
             const double dp = std::hypot(ex - pc.x, ey - pc.y);
-            val = dp < rp ? s.pupil : d < r ? s.iris : s.sclera;
+            const double di = std::hypot(ex - ic.x - s.inner_offset.x * s.width,
+                                         ey - ic.y - s.inner_offset.y * s.width);
+            val = dp < rp                                  ? s.pupil
+                  : di < s.inner_radius * s.width && d < r ? s.inner
+                  : d < r                                  ? s.iris
+                                                           : s.sclera;
           } else if (std::abs(ex) < hw && ey <= up && ey > up - lash_w) {
             val = s.lash;
           }
@@ -286,6 +297,63 @@ TEST(ImprovedIntegroDifferential, IgnoresEyelidsCuttingTheIris) {
 }
 
 // The literal eq. (2) (|D_n|, both polarities) also works on a clean eye.
+TEST(IrisSizePrior, NarrowsTheWidthRelativeRange) {
+  const std::array<cv::Point2d, 6> contour{cv::Point2d{0, 0}, {10, -5}, {20, -5},
+                                           {30, 0},           {20, 4},  {10, 4}};  // 30 px wide
+  const EyeRegionOptions region;  // 0.16-0.32 x width
+  const IrisSizePrior prior;      // 0.85-1.1 x the expected radius
+  const EyeRegionOptions six = with_expected_iris_radius(region, contour, 6.0, prior);
+  EXPECT_NEAR(six.min_iris_radius, 0.85 * 6 / 30, 1e-12);
+  EXPECT_NEAR(six.max_iris_radius, 1.1 * 6 / 30, 1e-12);
+  EXPECT_EQ(six.min_eye_width_px, region.min_eye_width_px);  // nothing else changes
+  // Clipped to the width-relative range where they overlap ...
+  const EyeRegionOptions nine = with_expected_iris_radius(region, contour, 9.0, prior);
+  EXPECT_NEAR(nine.min_iris_radius, 0.85 * 9 / 30, 1e-12);
+  EXPECT_EQ(nine.max_iris_radius, region.max_iris_radius);
+  // ... and unchanged where they do not, or without a usable expectation.
+  for (double r : {12.0, 1.0, 0.0, -3.0, std::nan("")}) {
+    const EyeRegionOptions same = with_expected_iris_radius(region, contour, r, prior);
+    EXPECT_EQ(same.min_iris_radius, region.min_iris_radius) << r;
+    EXPECT_EQ(same.max_iris_radius, region.max_iris_radius) << r;
+  }
+  EXPECT_TRUE(prior.check());
+  for (auto [d, lo, hi] : {std::tuple{0.0, 0.85, 1.1}, std::tuple{11.7, 1.1, 0.85},
+                           std::tuple{11.7, 0.0, 1.1}, std::tuple{std::nan(""), 0.85, 1.1}}) {
+    EyeCenterLocatorOptions o;
+    o.iris_size = {d, lo, hi};
+    EXPECT_FALSE(o.check()) << d << " " << lo << " " << hi;
+    EXPECT_FALSE(EyeCenterLocator::create(o));
+  }
+}
+
+// A light iris with a dark, off-centre inner disc: searched over the whole width-relative range
+// the limbus stage takes the disc's strong edge for the limbus; at the iris's size from the
+// eye's depth it finds the limbus.
+TEST(ImprovedIntegroDifferential, TheIrisSizeFromDepthFindsTheLimbusPastAStrongerInnerEdge) {
+  EyeSpec s;
+  s.width = 40;
+  s.iris_radius = 0.26;
+  s.upper = 0.2, s.lower = 0.16;
+  s.iris = 170, s.sclera = 205;
+  s.inner_radius = 0.17, s.inner_offset = {0.06, 0}, s.inner = 60;
+  s.pupil = 15;
+  cv::Mat img = blank({120, 80});
+  const RenderedEye e = render_eye(img, s);
+  auto locator = EyeCenterLocator::create();
+  ASSERT_TRUE(locator);
+  const auto plain = locator->locate(img, e.contour);
+  ASSERT_TRUE(plain && plain->found);
+  EXPECT_LT(plain->radius_px, 0.2 * s.width);  // the inner disc
+  EXPECT_GT(cv::norm(plain->iris_center_px - e.centre), 1.5);
+  // 11.7 mm across = 2 x 0.26 x 40 px: 0.889 px per mm.
+  const double px_per_mm = 2 * e.radius / locator->options().iris_size.diameter_mm;
+  const auto sized = locator->locate(img, e.contour, px_per_mm);
+  ASSERT_TRUE(sized && sized->found);
+  EXPECT_GT(sized->radius_px, 0.8 * e.radius);  // the limbus (the disc is 0.65 x it)
+  EXPECT_LT(sized->radius_px, 1.1 * e.radius);
+  EXPECT_LT(cv::norm(sized->iris_center_px - e.centre), 0.75);
+}
+
 TEST(ImprovedIntegroDifferential, AbsolutePolarityOption) {
   EyeSpec s;
   s.iris_offset = {-0.1, 0.02};
@@ -431,18 +499,20 @@ struct Scene {
   cv::Mat image;
   FaceLandmarks landmarks;
   cv::Point2d right, left;
+  double iris_radius = 0;
 };
 
-Scene make_scene(bool with_eyes = true) {
+Scene make_scene(bool with_eyes = true, const EyeSpec& eye = {}) {
   Scene sc;
   sc.image = cv::Mat(240, 320, CV_8UC1, cv::Scalar(150));
-  EyeSpec r, l;
+  EyeSpec r = eye, l = eye;
   r.mid = {130, 110}, l.mid = {190, 110};
   r.iris_offset = l.iris_offset = {0.07, 0.0};
   cv::Mat scratch = sc.image.clone();
   cv::Mat& target = with_eyes ? sc.image : scratch;
   const RenderedEye er = render_eye(target, r), el = render_eye(target, l);
   sc.right = er.centre, sc.left = el.centre;
+  sc.iris_radius = er.radius;
   sc.landmarks.camera = "camera_middle";
   sc.landmarks.frame_stamp = Timestamp::from_ns(40'000'000);
   sc.landmarks.frame_sequence = 1;
@@ -472,8 +542,14 @@ struct AnalyserRun {
   size_t writes = 0;
 };
 AnalyserRun run_analyser(Analyzer& a, const MultiFrame& mf,
-                         std::optional<const FaceLandmarks*> landmarks, Timestamp landmarks_stamp) {
+                         std::optional<const FaceLandmarks*> landmarks, Timestamp landmarks_stamp,
+                         std::optional<std::pair<HeadPose, Timestamp>> last_head_pose = {}) {
   Blackboard bb;
+  if (last_head_pose) {
+    BlackboardWriter h("head_pose");
+    h.set(keys::kHeadPose, last_head_pose->first, last_head_pose->second, 0.9f);
+    bb.commit(h, last_head_pose->second);
+  }
   if (landmarks) {
     BlackboardWriter l("face_landmarks");
     if (*landmarks != nullptr)
@@ -577,6 +653,58 @@ TEST(EyeCenterAnalyzer, ContractAndBlackboardBehaviour) {
     resized.landmarks.image_size = {640, 480};
     EXPECT_FALSE(run_analyser(**a, frame_with(resized, t), &resized.landmarks, t).status);
   }
+}
+
+// With calibrated cameras the last tick's head pose gives the iris's size in pixels: eyes whose
+// light irises hold a stronger dark inner disc are then found at the limbus.
+TEST(EyeCenterAnalyzer, TheHeadsDepthSizesTheIris) {
+  EyeSpec eye;
+  eye.iris_radius = 0.26;
+  eye.upper = 0.2, eye.lower = 0.16;
+  eye.iris = 170, eye.sclera = 205, eye.pupil = 15;
+  eye.inner_radius = 0.17, eye.inner = 60;  // concentric: the centre is right either way
+  const Scene sc = make_scene(true, eye);
+  CameraModel cam;
+  cam.frame = "camera_middle";
+  cam.image_size = sc.image.size();
+  const double depth_m = 1.0;
+  // 11.7 mm across = 2 x iris radius px at 1 m: fx = 2 r / 11.7 mm x 1 m.
+  cam.K = cv::Matx33d(2 * sc.iris_radius / 0.0117 * depth_m, 0, 160, 0,
+                      2 * sc.iris_radius / 0.0117 * depth_m, 120, 0, 0, 1);
+  EyeCenterAnalyzerOptions o;
+  o.camera_models = {{"camera_middle", cam}};
+  auto a = make_eye_center_analyzer(o);
+  ASSERT_TRUE(a) << a.error().to_string();
+  EXPECT_EQ((*a)->contract().reads_previous, std::vector<std::string>{keys::kHeadPose.name});
+  HeadPose pose;
+  pose.camera = "camera_left";  // any camera: its world position is what counts
+  pose.position_world_m = {0.01, -0.02, depth_m};
+  const Timestamp t = Timestamp::from_ns(400'000'000);
+  // Which edge was taken shows in the eye's confidence (it grows with the limbus step): the
+  // limbus steps 205 - 170 = 35 grey levels, the inner disc 170 - 60 = 110 (confidence 1).
+  auto right_eye = [&](Analyzer& analyser, std::optional<std::pair<HeadPose, Timestamp>> last) {
+    const AnalyserRun r = run_analyser(analyser, frame_with(sc, t), &sc.landmarks, t, last);
+    EXPECT_TRUE(r.status && r.entry && r.entry->present());
+    EXPECT_TRUE(r.entry && r.entry->present() && r.entry->value->right.found);
+    return r.entry && r.entry->present() ? r.entry->value->right : EyeCenter{};
+  };
+  // The pose of the last tick: the limbus, and the pupil inside it.
+  const EyeCenter sized = right_eye(**a, std::pair{pose, t - Duration::from_ms(40)});
+  EXPECT_LT(sized.confidence, 0.9);
+  EXPECT_LT(cv::norm(sized.center_px - sc.right), 1.0);
+  // No pose, a pose older than head_pose_max_age, or the option off: the width-relative prior
+  // takes the inner disc.
+  EXPECT_GT(right_eye(**a, std::nullopt).confidence, 0.95);
+  EXPECT_GT(right_eye(**a, std::pair{pose, t - Duration::from_ms(400)}).confidence, 0.95);
+  o.iris_size_from_depth = false;
+  auto off = make_eye_center_analyzer(o);
+  ASSERT_TRUE(off);
+  EXPECT_TRUE((*off)->contract().reads_previous.empty());
+  EXPECT_GT(right_eye(**off, std::pair{pose, t - Duration::from_ms(40)}).confidence, 0.95);
+  // Bad options.
+  EyeCenterAnalyzerOptions bad = o;
+  bad.head_pose_max_age = Duration::from_ns(0);
+  EXPECT_FALSE(make_eye_center_analyzer(bad));
 }
 
 TEST(EyeCenterAnalyzer, EachMethodIsSelectable) {

@@ -159,9 +159,38 @@ Result<EyeLocation> locate_timm_barth(const cv::Mat& image,
                                       const EyeRegionOptions& region = {},
                                       const TimmBarthOptions& options = {});
 
+// The iris's size in millimetres: the horizontal visible iris diameter (HVID) is 11.7 +- 0.5 mm
+// in adults (Ruefer, Schroeder & Erb, Cornea 24(3):259-261, 2005) and reaches it in the first
+// years of life, so unlike the eye's width it hardly differs between children. Given the eye's
+// depth, it fixes the limbus radius in pixels far more tightly than the width-relative prior of
+// EyeRegionOptions (0.16-0.32 x width: a factor 2, within which a narrow-eyed face's limbus
+// search locks onto an inner ring).
+struct IrisSizePrior {
+  double diameter_mm = 11.7;
+  // The limbus radius is searched in [min_ratio, max_ratio] x the expected radius (intersected
+  // with the width-relative prior). Below 1: an iris seen obliquely is narrower across (the
+  // horizontal cones measure that width), and the found circle sits inside the dark limbal ring.
+  double min_ratio = 0.85;
+  double max_ratio = 1.1;
+  // true: an eye whose pupil is not found at that size (hidden under a lid, or the size is
+  // wrong) is searched again with the width-relative prior alone, and that result is kept when
+  // it finds the eye. false: the sized search's result stands.
+  bool fall_back_without_pupil = true;
+  Status check() const;
+};
+
+// `region` with its iris-radius range narrowed to [min_ratio, max_ratio] x expected_radius_px
+// (as fractions of the width of the eye `contour`, six points in EyeRegion order), intersected
+// with the region's own range; unchanged when they do not overlap (an implausible expectation,
+// e.g. from a wrong depth) or the expectation is not a positive number.
+EyeRegionOptions with_expected_iris_radius(const EyeRegionOptions& region,
+                                           std::span<const cv::Point2d> contour,
+                                           double expected_radius_px, const IrisSizePrior& prior);
+
 struct EyeCenterLocatorOptions {
   EyeCenterMethod method = EyeCenterMethod::kImprovedIntegroDifferential;
   EyeRegionOptions region;
+  IrisSizePrior iris_size;  // used when locate() is given the eye's depth
   ImprovedIntegroDifferentialOptions improved;
   DaugmanOptions daugman;
   TimmBarthOptions timm_barth;
@@ -174,16 +203,21 @@ class EyeCenterLocator {
   static Result<EyeCenterLocator> create(const EyeCenterLocatorOptions& options = {});
 
   // One eye; `eye_contour_px` = six points in EyeRegion order (requires exactly six).
-  Result<EyeLocation> locate(const cv::Mat& image,
-                             std::span<const cv::Point2d> eye_contour_px) const;
+  // `pixels_per_mm`: the image scale at the eye (focal length / depth), when known: the limbus
+  // is then searched at the size options().iris_size gives it (with_expected_iris_radius).
+  Result<EyeLocation> locate(const cv::Mat& image, std::span<const cv::Point2d> eye_contour_px,
+                             std::optional<double> pixels_per_mm = std::nullopt) const;
   // Both eyes of 68-point landmarks fitted on `image` (requires kFaceLandmarkCount points):
   // right = subject's right eye (36-41), left = 42-47; camera, stamp, sequence and method filled.
-  Result<EyeCenters> locate_both(const cv::Mat& image, const FaceLandmarks& landmarks) const;
+  Result<EyeCenters> locate_both(const cv::Mat& image, const FaceLandmarks& landmarks,
+                                 std::optional<double> pixels_per_mm = std::nullopt) const;
 
   const EyeCenterLocatorOptions& options() const { return options_; }
 
  private:
   explicit EyeCenterLocator(EyeCenterLocatorOptions o) : options_(std::move(o)) {}
+  Result<EyeLocation> locate_in(const cv::Mat& image, std::span<const cv::Point2d> contour,
+                                const EyeRegionOptions& region) const;
   EyeCenterLocatorOptions options_;
 };
 
