@@ -153,7 +153,7 @@ int run(const std::string& session, const std::string& out_path) {
   for (auto& [name, o] : variants()) {
     auto loc = ec::EyeCenterLocator::create(o);
     if (!loc) return std::fprintf(stderr, "%s\n", loc.error().message.c_str()), 1;
-    locators.emplace_back(name, std::move(*loc));
+    locators.emplace_back(name, *loc);
   }
   std::ofstream out(out_path);
   auto on_tick = [&](const ds::MultiFrame& tick, const ds::BlackboardView& view) -> ds::Status {

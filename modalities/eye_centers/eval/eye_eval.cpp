@@ -130,7 +130,7 @@ Result<nlohmann::json> run_eye_eval(const EyeEvalOptions& options,
     lopt.method = *eye_center_method_from_string(m);
     auto l = EyeCenterLocator::create(lopt);
     if (!l) return tl::unexpected(l.error());
-    locators.emplace(m, std::move(*l));
+    locators.emplace(m, *l);
   }
 
   std::map<std::string, MethodRecord> records;

@@ -12,7 +12,7 @@ namespace {
 class EyeCenterAnalyzer : public Analyzer {
  public:
   EyeCenterAnalyzer(EyeCenterAnalyzerOptions o, EyeCenterLocator l)
-      : options_(std::move(o)), locator_(std::move(l)) {}
+      : options_(std::move(o)), locator_(l) {}
 
   std::string_view name() const override { return "eye_centers"; }
   AnalyzerContract contract() const override {
@@ -102,7 +102,7 @@ Result<std::unique_ptr<Analyzer>> make_eye_center_analyzer(
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
   auto l = EyeCenterLocator::create(options.locator);
   if (!l) return tl::unexpected(l.error());
-  return std::unique_ptr<Analyzer>(new EyeCenterAnalyzer(options, std::move(*l)));
+  return std::unique_ptr<Analyzer>(new EyeCenterAnalyzer(options, *l));
 }
 
 }  // namespace dreamsense::eye_centers

@@ -215,7 +215,7 @@ class EyeCenterLocator {
   const EyeCenterLocatorOptions& options() const { return options_; }
 
  private:
-  explicit EyeCenterLocator(EyeCenterLocatorOptions o) : options_(std::move(o)) {}
+  explicit EyeCenterLocator(const EyeCenterLocatorOptions& o) : options_(o) {}
   Result<EyeLocation> locate_in(const cv::Mat& image, std::span<const cv::Point2d> contour,
                                 const EyeRegionOptions& region) const;
   EyeCenterLocatorOptions options_;
