@@ -5,6 +5,7 @@
 #include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/face_detection/hog_face_detector.hpp"
 #include "dreamsense/face_landmarks/landmarker.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/vision/face_api_net.hpp"
 
 #include <fmt/format.h>
@@ -224,7 +225,7 @@ FaceResult score(const std::vector<cv::Rect2d>& boxes, const std::vector<const F
   for (const cv::Rect2d& b : boxes) r.best_iou = std::max(r.best_iou, iou(b, truth_box));
   const int k = match_detection(boxes, truth_box, min_iou);
   std::vector<cv::Rect2d> fitted;
-  for (const Fit* f : fits) fitted.push_back(f->fit ? points_box(f->fit->points) : cv::Rect2d());
+  for (const Fit* f : fits) fitted.push_back(f->fit ? points_extent(f->fit->points) : cv::Rect2d());
   r.detected_fitted_box = match_detection(fitted, truth_box, min_iou) >= 0;
   if (k < 0) return r;
   r.detected = true;
@@ -392,7 +393,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
                         fmt::format("{}: cannot decode the image (not an image, damaged, or "
                                     "larger than OpenCV's pixel limit)",
                                     it.image.string()));
-    const cv::Rect2d truth_box = points_box(truth);
+    const cv::Rect2d truth_box = points_extent(truth);
     nlohmann::json face = {{"name", it.name}};
 
     DetectorOutput haar_out, hog_out, wide_out, tiny_out, ssd_out;
@@ -451,7 +452,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
           // 6: dlib's box from the CNN's points (the detector's box in dlib's convention).
           const cv::Rect2d dlib_box =
               which == 6 && (*c)->fit
-                  ? landmarkers[0]->box_for_extent(points_box((*c)->fit->points))
+                  ? landmarkers[0]->box_for_extent(points_extent((*c)->fit->points))
                   : b;
           auto plain_fit = fit(0, dlib_box, dlib_box);
           if (!plain_fit) return tl::unexpected(plain_fit.error());
@@ -495,7 +496,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         } else if ((*c)->fit) {  // 4: dlib+tta started from the CNN's points
           const auto t1 = std::chrono::steady_clock::now();
           auto p = landmarkers[1]->fit_with_spread(
-              image, landmarkers[1]->box_for_extent(points_box((*c)->fit->points)));
+              image, landmarkers[1]->box_for_extent(points_extent((*c)->fit->points)));
           if (!p) return tl::unexpected(p.error());
           f.fit = std::move(*p);
           f.ms += ms_since(t1);
@@ -593,7 +594,7 @@ Result<EvalReport> run_landmarks_eval(const LandmarksEvalOptions& o, const Progr
         if (pass >= 1) {  // systematic offset and scale of the landmarker vs the annotations
           const size_t b = pass - 1;
           for (size_t k = 0; k < truth.size(); ++k) bias[b] += (*p)->points[k] - truth[k];
-          const cv::Rect2d e = points_box((*p)->points);
+          const cv::Rect2d e = points_extent((*p)->points);
           width_ratio[b] += e.width / truth_box.width;
           height_ratio[b] += e.height / truth_box.height;
           ++fitted[b];

@@ -1,7 +1,6 @@
 // 300-W .pts reader, folder listing and the landmark metrics.
 
 #include "dreamsense/eval/landmarks/landmarks_eval.hpp"
-#include "dreamsense/perception/face_landmarks.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -139,8 +138,6 @@ Result<std::vector<LandmarkItem>> list_300w(const std::filesystem::path& dir) {
                       fmt::format("{}: no NAME.jpg + NAME.pts pairs (300-W layout)", dir.string()));
   return items;
 }
-
-cv::Rect2d points_box(const std::vector<cv::Point2d>& points) { return points_extent(points); }
 
 double outer_corner_distance(const std::vector<cv::Point2d>& truth) {
   if (truth.size() != 68) return 0;

@@ -3,6 +3,8 @@
 
 #include "dreamsense/eval/landmarks/landmarks_eval.hpp"
 
+#include "dreamsense/perception/face_landmarks.hpp"
+
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
@@ -116,7 +118,7 @@ TEST(Metrics, NmeAndEyeErrorOnAKnownShape) {
   EXPECT_NEAR(nme_outer_corners(eye, truth), 36.0 / 68 / 100, 1e-12);
   // Wrong sizes: NaN, not a crash.
   EXPECT_TRUE(std::isnan(nme_outer_corners({truth.begin(), truth.begin() + 5}, truth)));
-  const cv::Rect2d b = points_box(truth);
+  const cv::Rect2d b = dreamsense::points_extent(truth);
   EXPECT_DOUBLE_EQ(b.x, 100);
   EXPECT_DOUBLE_EQ(b.width, 150);
 }

@@ -181,12 +181,12 @@ int run(const std::string& session, const std::string& out_path) {
       // tick's, from the self-calibrated or subject model).
       const auto hp = view.get(ds::keys::kHeadPose);
       if (hp && hp->stamp == tick.stamp && hp->present()) {
-        const double depth_m = cams.at(f.camera).to_camera(hp->value->position_world_m)[2];
+        const cv::Vec3d& head = hp->value->position_world_m;
         auto r = locators.front().second.locate(img, contour,
-                                                cams.at(f.camera).K(0, 0) / (1000 * depth_m));
+                                                ec::pixels_per_mm_at(cams.at(f.camera), head));
         if (!r) return tl::unexpected(r.error());
         e["improved_iris_sized"] = location_json(*r);
-        e["improved_iris_sized"]["depth_m"] = depth_m;
+        e["improved_iris_sized"]["depth_m"] = cams.at(f.camera).to_camera(head)[2];
       }
       rec[eye] = e;
     }

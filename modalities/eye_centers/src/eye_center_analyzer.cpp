@@ -70,9 +70,7 @@ class EyeCenterAnalyzer : public Analyzer {
     if (model == options_.camera_models.end() || !pose || !pose->present() ||
         !(now - pose->stamp <= options_.head_pose_max_age))
       return std::nullopt;
-    const double depth_m = model->second.to_camera(pose->value->position_world_m)[2];
-    if (!(depth_m > 0.05)) return std::nullopt;
-    return model->second.K(0, 0) / (1000.0 * depth_m);
+    return pixels_per_mm_at(model->second, pose->value->position_world_m);
   }
 
   EyeCenterAnalyzerOptions options_;

@@ -58,8 +58,7 @@ Status IrisSizePrior::check() const {
 EyeRegionOptions with_expected_iris_radius(const EyeRegionOptions& region,
                                            std::span<const cv::Point2d> contour,
                                            double expected_radius_px, const IrisSizePrior& prior) {
-  DS_CHECK_EQ(contour.size(), size_t{6});
-  const double width = cv::norm(contour[0] - contour[3]);
+  const double width = eye_region_from_contour(contour).width_px;
   if (!(expected_radius_px > 0) || !std::isfinite(expected_radius_px) || !(width > 0))
     return region;
   const double lo = std::max(region.min_iris_radius, prior.min_ratio * expected_radius_px / width);
@@ -81,6 +80,12 @@ Status EyeCenterLocatorOptions::check() const {
   return timm_barth.check();
 }
 
+std::optional<double> pixels_per_mm_at(const CameraModel& camera, const cv::Vec3d& point_world_m) {
+  const double depth_m = camera.to_camera(point_world_m)[2];
+  if (!(depth_m > 0.05) || !std::isfinite(depth_m)) return std::nullopt;
+  return camera.K(0, 0) / (1000.0 * depth_m);
+}
+
 Result<EyeCenterLocator> EyeCenterLocator::create(const EyeCenterLocatorOptions& options) {
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
   return EyeCenterLocator(options);
@@ -95,7 +100,11 @@ Result<EyeLocation> EyeCenterLocator::locate(const cv::Mat& image,
         options_.region, contour, 0.5 * options_.iris_size.diameter_mm * *pixels_per_mm,
         options_.iris_size);
     auto r = locate_in(image, contour, sized);
-    if (!r || !options_.iris_size.fall_back_without_pupil || (r->found && r->pupil_found)) return r;
+    const bool narrowed = sized.min_iris_radius != options_.region.min_iris_radius ||
+                          sized.max_iris_radius != options_.region.max_iris_radius;
+    if (!r || !narrowed || !options_.iris_size.fall_back_without_pupil ||
+        (r->found && r->pupil_found))
+      return r;  // (not narrowed: the width-relative search has just run)
     auto plain = locate_in(image, contour, options_.region);
     if (!plain || plain->found || !r->found) return plain;
     return r;

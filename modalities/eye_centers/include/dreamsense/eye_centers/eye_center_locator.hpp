@@ -9,6 +9,7 @@
 // featureless eye is found = false with a rejection reason (absence, not an error); an empty image
 // or an unsupported pixel type is an error. All functions are const and thread-safe.
 
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/eye_centers/eye_region.hpp"
 #include "dreamsense/perception/eye_centers.hpp"
@@ -186,6 +187,10 @@ struct IrisSizePrior {
 EyeRegionOptions with_expected_iris_radius(const EyeRegionOptions& region,
                                            std::span<const cv::Point2d> contour,
                                            double expected_radius_px, const IrisSizePrior& prior);
+
+// The image scale (pixels per millimetre) at a world point seen by `camera`: its focal length
+// over the point's depth; nullopt for a point less than 5 cm in front of the camera.
+std::optional<double> pixels_per_mm_at(const CameraModel& camera, const cv::Vec3d& point_world_m);
 
 struct EyeCenterLocatorOptions {
   EyeCenterMethod method = EyeCenterMethod::kImprovedIntegroDifferential;

@@ -39,8 +39,8 @@ Result<std::vector<LandmarkItem>> list_300w(const std::filesystem::path& dir);
 
 // ---- metrics -----------------------------------------------------------------------------------
 
-// Bounding box of points (the "box of the annotated points" of the detection rule).
-cv::Rect2d points_box(const std::vector<cv::Point2d>& points);
+// The "box of the annotated points" of the detection rule is points_extent
+// (perception/face_landmarks.hpp).
 // Distance of the outer eye corners, points 37 and 46 (1-based; indices 36 and 45): the 300-W
 // normaliser. Needs 68 points.
 double outer_corner_distance(const std::vector<cv::Point2d>& truth);
