@@ -1,5 +1,6 @@
 // `dreamsense analyze SESSION --out DIR`
 
+#include "dreamsense/core/log.hpp"
 #include "dreamsense/live/live_analysis.hpp"
 #include "dreamsense/primitives/catalogue.hpp"
 #include "dreamsense/runner/analysis.hpp"
@@ -199,13 +200,21 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
                                                            bool save_subject) {
   runner::AnalysisOptions o = o_in;
   std::optional<nlohmann::json> calibration_status;
+  auto self_calibration_overrides =
+      self_calibration::take_self_calibration_overrides(o.plan.overrides);
   if (!o.out_dir.empty() && self_calibration::needs_self_calibration(o, mode)) {
     self_calibration::ForAnalysisOptions so;
+    so.overrides = std::move(self_calibration_overrides);
     so.mode = mode;
     so.save_subject = save_subject;
     if (!quiet)
       so.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
     DS_ASSIGN_OR_RETURN(calibration_status, self_calibration::self_calibrate_for_analysis(o, so));
+  } else if (!self_calibration_overrides.empty()) {
+    log::info(
+        "--set self_calibration.{}: no self-calibration in this analysis (a subject "
+        "folder or model files are given), the option is not used",
+        self_calibration_overrides.front().key);
   }
   auto r = with_progress(
       "analyse", quiet, [&](const auto& progress) { return runner::analyze_session(o, progress); });

@@ -579,13 +579,29 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   EXPECT_EQ(sc["status"], "converged") << sc.dump();
   EXPECT_GE(sc["ticks_used"].get<int>(), 12);
   EXPECT_LT(sc["residual_rms_mm"].get<double>(), 3.0);
-  // The demo gives the robot's head (robot_head_m): the level comes from the ticks facing it when
-  // enough do in these 4 s, else from the world-level pitch; either way the summary says which.
+  // The demo gives the robot's head (robot_head_m): the level comes from the gaze's fixations
+  // on it, or the head's, when enough ticks have them in these 4 s, else from the world-level
+  // pitch; either way the summary says which.
   const std::string level = sc.value("level", "");
-  EXPECT_TRUE(level == "target_fixations" || level == "world_pitch") << sc.dump();
+  EXPECT_TRUE(level == "gaze_fixations" || level == "target_fixations" || level == "world_pitch")
+      << sc.dump();
   EXPECT_TRUE(sc.contains("fixation_ticks")) << sc.dump();
+  ASSERT_TRUE(sc.contains("gaze_level")) << sc.dump();
+  EXPECT_EQ(sc["gaze_level"]["applied"].get<bool>(), level == "gaze_fixations") << sc.dump();
   EXPECT_TRUE(fs::exists(root() / "y" / "self_calibration" / "face_model.yaml"));
   EXPECT_NE(r.err.find("self_calibration/face_model.yaml"), std::string::npos) << r.err;
+  // The head-fixation level (the baseline) on request; an unknown self-calibration option is
+  // an error naming it.
+  r = run("analyze " + unknown.string() + " --set self_calibration.gaze_level=false --out " +
+          (root() / "y2").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json base = json::parse(slurp(root() / "y2" / "summary.json"))["self_calibration"];
+  EXPECT_FALSE(base["gaze_level"]["applied"].get<bool>()) << base.dump();
+  EXPECT_NE(base.value("level", ""), "gaze_fixations") << base.dump();
+  r = run("analyze " + unknown.string() + " --set self_calibration.gaze_levl=false --out " +
+          (root() / "y3").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("self_calibration.gaze_levl"), std::string::npos) << r.err;
   // `--subject none` keeps the generic model and does not self-calibrate.
   r = run("analyze " + unknown.string() + " --subject none --out " + (root() / "z").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;

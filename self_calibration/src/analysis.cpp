@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <exception>
 #include <fstream>
 
 namespace dreamsense::self_calibration {
@@ -30,6 +32,54 @@ bool needs_self_calibration(const runner::AnalysisOptions& o, SelfCalibrationMod
   return !fs::is_directory(o.plan.subjects_dir / it->second);
 }
 
+namespace {
+
+Result<double> number_of(const runner::OptionOverride& o) {
+  try {
+    size_t used = 0;
+    const double v = std::stod(o.value, &used);
+    if (used == o.value.size() && std::isfinite(v)) return v;
+  } catch (const std::exception&) {
+  }
+  return make_error(ErrorCode::kInvalidArgument, "option self_calibration.{}: '{}' is not a number",
+                    o.key, o.value);
+}
+
+Status apply_override(const runner::OptionOverride& o, SessionSelfCalibrationOptions& so) {
+  if (o.key == "gaze_level") {
+    if (o.value != "true" && o.value != "false")
+      return make_error(ErrorCode::kInvalidArgument,
+                        "option self_calibration.gaze_level: true or false (got '{}')", o.value);
+    so.gaze_level.enabled = o.value == "true";
+  } else if (o.key == "gaze_level_max_yaw_deg") {
+    DS_ASSIGN_OR_RETURN(so.gaze_level.max_yaw_deg, number_of(o));
+  } else if (o.key == "gaze_level_max_pitch_deg") {
+    DS_ASSIGN_OR_RETURN(so.gaze_level.max_pitch_deg, number_of(o));
+  } else if (o.key == "gaze_level_min_ticks") {
+    DS_ASSIGN_OR_RETURN(const double n, number_of(o));
+    so.gaze_level.min_ticks = static_cast<int>(n);
+  } else {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "option self_calibration.{}: unknown (known: gaze_level, "
+                      "gaze_level_max_yaw_deg, gaze_level_max_pitch_deg, gaze_level_min_ticks)",
+                      o.key);
+  }
+  return ok_status();
+}
+
+}  // namespace
+
+std::vector<runner::OptionOverride> take_self_calibration_overrides(
+    std::vector<runner::OptionOverride>& overrides) {
+  std::vector<runner::OptionOverride> taken;
+  std::erase_if(overrides, [&](const runner::OptionOverride& o) {
+    if (o.analyzer != "self_calibration") return false;
+    taken.push_back(o);
+    return true;
+  });
+  return taken;
+}
+
 Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
                                                    const ForAnalysisOptions& options) {
   const SelfCalibrationMode mode = options.mode;
@@ -47,6 +97,8 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
         if (ch == '[' || ch == ']') ch = ' ';
       so.face.fixation_target_world_m = parse_vec3(v);
     }
+  for (const auto& over : options.overrides) DS_RETURN_IF_ERROR(apply_override(over, so));
+  DS_RETURN_IF_ERROR(so.check());
   DS_ASSIGN_OR_RETURN(const SessionSelfCalibration c, self_calibrate_session(o.session_dir, so));
   const fs::path dir = o.out_dir / "self_calibration";
   DS_RETURN_IF_ERROR(write_self_calibration(c, dir));

@@ -2,15 +2,18 @@
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/sensor_frame.hpp"
+#include "dreamsense/eye_centers/eye_center_locator.hpp"
 #include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/gaze/gaze_estimator.hpp"
 #include "dreamsense/head_pose/face_shape_fit.hpp"
+#include "dreamsense/self_calibration/gaze_level.hpp"
 #include "dreamsense/sources/session.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <ctime>
 #include <fstream>
 #include <map>
@@ -22,18 +25,24 @@ namespace {
 // a recording's stamps may differ by a few ms).
 constexpr int64_t kSameTickNs = 10'000'000;
 
-std::optional<cv::Vec3d> model_centroid(const head_pose::FaceModel3d& m, int from, int to) {
-  cv::Vec3d s(0, 0, 0);
-  for (int i = from; i <= to; ++i) {
-    const auto it = std::find(m.landmark_index.begin(), m.landmark_index.end(), i);
-    if (it == m.landmark_index.end()) return std::nullopt;
-    const cv::Point3d& p = m.points_m[static_cast<size_t>(it - m.landmark_index.begin())];
-    s += cv::Vec3d(p.x, p.y, p.z);
-  }
-  return s * (1.0 / (to - from + 1));
-}
-
 nlohmann::json vec_json(const cv::Vec3d& v) { return {v[0], v[1], v[2]}; }
+
+// Mean of the triangulated eye-opening points (landmarks 36-47) in the world; nullopt when none.
+std::optional<cv::Vec3d> eye_openings_centre(const head_pose::TriangulatedFace& face,
+                                             const std::vector<int>& landmark_index) {
+  cv::Vec3d s(0, 0, 0);
+  int n = 0;
+  for (size_t k = 0; k < landmark_index.size() && k < face.points_world.size(); ++k) {
+    const cv::Vec3d& p = face.points_world[k];
+    if (landmark_index[k] < 36 || landmark_index[k] > 47 || !std::isfinite(p[0]) ||
+        !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      continue;
+    s += p;
+    ++n;
+  }
+  if (n == 0) return std::nullopt;
+  return s * (1.0 / n);
+}
 
 }  // namespace
 
@@ -43,6 +52,8 @@ Status SessionSelfCalibrationOptions::check() const {
                       "SessionSelfCalibrationOptions: max_seconds > 0, tick_step >= 1 and "
                       "enough_frames >= 1 needed");
   if (auto s = eyes.check(); !s) return s;
+  if (auto s = pupils.check(); !s) return s;
+  if (auto s = gaze_level.check(); !s) return s;
   return face.check();
 }
 
@@ -65,6 +76,10 @@ nlohmann::json SessionSelfCalibration::to_json() const {
   j["level"] = face.level;
   j["fixation_ticks"] = face.fixation_ticks;
   j["fixation_correction_deg"] = face.fixation_correction_deg;
+  j["gaze_level"] = {{"applied", gaze_level.applied},
+                     {"ticks_with_gaze", gaze_level.ticks_with_gaze},
+                     {"fixation_ticks", gaze_level.fixation_ticks},
+                     {"correction_deg", gaze_level.correction_deg}};
   j["ticks_used"] = face.frames_used;
   j["points"] = face.model.points_m.size();
   j["residual_rms_mm"] = 1000 * face.median_rms_m;
@@ -126,6 +141,8 @@ Result<SessionSelfCalibration> self_calibrate_session(
   if (!detector) return tl::unexpected(detector.error());
   auto landmarker = face_landmarks::make_dlib_landmarker();
   if (!landmarker) return tl::unexpected(landmarker.error());
+  auto pupil_locator = eye_centers::EyeCenterLocator::create(options.pupils);
+  if (!pupil_locator) return tl::unexpected(pupil_locator.error());
 
   sources::SessionReaderOptions ro;
   for (const auto& [id, c] : cameras) ro.only.push_back(id);
@@ -133,6 +150,7 @@ Result<SessionSelfCalibration> self_calibrate_session(
   if (!reader) return tl::unexpected(reader.error());
 
   std::vector<head_pose::MultiViewLandmarks> ticks;
+  std::vector<std::vector<EyeCenters>> pupils;  // per tick, per view of ticks[i]
   std::vector<FramePtr> group;
   int64_t first_ns = 0, group_ns = 0;
   bool started = false;
@@ -146,6 +164,7 @@ Result<SessionSelfCalibration> self_calibrate_session(
     ++out.ticks_searched;
     head_pose::MultiViewLandmarks mv;
     mv.stamp_ns = group_ns;
+    std::vector<const cv::Mat*> images;  // per view
     for (const FramePtr& f : group) {
       const ColorImage* img = f->as<ColorImage>();
       if (img == nullptr) continue;
@@ -156,11 +175,31 @@ Result<SessionSelfCalibration> self_calibrate_session(
       if (!*pts) continue;
       ++out.views_with_landmarks;
       mv.views.push_back({&cameras.at(f->sensor), std::move(**pts)});
+      images.push_back(&img->image);
     }
+    std::optional<cv::Vec3d> eyes_world;  // sizes the iris in each view (pixels per mm)
     if (mv.views.size() >= 2) {
       ++multi_view;
-      if (head_pose::triangulate_face(mv, options.face.triangulation)) ++triangulated;
+      if (const auto t = head_pose::triangulate_face(mv, options.face.triangulation)) {
+        ++triangulated;
+        eyes_world = eye_openings_centre(*t, options.face.triangulation.landmark_index);
+      }
     }
+    std::vector<EyeCenters> found;
+    const bool locate_pupils =
+        options.gaze_level.enabled && face_options.fixation_target_world_m.has_value();
+    for (size_t v = 0; v < mv.views.size() && locate_pupils; ++v) {
+      FaceLandmarks l;
+      l.camera = mv.views[v].camera->frame;
+      l.image_size = images[v]->size();
+      l.points_px = mv.views[v].landmarks_px;
+      const auto scale = eyes_world
+                             ? eye_centers::pixels_per_mm_at(*mv.views[v].camera, *eyes_world)
+                             : std::nullopt;
+      auto p = pupil_locator->locate_both(*images[v], l, scale);
+      found.push_back(p ? *p : EyeCenters{});  // a view without pupils only loses its gaze
+    }
+    pupils.push_back(std::move(found));
     ticks.push_back(std::move(mv));
     group.clear();
     return ok_status();
@@ -246,12 +285,23 @@ Result<SessionSelfCalibration> self_calibrate_session(
   }
   if (!enough()) DS_RETURN_IF_ERROR(flush());
   out.face = head_pose::self_calibrate_face(ticks, face_options);
+  if (out.face.converged() && face_options.fixation_target_world_m) {
+    out.gaze_level = level_from_gaze_fixations(out.face.model, ticks, pupils,
+                                               *face_options.fixation_target_world_m, options.eyes,
+                                               options.gaze_level);
+    if (out.gaze_level.applied) {
+      out.face.model = pitched(out.face.model, out.gaze_level.correction_deg);
+      out.face.level = "gaze_fixations";
+      out.face.level_pitch_correction_deg += out.gaze_level.correction_deg;
+      out.face.reason +=
+          fmt::format("; level refined from {} gaze fixations on the target ({:+.1f} deg)",
+                      out.gaze_level.fixation_ticks, out.gaze_level.correction_deg);
+    }
+  }
   if (out.face.converged()) {
-    const auto r = model_centroid(out.face.model, 36, 41),
-               l = model_centroid(out.face.model, 42, 47);
-    if (r && l) {
-      out.right_eyeball = gaze::anatomical_eyeball(*r, options.eyes);
-      out.left_eyeball = gaze::anatomical_eyeball(*l, options.eyes);
+    if (const auto e = anatomical_eyeballs(out.face.model, options.eyes)) {
+      out.right_eyeball = e->first;
+      out.left_eyeball = e->second;
     }
   }
   out.cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;

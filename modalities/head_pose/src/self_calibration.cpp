@@ -1,5 +1,6 @@
 #include "dreamsense/head_pose/self_calibration.hpp"
 
+#include "dreamsense/core/statistics.hpp"
 #include "dreamsense/head_pose/head_pose_estimator.hpp"
 
 #include <fmt/format.h>
@@ -21,13 +22,6 @@ bool finite(const cv::Vec3d& v) {
   return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
 }
 bool finite(const cv::Point2d& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
-
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
-  return v[m];
-}
 
 // Centroid of the finite landmarks [from, to] of 68 pixels; nullopt when any is missing.
 std::optional<cv::Point2d> centroid_px(const std::vector<cv::Point2d>& p, int from, int to) {
@@ -252,7 +246,7 @@ std::optional<TriangulatedFace> triangulate_face(const MultiViewLandmarks& frame
       }
     if (iod.size() >= 2) {
       const auto [lo, hi] = std::minmax_element(iod.begin(), iod.end());
-      pair_scale_spread = (*hi - *lo) / median(iod);
+      pair_scale_spread = (*hi - *lo) / upper_median(iod);
     }
   }
   Solution s = solve(views, kept, n_points, min_cos);
@@ -368,14 +362,14 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
     return out;
   }
 
-  out.median_pair_scale_spread = spreads.empty() ? 0.0 : median(spreads);
+  out.median_pair_scale_spread = spreads.empty() ? 0.0 : upper_median(spreads);
   std::vector<double> pair_medians;
   for (auto& [pair, iods] : pair_iods)
     if (static_cast<int>(iods.size()) >= options.min_pair_ticks)
-      pair_medians.push_back(median(iods));
+      pair_medians.push_back(upper_median(iods));
   if (pair_medians.size() >= 2) {
     const auto [lo, hi] = std::minmax_element(pair_medians.begin(), pair_medians.end());
-    out.pair_median_scale_spread = (*hi - *lo) / median(pair_medians);
+    out.pair_median_scale_spread = (*hi - *lo) / upper_median(pair_medians);
   }
   if (out.pair_median_scale_spread > options.max_pair_scale_spread) {
     out.status = SelfCalibrationStatus::kInconsistent;
@@ -413,7 +407,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
       // Second pass without the points farthest from the mean (a bad landmark).
       std::vector<double> res;
       for (size_t j = 0; j < a.size(); ++j) res.push_back(cv::norm(T.apply(a[j]) - b[j]));
-      const double cut = std::max(3 * median(res), 0.001);
+      const double cut = std::max(3 * upper_median(res), 0.001);
       std::vector<cv::Vec3d> a2, b2;
       for (size_t j = 0; j < a.size(); ++j)
         if (res[j] <= cut) {
@@ -432,10 +426,10 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
     std::vector<double> rms;
     for (double r : frame_rms)
       if (std::isfinite(r)) rms.push_back(r);
-    const double med = median(rms);
+    const double med = upper_median(rms);
     std::vector<double> dev;
     for (double r : rms) dev.push_back(std::abs(r - med));
-    const double cut = std::max(options.max_frame_rms_m, med + 3 * 1.4826 * median(dev));
+    const double cut = std::max(options.max_frame_rms_m, med + 3 * 1.4826 * upper_median(dev));
     for (size_t f = 0; f < shapes.size(); ++f)
       used[f] = std::isfinite(frame_rms[f]) && frame_rms[f] <= cut;
     // New mean: per coordinate median of the used ticks, without points beyond 3 robust sigmas.
@@ -451,11 +445,11 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
       for (int c = 0; c < 3; ++c) {
         std::vector<double> v;
         for (const auto& o : obs) v.push_back(o[c]);
-        m[c] = median(v);
+        m[c] = upper_median(v);
       }
       std::vector<double> d;
       for (const auto& o : obs) d.push_back(cv::norm(o - m));
-      const double dcut = std::max(3 * 1.4826 * median(d), 0.0005);
+      const double dcut = std::max(3 * 1.4826 * upper_median(d), 0.0005);
       cv::Vec3d sum(0, 0, 0);
       int n = 0;
       for (const auto& o : obs)
@@ -473,8 +467,8 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
       reproj.push_back(shapes[f].rms_px);
       ++out.frames_used;
     }
-  out.median_rms_m = median(rms);
-  out.median_reprojection_px = median(reproj);
+  out.median_rms_m = upper_median(rms);
+  out.median_reprojection_px = upper_median(reproj);
   if (out.frames_used < options.min_frames) {
     out.status = SelfCalibrationStatus::kTooFewFrames;
     out.reason = fmt::format("{} consistent ticks of {} triangulated; need {}", out.frames_used,
@@ -584,12 +578,12 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
   auto robust_spread = [&](const std::vector<double>& v, double m) {
     std::vector<double> dev;
     for (double r : v) dev.push_back(std::abs(r - m));
-    return 1.4826 * median(dev);
+    return 1.4826 * upper_median(dev);
   };
   for (int pass = 0; pass < 2; ++pass) {
     if (options.frontal == FrontalReference::kMeanWorldPitch) {
       const auto pitches = angles(1);
-      const double m = median(pitches);
+      const double m = upper_median(pitches);
       out.pitch_spread_deg = robust_spread(pitches, m);
       if (std::isfinite(m) && out.pitch_spread_deg <= options.max_roll_spread_deg) {
         head_from_world = rotation_from_ypr_deg(0, m, 0) * head_from_world;
@@ -597,7 +591,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
       }
     }
     const auto rolls = angles(2);
-    const double m = median(rolls);
+    const double m = upper_median(rolls);
     out.roll_spread_deg = robust_spread(rolls, m);
     if (options.upright == UprightReference::kMeanWorldRoll && std::isfinite(m) &&
         out.roll_spread_deg <= options.max_roll_spread_deg) {
@@ -632,7 +626,7 @@ SelfCalibration self_calibrate_face(const std::vector<MultiViewLandmarks>& frame
             std::abs(pitch + c) <= options.fixation_max_pitch_deg)
           facing.push_back(pitch + c);
       if (static_cast<int>(facing.size()) < options.min_fixation_ticks) break;
-      c -= median(facing);
+      c -= upper_median(facing);
     }
     out.fixation_ticks = static_cast<int>(facing.size());
     if (out.fixation_ticks >= options.min_fixation_ticks) {

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace dreamsense::self_calibration {
 
@@ -28,7 +29,16 @@ struct ForAnalysisOptions {
   bool save_subject = false;
   // One-line progress messages for the user ("self-calibration: ...", "... converged: ...").
   std::function<void(const std::string&)> progress;
+  // `--set self_calibration.KEY=VALUE` (taken out of the plan's overrides by
+  // take_self_calibration_overrides): gaze_level (true/false), gaze_level_max_yaw_deg,
+  // gaze_level_max_pitch_deg, gaze_level_min_ticks. An unknown key or a bad value is an error.
+  std::vector<runner::OptionOverride> overrides;
 };
+
+// Removes the overrides of the pseudo-analyser "self_calibration" from `overrides` (the planner
+// knows only analysers) and returns them.
+std::vector<runner::OptionOverride> take_self_calibration_overrides(
+    std::vector<runner::OptionOverride>& overrides);
 
 // Writes OUT/self_calibration/ and points `o` at its files when it converged; returns the
 // status for summary.json's `self_calibration`.

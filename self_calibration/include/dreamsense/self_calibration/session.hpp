@@ -4,15 +4,18 @@
 // Every `tick_step`-th tick of the first `max_seconds` is searched for the face in every
 // calibrated colour camera (OpenCV cascade on the full frame, dlib's 68 landmarks);
 // head_pose::self_calibrate_face triangulates and aligns the ticks; gaze::anatomical_eyeball
-// places the eyeballs behind the triangulated eye openings. The result is written as a subject
-// folder (face_model.yaml, gaze.yaml, self_calibration.json) that `analyze` uses like one from
-// `train face` / `train gaze`. With fewer than two cameras seeing the face, or an inconsistent
-// result, nothing is written but the status and its reason (the analysis then falls back to the
-// generic face model and the built-in gaze constants, and says so).
+// places the eyeballs behind the triangulated eye openings; with a fixation target (the robot's
+// head), the frame's level is refined from the gaze's fixations on it (gaze_level.hpp). The
+// result is written as a subject folder (face_model.yaml, gaze.yaml, self_calibration.json) that
+// `analyze` uses like one from `train face` / `train gaze`. With fewer than two cameras seeing the
+// face, or an inconsistent result, nothing is written but the status and its reason (the analysis
+// then falls back to the generic face model and the built-in gaze constants, and says so).
 
 #include "dreamsense/core/status.hpp"
+#include "dreamsense/eye_centers/eye_center_locator.hpp"
 #include "dreamsense/gaze/eyeball_model.hpp"
 #include "dreamsense/head_pose/self_calibration.hpp"
+#include "dreamsense/self_calibration/gaze_level.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -37,6 +40,12 @@ struct SessionSelfCalibrationOptions {
   head_pose::SelfCalibrationOptions face;
   bool fixation_from_metadata = true;
   gaze::AnatomicalEyeOptions eyes;
+  // With a fixation target: the pupils located in every view (the eye-centre analyser's
+  // default method, the iris sized at the triangulated eyes' depth) and the level refined from
+  // the gaze's fixations on the target (gaze_level.hpp); gaze_level.enabled = false keeps the
+  // head-fixation level.
+  eye_centers::EyeCenterLocatorOptions pupils;
+  GazeLevelOptions gaze_level;
   Status check() const;
 };
 
@@ -48,6 +57,7 @@ struct SessionSelfCalibration {
   double seconds_searched = 0;                     // of session time
   double cpu_s = 0;                                // process CPU time of the self-calibration
   gaze::EyeballModel right_eyeball, left_eyeball;  // valid when face.converged()
+  GazeLevel gaze_level;                            // applied: face.level "gaze_fixations"
   std::string session;
   nlohmann::json to_json() const;
 };
