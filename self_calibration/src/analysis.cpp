@@ -45,12 +45,18 @@ Result<double> number_of(const runner::OptionOverride& o) {
                     o.key, o.value);
 }
 
+Result<bool> bool_of(const runner::OptionOverride& o) {
+  if (o.value == "true") return true;
+  if (o.value == "false") return false;
+  return make_error(ErrorCode::kInvalidArgument,
+                    "option self_calibration.{}: true or false (got '{}')", o.key, o.value);
+}
+
 Status apply_override(const runner::OptionOverride& o, SessionSelfCalibrationOptions& so) {
   if (o.key == "gaze_level") {
-    if (o.value != "true" && o.value != "false")
-      return make_error(ErrorCode::kInvalidArgument,
-                        "option self_calibration.gaze_level: true or false (got '{}')", o.value);
-    so.gaze_level.enabled = o.value == "true";
+    DS_ASSIGN_OR_RETURN(so.gaze_level.enabled, bool_of(o));
+  } else if (o.key == "gaze_level_eye_yaw") {
+    DS_ASSIGN_OR_RETURN(so.gaze_level.eye_yaw, bool_of(o));
   } else if (o.key == "gaze_level_max_yaw_deg") {
     DS_ASSIGN_OR_RETURN(so.gaze_level.max_yaw_deg, number_of(o));
   } else if (o.key == "gaze_level_max_pitch_deg") {
@@ -61,7 +67,8 @@ Status apply_override(const runner::OptionOverride& o, SessionSelfCalibrationOpt
   } else {
     return make_error(ErrorCode::kInvalidArgument,
                       "option self_calibration.{}: unknown (known: gaze_level, "
-                      "gaze_level_max_yaw_deg, gaze_level_max_pitch_deg, gaze_level_min_ticks)",
+                      "gaze_level_eye_yaw, gaze_level_max_yaw_deg, gaze_level_max_pitch_deg, "
+                      "gaze_level_min_ticks)",
                       o.key);
   }
   return ok_status();

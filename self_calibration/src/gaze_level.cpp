@@ -121,7 +121,7 @@ GazeLevel level_from_gaze_fixations(const head_pose::FaceModel3d& model,
                                     const GazeLevelOptions& options) {
   GazeLevel out;
   if (!options.enabled || ticks.size() != pupils.size()) return out;
-  double c = 0;
+  double c = 0, shift_x = 0;
   for (int round = 0; round < options.rounds; ++round) {
     head_pose::HeadPoseEstimatorOptions pose_options;
     pose_options.model = pitched(model, c);
@@ -131,7 +131,9 @@ GazeLevel level_from_gaze_fixations(const head_pose::FaceModel3d& model,
     gaze_options.method = gaze::GazeMethod::kEyeball;
     gaze_options.right_eyeball = eyeballs->first;
     gaze_options.left_eyeball = eyeballs->second;
-    std::vector<double> facing;
+    gaze_options.right_eyeball.centre_head_m[0] += shift_x;
+    gaze_options.left_eyeball.centre_head_m[0] += shift_x;
+    std::vector<double> facing_yaw, facing_pitch;
     out.ticks_with_gaze = 0;
     for (size_t i = 0; i < ticks.size(); ++i) {
       const auto offset =
@@ -139,17 +141,23 @@ GazeLevel level_from_gaze_fixations(const head_pose::FaceModel3d& model,
       if (!offset) continue;
       ++out.ticks_with_gaze;
       if (std::abs((*offset)[0]) <= options.max_yaw_deg &&
-          std::abs((*offset)[1]) <= options.max_pitch_deg)
-        facing.push_back((*offset)[1]);
+          std::abs((*offset)[1]) <= options.max_pitch_deg) {
+        facing_yaw.push_back((*offset)[0]);
+        facing_pitch.push_back((*offset)[1]);
+      }
     }
-    out.fixation_ticks = static_cast<int>(facing.size());
+    out.fixation_ticks = static_cast<int>(facing_pitch.size());
     if (out.fixation_ticks < options.min_ticks) return out;  // not applied
     // Pitching the frame by c adds c to the target's head-frame pitch while the eye-in-head
     // pitch barely moves, so the offsets grow by about c: c takes away their median.
-    c -= upper_median(facing);
+    c -= upper_median(facing_pitch);
+    // Moving both eyeballs by dx along the head's x turns the gaze of an eye looking ahead by
+    // -dx / radius (rad) in yaw, so the yaw offsets grow by dx / radius.
+    if (options.eye_yaw) shift_x -= eyes.radius_m * upper_median(facing_yaw) / kDegreesPerRadian;
   }
   out.applied = true;
   out.correction_deg = c;
+  out.eyeball_shift_x_m = shift_x;
   return out;
 }
 

@@ -79,7 +79,8 @@ nlohmann::json SessionSelfCalibration::to_json() const {
   j["gaze_level"] = {{"applied", gaze_level.applied},
                      {"ticks_with_gaze", gaze_level.ticks_with_gaze},
                      {"fixation_ticks", gaze_level.fixation_ticks},
-                     {"correction_deg", gaze_level.correction_deg}};
+                     {"correction_deg", gaze_level.correction_deg},
+                     {"eyeball_shift_x_mm", 1000 * gaze_level.eyeball_shift_x_m}};
   j["ticks_used"] = face.frames_used;
   j["points"] = face.model.points_m.size();
   j["residual_rms_mm"] = 1000 * face.median_rms_m;
@@ -302,6 +303,8 @@ Result<SessionSelfCalibration> self_calibrate_session(
     if (const auto e = anatomical_eyeballs(out.face.model, options.eyes)) {
       out.right_eyeball = e->first;
       out.left_eyeball = e->second;
+      out.right_eyeball.centre_head_m[0] += out.gaze_level.eyeball_shift_x_m;
+      out.left_eyeball.centre_head_m[0] += out.gaze_level.eyeball_shift_x_m;
     }
   }
   out.cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;

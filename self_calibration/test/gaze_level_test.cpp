@@ -43,11 +43,14 @@ struct Synthetic {
 // `n` ticks: every other one the child looks at `robot` with the eyes while the head stops
 // `head_short_deg` below it (the eyes do the rest, as in people); the others look at toys on the
 // table below, head and eyes together. Landmarks and pupils are projected without noise but for
-// `noise_px` on the pupils.
+// `noise_px` on the pupils. The true eyeballs are the anatomical ones moved by
+// `eyeball_shift_x_m` along the head's x.
 void make_ticks(Synthetic& s, const head_pose::FaceModel3d& truth, const cv::Vec3d& robot, int n,
-                double head_short_deg, double noise_px) {
-  const auto eyeballs = anatomical_eyeballs(truth, {});
+                double head_short_deg, double noise_px, double eyeball_shift_x_m = 0) {
+  auto eyeballs = anatomical_eyeballs(truth, {});
   ASSERT_TRUE(eyeballs);
+  eyeballs->first.centre_head_m[0] += eyeball_shift_x_m;
+  eyeballs->second.centre_head_m[0] += eyeball_shift_x_m;
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> jitter(-2, 2), toy_x(-0.3, 0.3);
   std::normal_distribution<double> noise(0, noise_px);
@@ -105,6 +108,25 @@ TEST(GazeLevel, PitchedModelIsLevelledBackByTheEyesNotTheHead) {
   const auto off = level_from_gaze_fixations(pitched(truth, 6.0), s.ticks, s.pupils, robot, {});
   ASSERT_TRUE(off.applied);
   EXPECT_NEAR(off.correction_deg, -6.0, 0.7);
+}
+
+// Eyeballs 1.5 mm to the side of where the eye openings put them: the gaze looks past the robot
+// by ~8 deg in yaw; with eye_yaw the fixations give the shift back, and the level stays; without
+// it (the default) the shift stays 0.
+TEST(GazeLevel, EyesLookingPastTheTargetSidewaysGiveTheEyeballsShift) {
+  const auto truth = head_pose::generic_face_model(false);
+  const cv::Vec3d robot(0, -0.30, 0.15);
+  Synthetic s;
+  make_ticks(s, truth, robot, 40, 0.0, 0.3, 0.0015);
+  GazeLevelOptions with_yaw;
+  with_yaw.eye_yaw = true;
+  const auto level = level_from_gaze_fixations(truth, s.ticks, s.pupils, robot, {}, with_yaw);
+  ASSERT_TRUE(level.applied);
+  EXPECT_NEAR(level.eyeball_shift_x_m, 0.0015, 0.0003);
+  EXPECT_NEAR(level.correction_deg, 0.0, 0.7);
+  const auto pitch = level_from_gaze_fixations(truth, s.ticks, s.pupils, robot, {});
+  ASSERT_TRUE(pitch.applied);
+  EXPECT_EQ(pitch.eyeball_shift_x_m, 0.0);
 }
 
 TEST(GazeLevel, NoFixationsOrNoPupilsLeaveTheLevel) {

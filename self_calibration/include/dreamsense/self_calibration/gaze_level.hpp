@@ -37,6 +37,12 @@ struct GazeLevelOptions {
   double max_pitch_deg = 12;
   int min_ticks = 8;  // fixations needed, else the level is not changed
   int rounds = 4;     // correction and selection alternate this many times
+  // Also the eyes' sideways offset: both eyeballs moved along the head's x until the median yaw
+  // offset of the fixations is zero (a conjugate eye-in-head yaw bias, e.g. from the eye
+  // openings' centroids not being centred on the eyeballs). The head pose is not changed. Off:
+  // on the demo it did not follow the analysis's yaw bias on the robot (modalities/head_pose/
+  // README.md, "Level from gaze fixations").
+  bool eye_yaw = false;
   Status check() const;
 };
 
@@ -45,6 +51,8 @@ struct GazeLevel {
   int ticks_with_gaze = 0;    // ticks where a head pose and the gaze of one eye at least were found
   int fixation_ticks = 0;     // of them, gazing at the target after the last round
   double correction_deg = 0;  // pitch added to the head frame (about its x axis), when applied
+  // With eye_yaw: added to both eyeballs' centre_head_m x (metres), when applied.
+  double eyeball_shift_x_m = 0;
 };
 
 // The model's right (36-41) and left (42-47) anatomical eyeballs; nullopt when an eye opening's
