@@ -142,6 +142,8 @@ Result<EyeCenters> EyeCenterLocator::locate_both(const cv::Mat& image,
   out.right = right->to_eye_center();
   out.left = left->to_eye_center();
   out.method = std::string(to_string(options_.method));
+  out.pupil_stage = options_.method == EyeCenterMethod::kImprovedIntegroDifferential &&
+                    options_.improved.pupil.enabled;
   return out;
 }
 

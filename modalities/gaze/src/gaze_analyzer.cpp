@@ -54,6 +54,10 @@ class GazeAnalyzer : public Analyzer {
         return make_error(ErrorCode::kNotFound, "gaze: no camera model for reference '{}'", ref);
       raw = gaze_hits_camera_rect(g->both, rc->second, options_.mutual, miss);
     }
+    const EyeCenters& pupils = *eyes->value;
+    if (options_.mutual.require_visible_pupil && pupils.pupil_stage && !pupils.right.pupil_found &&
+        !pupils.left.pupil_found)
+      raw = false;
     const float confidence = std::min(head->confidence, eyes->confidence);
     out.set(keys::kMutualGaze, mutual_.update(in.stamp, raw, miss), in.stamp, confidence);
     out.set(keys::kEyeGaze, std::move(*g), in.stamp, confidence);

@@ -19,6 +19,7 @@ Status read_mutual_options(OptionsNode& node, MutualGazeOptions& m) {
   DS_RETURN_IF_ERROR(node.get("radius_m", m.radius_m));
   DS_RETURN_IF_ERROR(node.get("onset_s", m.onset_s));
   DS_RETURN_IF_ERROR(node.get("release_s", m.release_s));
+  DS_RETURN_IF_ERROR(node.get("require_visible_pupil", m.require_visible_pupil));
   return ok_status();
 }
 

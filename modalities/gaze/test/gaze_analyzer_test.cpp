@@ -119,5 +119,40 @@ TEST(GazeAnalyzer, WritesGazeAndMutualGazeOrAbsence) {
   }
 }
 
+// Eye contact shows the pupils: a gaze ray on the robot from eyes whose locator looked for the
+// pupil and found it in neither eye (hidden under the lids) is not mutual gaze; one eye's pupil
+// is enough; a locator without a pupil stage is not held to it; the option switches it off.
+TEST(GazeAnalyzer, MutualGazeNeedsAVisiblePupil) {
+  auto mutual_of = [](const GazeAnalyzerOptions& o, bool stage, bool right, bool left) {
+    auto a = make_gaze_analyzer(o);
+    EXPECT_TRUE(a) << a.error().message;
+    Blackboard bb;
+    const Timestamp t = Timestamp::from_seconds(1);
+    Inputs in = frontal(t);
+    in.eyes.pupil_stage = stage;
+    in.eyes.right.pupil_found = right;
+    in.eyes.left.pupil_found = left;
+    commit_inputs(bb, in, t);
+    MultiFrame mf;
+    mf.stamp = t;
+    BlackboardWriter w("gaze");
+    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    const auto m = bb.snapshot().get(keys::kMutualGaze);
+    EXPECT_TRUE(m && m->present());
+    return m && m->present() && m->value->raw;
+  };
+  GazeAnalyzerOptions o;
+  o.cameras["cam"] = camera();
+  o.mutual.robot_head_m = {0, 0, 0};
+  o.mutual.onset_s = 0;
+  EXPECT_TRUE(mutual_of(o, true, true, true));
+  EXPECT_TRUE(mutual_of(o, true, false, true));
+  EXPECT_FALSE(mutual_of(o, true, false, false));
+  EXPECT_TRUE(mutual_of(o, false, false, false));
+  o.mutual.require_visible_pupil = false;
+  EXPECT_TRUE(mutual_of(o, true, false, false));
+}
+
 }  // namespace
 }  // namespace dreamsense::gaze

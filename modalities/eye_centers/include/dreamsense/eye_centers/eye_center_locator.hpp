@@ -56,7 +56,9 @@ struct EyeLocation {
   double confidence = 0;       // [0, 1], see each method's options
   double score = 0;            // the raw peak: limbus step in grey levels, or T&B's objective
   EyeRejection rejection = EyeRejection::kNone;
-  EyeCenter to_eye_center() const { return {found, center_px, found ? confidence : 0.0}; }
+  EyeCenter to_eye_center() const {
+    return {found, center_px, found ? confidence : 0.0, found && pupil_found};
+  }
 };
 
 // D4.2 eq. (2). For a candidate centre (x0, y0) the normalised contour sums (ring means) L_k at

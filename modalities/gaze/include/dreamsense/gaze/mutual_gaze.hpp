@@ -26,6 +26,11 @@ struct MutualGazeOptions {
   double rect_x_min_m = -0.18, rect_x_max_m = 0.07, rect_y_min_m = -0.05, rect_y_max_m = 0.45;
   double onset_s = 0.04;    // test must hold this long before mutual gaze starts
   double release_s = 0.12;  // and fail this long before it ends (blinks, one-frame misses)
+  // Eye contact shows the pupils: when the eye-centre locator has a pupil stage and found the
+  // pupil in neither eye, the frame's test fails whatever the gaze ray says. Eyes whose pupils
+  // are hidden under the lids look down (toys, table), and there the iris-centre gaze is
+  // biased upwards (modalities/gaze/README.md, "Mutual gaze needs a visible pupil").
+  bool require_visible_pupil = true;
   Status check() const;
 };
 
