@@ -598,6 +598,12 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   const json base = json::parse(slurp(root() / "y2" / "summary.json"))["self_calibration"];
   EXPECT_FALSE(base["gaze_level"]["applied"].get<bool>()) << base.dump();
   EXPECT_NE(base.value("level", ""), "gaze_fixations") << base.dump();
+  // The guided face search (half the CPU) converges too.
+  r = run("analyze " + unknown.string() + " --set self_calibration.guided_search=true --out " +
+          (root() / "y4").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(slurp(root() / "y4" / "summary.json"))["self_calibration"]["status"],
+            "converged");
   r = run("analyze " + unknown.string() + " --set self_calibration.gaze_levl=false --out " +
           (root() / "y3").string());
   EXPECT_NE(r.exit_code, 0);

@@ -55,6 +55,14 @@ Result<bool> bool_of(const runner::OptionOverride& o) {
 Status apply_override(const runner::OptionOverride& o, SessionSelfCalibrationOptions& so) {
   if (o.key == "gaze_level") {
     DS_ASSIGN_OR_RETURN(so.gaze_level.enabled, bool_of(o));
+  } else if (o.key == "tick_step") {
+    DS_ASSIGN_OR_RETURN(const double n, number_of(o));
+    so.tick_step = static_cast<int>(n);
+  } else if (o.key == "enough_frames") {
+    DS_ASSIGN_OR_RETURN(const double n, number_of(o));
+    so.enough_frames = static_cast<int>(n);
+  } else if (o.key == "guided_search") {
+    DS_ASSIGN_OR_RETURN(so.guided_search, bool_of(o));
   } else if (o.key == "gaze_level_eye_yaw") {
     DS_ASSIGN_OR_RETURN(so.gaze_level.eye_yaw, bool_of(o));
   } else if (o.key == "gaze_level_max_yaw_deg") {
@@ -65,11 +73,13 @@ Status apply_override(const runner::OptionOverride& o, SessionSelfCalibrationOpt
     DS_ASSIGN_OR_RETURN(const double n, number_of(o));
     so.gaze_level.min_ticks = static_cast<int>(n);
   } else {
-    return make_error(ErrorCode::kInvalidArgument,
-                      "option self_calibration.{}: unknown (known: gaze_level, "
-                      "gaze_level_eye_yaw, gaze_level_max_yaw_deg, gaze_level_max_pitch_deg, "
-                      "gaze_level_min_ticks)",
-                      o.key);
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        "option self_calibration.{}: unknown (known: tick_step, enough_frames, guided_search, "
+        "gaze_level, "
+        "gaze_level_eye_yaw, gaze_level_max_yaw_deg, gaze_level_max_pitch_deg, "
+        "gaze_level_min_ticks)",
+        o.key);
   }
   return ok_status();
 }
