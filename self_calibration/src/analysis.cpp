@@ -2,13 +2,12 @@
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/perception/options_node.hpp"
 #include "dreamsense/self_calibration/session.hpp"
 #include "dreamsense/sources/session.hpp"
 
 #include <fmt/format.h>
 
-#include <cmath>
-#include <exception>
 #include <fstream>
 
 namespace dreamsense::self_calibration {
@@ -34,53 +33,22 @@ bool needs_self_calibration(const runner::AnalysisOptions& o, SelfCalibrationMod
 
 namespace {
 
-Result<double> number_of(const runner::OptionOverride& o) {
-  try {
-    size_t used = 0;
-    const double v = std::stod(o.value, &used);
-    if (used == o.value.size() && std::isfinite(v)) return v;
-  } catch (const std::exception&) {
-  }
-  return make_error(ErrorCode::kInvalidArgument, "option self_calibration.{}: '{}' is not a number",
-                    o.key, o.value);
-}
-
-Result<bool> bool_of(const runner::OptionOverride& o) {
-  if (o.value == "true") return true;
-  if (o.value == "false") return false;
-  return make_error(ErrorCode::kInvalidArgument,
-                    "option self_calibration.{}: true or false (got '{}')", o.key, o.value);
-}
-
-Status apply_override(const runner::OptionOverride& o, SessionSelfCalibrationOptions& so) {
-  if (o.key == "gaze_level") {
-    DS_ASSIGN_OR_RETURN(so.gaze_level.enabled, bool_of(o));
-  } else if (o.key == "tick_step") {
-    DS_ASSIGN_OR_RETURN(const double n, number_of(o));
-    so.tick_step = static_cast<int>(n);
-  } else if (o.key == "enough_frames") {
-    DS_ASSIGN_OR_RETURN(const double n, number_of(o));
-    so.enough_frames = static_cast<int>(n);
-  } else if (o.key == "guided_search") {
-    DS_ASSIGN_OR_RETURN(so.guided_search, bool_of(o));
-  } else if (o.key == "gaze_level_eye_yaw") {
-    DS_ASSIGN_OR_RETURN(so.gaze_level.eye_yaw, bool_of(o));
-  } else if (o.key == "gaze_level_max_yaw_deg") {
-    DS_ASSIGN_OR_RETURN(so.gaze_level.max_yaw_deg, number_of(o));
-  } else if (o.key == "gaze_level_max_pitch_deg") {
-    DS_ASSIGN_OR_RETURN(so.gaze_level.max_pitch_deg, number_of(o));
-  } else if (o.key == "gaze_level_min_ticks") {
-    DS_ASSIGN_OR_RETURN(const double n, number_of(o));
-    so.gaze_level.min_ticks = static_cast<int>(n);
-  } else {
-    return make_error(
-        ErrorCode::kInvalidArgument,
-        "option self_calibration.{}: unknown (known: tick_step, enough_frames, guided_search, "
-        "gaze_level, "
-        "gaze_level_eye_yaw, gaze_level_max_yaw_deg, gaze_level_max_pitch_deg, "
-        "gaze_level_min_ticks)",
-        o.key);
-  }
+// `--set self_calibration.KEY=VALUE` read as an analyser's options are (typed reads, one-line
+// errors naming the key, unread keys unknown).
+Status apply_overrides(const std::vector<runner::OptionOverride>& overrides,
+                       SessionSelfCalibrationOptions& so) {
+  OptionsNode node("self_calibration", YAML::Node(YAML::NodeType::Map));
+  for (const auto& o : overrides) DS_RETURN_IF_ERROR(node.set(o.key, o.value));
+  DS_RETURN_IF_ERROR(node.get("tick_step", so.tick_step));
+  DS_RETURN_IF_ERROR(node.get("enough_frames", so.enough_frames));
+  DS_RETURN_IF_ERROR(node.get("guided_search", so.guided_search));
+  DS_RETURN_IF_ERROR(node.get("gaze_level", so.gaze_level.enabled));
+  DS_RETURN_IF_ERROR(node.get("gaze_level_eye_yaw", so.gaze_level.eye_yaw));
+  DS_RETURN_IF_ERROR(node.get("gaze_level_max_yaw_deg", so.gaze_level.max_yaw_deg));
+  DS_RETURN_IF_ERROR(node.get("gaze_level_max_pitch_deg", so.gaze_level.max_pitch_deg));
+  DS_RETURN_IF_ERROR(node.get("gaze_level_min_ticks", so.gaze_level.min_ticks));
+  for (const auto& key : node.unread_keys())
+    return make_error(ErrorCode::kInvalidArgument, "{}.{}: unknown option", node.where(), key);
   return ok_status();
 }
 
@@ -114,7 +82,7 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
         if (ch == '[' || ch == ']') ch = ' ';
       so.face.fixation_target_world_m = parse_vec3(v);
     }
-  for (const auto& over : options.overrides) DS_RETURN_IF_ERROR(apply_override(over, so));
+  DS_RETURN_IF_ERROR(apply_overrides(options.overrides, so));
   DS_RETURN_IF_ERROR(so.check());
   DS_ASSIGN_OR_RETURN(const SessionSelfCalibration c, self_calibrate_session(o.session_dir, so));
   const fs::path dir = o.out_dir / "self_calibration";

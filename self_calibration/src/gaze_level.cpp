@@ -97,10 +97,13 @@ Status GazeLevelOptions::check() const {
 }
 
 std::optional<std::pair<gaze::EyeballModel, gaze::EyeballModel>> anatomical_eyeballs(
-    const head_pose::FaceModel3d& model, const gaze::AnatomicalEyeOptions& eyes) {
+    const head_pose::FaceModel3d& model, const gaze::AnatomicalEyeOptions& eyes, double shift_x_m) {
   const auto right = model_centroid(model, 36, 41), left = model_centroid(model, 42, 47);
   if (!right || !left) return std::nullopt;
-  return std::pair{gaze::anatomical_eyeball(*right, eyes), gaze::anatomical_eyeball(*left, eyes)};
+  std::pair out{gaze::anatomical_eyeball(*right, eyes), gaze::anatomical_eyeball(*left, eyes)};
+  out.first.centre_head_m[0] += shift_x_m;
+  out.second.centre_head_m[0] += shift_x_m;
+  return out;
 }
 
 head_pose::FaceModel3d pitched(const head_pose::FaceModel3d& model, double pitch_deg) {
@@ -125,14 +128,12 @@ GazeLevel level_from_gaze_fixations(const head_pose::FaceModel3d& model,
   for (int round = 0; round < options.rounds; ++round) {
     head_pose::HeadPoseEstimatorOptions pose_options;
     pose_options.model = pitched(model, c);
-    const auto eyeballs = anatomical_eyeballs(pose_options.model, eyes);
+    const auto eyeballs = anatomical_eyeballs(pose_options.model, eyes, shift_x);
     if (!eyeballs) return {};
     gaze::GazeEstimatorOptions gaze_options;
     gaze_options.method = gaze::GazeMethod::kEyeball;
     gaze_options.right_eyeball = eyeballs->first;
     gaze_options.left_eyeball = eyeballs->second;
-    gaze_options.right_eyeball.centre_head_m[0] += shift_x;
-    gaze_options.left_eyeball.centre_head_m[0] += shift_x;
     std::vector<double> facing_yaw, facing_pitch;
     out.ticks_with_gaze = 0;
     for (size_t i = 0; i < ticks.size(); ++i) {

@@ -153,6 +153,9 @@ Result<SessionSelfCalibration> self_calibrate_session(
   std::vector<head_pose::MultiViewLandmarks> ticks;
   std::vector<std::vector<EyeCenters>> pupils;  // per tick, per view of ticks[i]
   std::map<SensorId, cv::Rect2d> last_box;      // per camera: its face at the last searched tick
+  // Only the gaze level uses the pupils.
+  const bool locate_pupils =
+      options.gaze_level.enabled && face_options.fixation_target_world_m.has_value();
   std::vector<FramePtr> group;
   int64_t first_ns = 0, group_ns = 0;
   bool started = false;
@@ -205,8 +208,6 @@ Result<SessionSelfCalibration> self_calibrate_session(
       }
     }
     std::vector<EyeCenters> found;
-    const bool locate_pupils =
-        options.gaze_level.enabled && face_options.fixation_target_world_m.has_value();
     for (size_t v = 0; v < mv.views.size() && locate_pupils; ++v) {
       FaceLandmarks l;
       l.camera = mv.views[v].camera->frame;
@@ -318,11 +319,10 @@ Result<SessionSelfCalibration> self_calibrate_session(
     }
   }
   if (out.face.converged()) {
-    if (const auto e = anatomical_eyeballs(out.face.model, options.eyes)) {
+    if (const auto e =
+            anatomical_eyeballs(out.face.model, options.eyes, out.gaze_level.eyeball_shift_x_m)) {
       out.right_eyeball = e->first;
       out.left_eyeball = e->second;
-      out.right_eyeball.centre_head_m[0] += out.gaze_level.eyeball_shift_x_m;
-      out.left_eyeball.centre_head_m[0] += out.gaze_level.eyeball_shift_x_m;
     }
   }
   out.cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;

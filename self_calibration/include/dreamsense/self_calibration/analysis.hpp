@@ -30,7 +30,8 @@ struct ForAnalysisOptions {
   // One-line progress messages for the user ("self-calibration: ...", "... converged: ...").
   std::function<void(const std::string&)> progress;
   // `--set self_calibration.KEY=VALUE` (taken out of the plan's overrides by
-  // take_self_calibration_overrides): gaze_level (true/false), gaze_level_max_yaw_deg,
+  // take_self_calibration_overrides), read like an analyser's options: tick_step,
+  // enough_frames, guided_search, gaze_level, gaze_level_eye_yaw, gaze_level_max_yaw_deg,
   // gaze_level_max_pitch_deg, gaze_level_min_ticks. An unknown key or a bad value is an error.
   std::vector<runner::OptionOverride> overrides;
 };

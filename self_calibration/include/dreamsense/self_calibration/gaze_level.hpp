@@ -55,10 +55,12 @@ struct GazeLevel {
   double eyeball_shift_x_m = 0;
 };
 
-// The model's right (36-41) and left (42-47) anatomical eyeballs; nullopt when an eye opening's
-// six points are not all in the model.
+// The model's right (36-41) and left (42-47) anatomical eyeballs, both moved by `shift_x_m`
+// along the head's x (GazeLevel::eyeball_shift_x_m); nullopt when an eye opening's six points
+// are not all in the model.
 std::optional<std::pair<gaze::EyeballModel, gaze::EyeballModel>> anatomical_eyeballs(
-    const head_pose::FaceModel3d& model, const gaze::AnatomicalEyeOptions& eyes);
+    const head_pose::FaceModel3d& model, const gaze::AnatomicalEyeOptions& eyes,
+    double shift_x_m = 0);
 
 // `model` with its frame turned by `pitch_deg` about x (rotation_from_ypr_deg(0, pitch_deg, 0)
 // applied to every point): the same face, its "straight ahead" tilted.
