@@ -7,6 +7,7 @@
 // Per transform: pooled 256, logits 7, dense3 2x2 grid means (1024), dense2 global mean (128).
 // Extra: landmark-net pooled 256 and recognition descriptor 128 of the untransformed crop.
 #include "dreamsense/eval/faces/datasets.hpp"
+#include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/expression/labels.hpp"
 #include "dreamsense/vision/face_alignment.hpp"
 #include "dreamsense/vision/face_api_net.hpp"
@@ -135,7 +136,16 @@ int main(int argc, char** argv) {
   // crop (landmark box + 10 %), zoomed-out aligned crops (x0.8, x0.7); each with its mirror.
   // Extra: the alignment source (0 landmarks, 1 landmarks on the crop, 2 crop geometry).
   const bool crops_mode = std::getenv("FER_MODE") != nullptr;
-  const int T = crops_mode ? 8 : static_cast<int>(jitters.size());
+  // FER_MODE=detbox: views 0 whole image, 1 aligned crop, 2 package box, 3-5 the cascade's own
+  // box (as the aligner finds it; whole image when it finds none) grown x1.0, x1.2, x1.4.
+  const bool detbox = crops_mode && std::string(std::getenv("FER_MODE")) == "detbox";
+  face_detection::FaceDetectorOptions dopt;
+  dopt.min_face_px = crop.min_face_fraction * crop.working_px;
+  dopt.detection_width = std::max(dopt.detection_width, 4 * crop.working_px);
+  dopt.estimate_frontalness = false;
+  auto detector = face_detection::FaceDetector::create(dopt);
+  if (!detector) return 1;
+  const int T = detbox ? 12 : crops_mode ? 8 : static_cast<int>(jitters.size());
   const int per = crops_mode ? 263 : 256 + 7 + 1024 + 128, extra = crops_mode ? 1 : 256 + 128;
   std::ofstream out(argv[3], std::ios::binary);
   const int header[4] = {static_cast<int>(items->size()), T, per, extra};
@@ -182,7 +192,33 @@ int main(int argc, char** argv) {
         if (box.area() < 16) box = cv::Rect(0, 0, grey->cols, grey->rows);
       }
       views.push_back((*grey)(box).clone());
-      if (std::string(std::getenv("FER_MODE")) == "frames") {
+      if (detbox) {
+        views.clear();
+        views.push_back(*grey);
+        views.push_back(vision::resample_face(*grey, f, vision::kFaceApiInputPx));
+        views.push_back((*grey)(box).clone());
+        const double k = static_cast<double>(crop.working_px) / std::min(grey->cols, grey->rows);
+        cv::Mat work;
+        cv::resize(*grey, work, cv::Size(), k, k, cv::INTER_LINEAR);
+        cv::Rect2d det(0, 0, grey->cols, grey->rows);
+        double best = 0;
+        for (const auto& d : detector->detect(work, std::nullopt, false))
+          if (d.box_px.area() > best) {
+            best = d.box_px.area();
+            det = cv::Rect2d(d.box_px.x / k, d.box_px.y / k, d.box_px.width / k,
+                             d.box_px.height / k);
+          }
+        for (double grow : {1.0, 1.2, 1.4}) {
+          const double side = std::max(det.width, det.height) * grow;
+          const double cx = det.x + det.width / 2, cy = det.y + det.height / 2;
+          const double s = 112.0 / side;
+          const cv::Matx23d t(s, 0, 56 - s * cx, 0, s, 56 - s * cy);
+          cv::Mat v;
+          cv::warpAffine(*grey, v, cv::Mat(t), cv::Size(112, 112), cv::INTER_LINEAR,
+                         cv::BORDER_REPLICATE);
+          views.push_back(v);
+        }
+      } else if (std::string(std::getenv("FER_MODE")) == "frames") {
         views.clear();
         views.push_back(framed(*grey, f, 0.36, 0.40, true, false));
         views.push_back(framed(*grey, f, 0.36, 0.40, false, false));
