@@ -590,9 +590,11 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   EXPECT_EQ(sc["gaze_level"]["applied"].get<bool>(), level == "gaze_fixations") << sc.dump();
   EXPECT_TRUE(fs::exists(root() / "y" / "self_calibration" / "face_model.yaml"));
   EXPECT_NE(r.err.find("self_calibration/face_model.yaml"), std::string::npos) << r.err;
-  // The head-fixation level (the baseline) on request; an unknown self-calibration option is
-  // an error naming it.
-  r = run("analyze " + unknown.string() + " --set self_calibration.gaze_level=false --out " +
+  // The head-fixation level and the full size range at every tick (the baselines) on request;
+  // an unknown self-calibration option is an error naming it.
+  r = run("analyze " + unknown.string() +
+          " --set self_calibration.gaze_level=false --set "
+          "self_calibration.size_guided_search=false --out " +
           (root() / "y2").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json base = json::parse(slurp(root() / "y2" / "summary.json"))["self_calibration"];

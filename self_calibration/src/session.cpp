@@ -174,7 +174,8 @@ Result<SessionSelfCalibration> self_calibrate_session(
       const ColorImage* img = f->as<ColorImage>();
       if (img == nullptr) continue;
       std::vector<DetectedFace> faces;
-      if (const auto it = last_box.find(f->sensor); options.guided_search && it != last_box.end()) {
+      const auto it = last_box.find(f->sensor);
+      if (options.guided_search && it != last_box.end()) {
         // Around this camera's face of the last searched tick (0.24 s ago at the defaults), as
         // the face tracker searches between full searches; the full frame when it is not there.
         const cv::Rect2d& b = it->second;
@@ -185,6 +186,13 @@ Result<SessionSelfCalibration> self_calibrate_session(
         if (!region.empty())
           faces = detector->detect(
               img->image, face_detection::SearchRegion{region, 0.6 * size, 1.6 * size}, false);
+      } else if (options.size_guided_search && it != last_box.end()) {
+        const double size = std::max(it->second.width, it->second.height);
+        faces = detector->detect(
+            img->image,
+            face_detection::SearchRegion{cv::Rect(0, 0, img->image.cols, img->image.rows),
+                                         0.5 * size, 2.0 * size, /*shrink_to_min_face=*/false},
+            false);
       }
       if (faces.empty()) faces = detector->detect(img->image, std::nullopt, false);
       if (faces.empty()) {

@@ -7,8 +7,8 @@
 // Per transform: pooled 256, logits 7, dense3 2x2 grid means (1024), dense2 global mean (128).
 // Extra: landmark-net pooled 256 and recognition descriptor 128 of the untransformed crop.
 #include "dreamsense/eval/faces/datasets.hpp"
-#include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/expression/labels.hpp"
+#include "dreamsense/face_detection/face_detector.hpp"
 #include "dreamsense/vision/face_alignment.hpp"
 #include "dreamsense/vision/face_api_net.hpp"
 #include "dreamsense/vision/face_crops.hpp"
@@ -205,8 +205,8 @@ int main(int argc, char** argv) {
         for (const auto& d : detector->detect(work, std::nullopt, false))
           if (d.box_px.area() > best) {
             best = d.box_px.area();
-            det = cv::Rect2d(d.box_px.x / k, d.box_px.y / k, d.box_px.width / k,
-                             d.box_px.height / k);
+            det =
+                cv::Rect2d(d.box_px.x / k, d.box_px.y / k, d.box_px.width / k, d.box_px.height / k);
           }
         for (double grow : {1.0, 1.2, 1.4}) {
           const double side = std::max(det.width, det.height) * grow;

@@ -216,7 +216,7 @@ std::vector<DetectedFace> FaceDetector::detect(const cv::Mat& image,
   int k = std::max(1, (image.cols + o.detection_width - 1) / o.detection_width);
   // Around a tracked face: shrink so that the smallest face searched is ~ the cascade window
   // (cost grows with the face's size in pixels, not with the region's area).
-  if (search && search->min_face_px > 0)
+  if (search && search->shrink_to_min_face && search->min_face_px > 0)
     k = std::max(k, static_cast<int>(std::floor(search->min_face_px / impl_->frontal_window)));
   // Work on a region aligned to the k x k grid, so a region is shrunk exactly as the full frame.
   cv::Rect region(0, 0, image.cols / k * k, image.rows / k * k);

@@ -156,6 +156,33 @@ TEST(FaceDetector, FindsTheDemoFaceWhereTheTruthIs) {
   }
 }
 
+// The self-calibration's search: the full frame shrunk as always, only face sizes near the last
+// one. The cascade windows at those sizes are the full search's, so the box is the same.
+TEST(FaceDetector, SizeLimitedSearchAtTheFullFrameScaleKeepsTheFullSearchBox) {
+  FaceDetector d = make_detector();
+  const MultiFrame& mf = demo().ticks[0];
+  const auto& truth = demo().truth.at(mf.stamp.ns());
+  int compared = 0;
+  for (const SensorId& cam : kCameras) {
+    const auto& t = truth.cameras.at(cam);
+    if (!t.visible || std::abs(t.yaw_deg) > 45) continue;
+    const cv::Mat& image = image_of(mf, cam);
+    const auto full = d.detect(image, std::nullopt, false);
+    ASSERT_EQ(full.size(), 1u) << cam;
+    const double size = full[0].box_px.width;
+    const cv::Rect whole(0, 0, image.cols, image.rows);
+    const auto limited = d.detect(image, SearchRegion{whole, 0.5 * size, 2.0 * size, false}, false);
+    ASSERT_EQ(limited.size(), 1u) << cam;
+    EXPECT_EQ(limited[0].box_px, full[0].box_px) << cam;
+    EXPECT_EQ(limited[0].score, full[0].score) << cam;
+    // Sizes that exclude the face: nothing.
+    EXPECT_TRUE(d.detect(image, SearchRegion{whole, 2.5 * size, 4 * size, false}, false).empty())
+        << cam;
+    ++compared;
+  }
+  EXPECT_GE(compared, 1);
+}
+
 TEST(HogFaceDetector, FindsTheDemoFaceAndNothingInBlankImages) {
   EXPECT_FALSE(HogFaceDetector::create({.min_face_px = 5}));
   auto d = HogFaceDetector::create();

@@ -59,6 +59,10 @@ struct FaceDetectorOptions {
 struct SearchRegion {
   cv::Rect region_px;                       // full-resolution pixels; clipped to the image
   double min_face_px = 0, max_face_px = 0;  // 0 = the detector's own limits
+  // false: the image is shrunk as for a full-frame search (detection_width only), so the cascade
+  // windows at the sizes searched are exactly those of a full-frame search; only the sizes
+  // outside [min_face_px, max_face_px] are skipped.
+  bool shrink_to_min_face = true;
 };
 
 // Detects faces in one image. Holds OpenCV cascades, which are not safe to use from two threads
