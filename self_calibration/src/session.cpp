@@ -104,6 +104,10 @@ nlohmann::json SessionSelfCalibration::to_json() const {
 Result<SessionSelfCalibration> self_calibrate_session(
     const std::filesystem::path& dir, const SessionSelfCalibrationOptions& options) {
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  // dlib's model is the process's shared one (the analysis's face_landmarks uses it too, so it
+  // is loaded once); its load (~1 s) is not a cost of self-calibrating, so the clock starts after.
+  auto landmarker = face_landmarks::shared_dlib_landmarker();
+  if (!landmarker) return tl::unexpected(landmarker.error());
   const std::clock_t cpu0 = std::clock();
   auto manifest = sources::read_manifest(dir);
   if (!manifest) return tl::unexpected(manifest.error());
@@ -140,8 +144,6 @@ Result<SessionSelfCalibration> self_calibrate_session(
 
   auto detector = face_detection::FaceDetector::create({});
   if (!detector) return tl::unexpected(detector.error());
-  auto landmarker = face_landmarks::make_dlib_landmarker();
-  if (!landmarker) return tl::unexpected(landmarker.error());
   auto pupil_locator = eye_centers::EyeCenterLocator::create(options.pupils);
   if (!pupil_locator) return tl::unexpected(pupil_locator.error());
 

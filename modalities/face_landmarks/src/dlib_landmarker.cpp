@@ -9,6 +9,7 @@
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -18,6 +19,8 @@
 #include <dlib/image_processing/shape_predictor.h>
 #include <dlib/opencv/cv_image.h>
 #include <fstream>
+#include <map>
+#include <mutex>
 
 namespace dreamsense::face_landmarks {
 namespace {
@@ -381,6 +384,23 @@ Result<std::unique_ptr<Landmarker>> make_dlib_landmarker(const DlibLandmarkerOpt
   m.mean_extent = cv::Rect2d(x0, y0, x1 - x0, y1 - y0);
   m.quantized = options.quantized_leaves;
   return std::unique_ptr<Landmarker>(new DlibLandmarker(options, std::move(m)));
+}
+
+Result<std::shared_ptr<const Landmarker>> shared_dlib_landmarker(
+    const DlibLandmarkerOptions& options) {
+  if (auto s = options.check(); !s) return tl::unexpected(s.error());
+  std::string key = fmt::format(
+      "{}|{}|{}|{}|{}|{}|{}|", options.model.string(), options.refit_passes, options.mirror,
+      options.min_box_px, options.min_contrast, options.min_box_inside, options.quantized_leaves);
+  for (double scale : options.box_scales) key += fmt::format("{},", scale);
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const Landmarker>> loaded;
+  const std::lock_guard lock(mutex);
+  if (const auto it = loaded.find(key); it != loaded.end()) return it->second;
+  DS_ASSIGN_OR_RETURN(std::unique_ptr<Landmarker> made, make_dlib_landmarker(options));
+  std::shared_ptr<const Landmarker> shared = std::move(made);
+  loaded.emplace(key, shared);
+  return shared;
 }
 
 }  // namespace dreamsense::face_landmarks

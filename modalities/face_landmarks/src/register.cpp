@@ -26,7 +26,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
     for (const auto& [id, m] : cameras) o.cameras.push_back(id);
     if (auto s = o.check(); !s) return tl::unexpected(s.error());
     PlannedAnalyzers p;
-    DS_ASSIGN_OR_RETURN(std::shared_ptr<const Landmarker> dlib, make_dlib_landmarker(o.dlib));
+    DS_ASSIGN_OR_RETURN(std::shared_ptr<const Landmarker> dlib, shared_dlib_landmarker(o.dlib));
     std::shared_ptr<const Landmarker> cnn;
     if (o.cnn_fallback) {
       auto c = make_face_api_landmarker(o.cnn);

@@ -25,26 +25,24 @@
 namespace dreamsense::face_landmarks {
 namespace {
 
-// The 100 MB model is loaded once per test binary.
+// The 100 MB model is loaded once per test binary (the process's shared one).
 std::shared_ptr<const Landmarker> shared_landmarker() {
-  static std::shared_ptr<const Landmarker> l = [] {
-    auto r = make_dlib_landmarker();
-    if (!r) throw std::runtime_error(r.error().to_string());
-    return std::shared_ptr<const Landmarker>(std::move(*r));
-  }();
-  return l;
+  auto r = shared_dlib_landmarker();
+  if (!r) throw std::runtime_error(r.error().to_string());
+  return *r;
+}
+
+DlibLandmarkerOptions float_leaves() {
+  DlibLandmarkerOptions o;
+  o.quantized_leaves = false;
+  return o;
 }
 
 // dlib's float leaves (DlibLandmarkerOptions::quantized_leaves false), the bit-exact baseline.
 std::shared_ptr<const Landmarker> float_landmarker() {
-  static std::shared_ptr<const Landmarker> l = [] {
-    DlibLandmarkerOptions o;
-    o.quantized_leaves = false;
-    auto r = make_dlib_landmarker(o);
-    if (!r) throw std::runtime_error(r.error().to_string());
-    return std::shared_ptr<const Landmarker>(std::move(*r));
-  }();
-  return l;
+  auto r = shared_dlib_landmarker(float_leaves());
+  if (!r) throw std::runtime_error(r.error().to_string());
+  return *r;
 }
 
 const sim::PlanarFaceOptions kPortrait;
@@ -314,6 +312,23 @@ TEST(FaceApiLandmarker, PortraitTinyDetectorAndEyes) {
   FaceApiLandmarkerOptions bad;
   bad.margin = -0.1;
   EXPECT_FALSE(make_face_api_landmarker(bad));
+}
+
+// One load per options and process; other options another model; a missing file an error.
+TEST(DlibLandmarker, SharedLandmarkerIsLoadedOncePerOptions) {
+  const auto a = shared_dlib_landmarker(), b = shared_dlib_landmarker();
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(a->get(), b->get());
+  const auto f = shared_dlib_landmarker(float_leaves());
+  ASSERT_TRUE(f);
+  EXPECT_NE(f->get(), a->get());
+  EXPECT_EQ(f->get(), float_landmarker().get());
+  DlibLandmarkerOptions missing;
+  missing.model = "/nonexistent/shape_predictor.dat";
+  const auto e = shared_dlib_landmarker(missing);
+  ASSERT_FALSE(e);
+  EXPECT_NE(e.error().message.find("/nonexistent/shape_predictor.dat"), std::string::npos);
+  EXPECT_TRUE(shared_dlib_landmarker());  // a failed load leaves the cache usable
 }
 
 TEST(DlibLandmarker, NegativeCases) {

@@ -67,8 +67,10 @@ struct SessionSelfCalibration {
   int cameras = 0;  // calibrated colour streams searched
   int ticks_searched = 0;
   int views_with_landmarks = 0;
-  double seconds_searched = 0;                     // of session time
-  double cpu_s = 0;                                // process CPU time of the self-calibration
+  double seconds_searched = 0;  // of session time
+  // Process CPU time of the self-calibration, without loading dlib's model (shared with the
+  // analysis, see shared_dlib_landmarker).
+  double cpu_s = 0;
   gaze::EyeballModel right_eyeball, left_eyeball;  // valid when face.converged()
   GazeLevel gaze_level;                            // applied: face.level "gaze_fixations"
   std::string session;
