@@ -44,6 +44,30 @@ std::optional<cv::Vec3d> eye_openings_centre(const head_pose::TriangulatedFace& 
   return s * (1.0 / n);
 }
 
+// Where a camera's face is looked for first, from its box at the last searched tick (`last`,
+// null: none); nullopt: the full frame at once. The caller searches the full frame when this
+// finds nothing. See SessionSelfCalibrationOptions::guided_search and size_guided_search.
+std::optional<face_detection::SearchRegion> first_search(const cv::Rect2d* last, cv::Size image,
+                                                         const SessionSelfCalibrationOptions& o) {
+  if (last == nullptr) return std::nullopt;
+  const double size = std::max(last->width, last->height);
+  const cv::Rect whole(0, 0, image.width, image.height);
+  if (o.guided_search) {
+    // Around the last box (0.24 s ago at the defaults), as the face tracker searches between
+    // full searches.
+    const double m = 0.75 * size;
+    const cv::Rect region =
+        cv::Rect(cv::Rect2d(last->x - m, last->y - m, last->width + 2 * m, last->height + 2 * m)) &
+        whole;
+    if (region.empty()) return std::nullopt;
+    return face_detection::SearchRegion{region, 0.6 * size, 1.6 * size};
+  }
+  if (o.size_guided_search)
+    return face_detection::SearchRegion{whole, 0.5 * size, 2.0 * size,
+                                        /*shrink_to_min_face=*/false};
+  return std::nullopt;
+}
+
 }  // namespace
 
 Status SessionSelfCalibrationOptions::check() const {
@@ -177,25 +201,9 @@ Result<SessionSelfCalibration> self_calibrate_session(
       if (img == nullptr) continue;
       std::vector<DetectedFace> faces;
       const auto it = last_box.find(f->sensor);
-      if (options.guided_search && it != last_box.end()) {
-        // Around this camera's face of the last searched tick (0.24 s ago at the defaults), as
-        // the face tracker searches between full searches; the full frame when it is not there.
-        const cv::Rect2d& b = it->second;
-        const double size = std::max(b.width, b.height), m = 0.75 * size;
-        const cv::Rect region =
-            cv::Rect(cv::Rect2d(b.x - m, b.y - m, b.width + 2 * m, b.height + 2 * m)) &
-            cv::Rect(0, 0, img->image.cols, img->image.rows);
-        if (!region.empty())
-          faces = detector->detect(
-              img->image, face_detection::SearchRegion{region, 0.6 * size, 1.6 * size}, false);
-      } else if (options.size_guided_search && it != last_box.end()) {
-        const double size = std::max(it->second.width, it->second.height);
-        faces = detector->detect(
-            img->image,
-            face_detection::SearchRegion{cv::Rect(0, 0, img->image.cols, img->image.rows),
-                                         0.5 * size, 2.0 * size, /*shrink_to_min_face=*/false},
-            false);
-      }
+      if (const auto first = first_search(it == last_box.end() ? nullptr : &it->second,
+                                          img->image.size(), options))
+        faces = detector->detect(img->image, *first, false);
       if (faces.empty()) faces = detector->detect(img->image, std::nullopt, false);
       if (faces.empty()) {
         last_box.erase(f->sensor);

@@ -9,17 +9,22 @@ Result<std::shared_ptr<const face_landmarks::Landmarker>> load_landmarker(
   return std::shared_ptr<const face_landmarks::Landmarker>(std::move(*l));
 }
 
+face_detection::FaceDetectorOptions crop_finder_options(const FaceCropOptions& crop,
+                                                        const FaceLocatorOptions& options) {
+  face_detection::FaceDetectorOptions d = options.detector;
+  d.min_face_px = crop.min_face_fraction * crop.working_px;
+  d.detection_width = std::max(d.detection_width, 4 * crop.working_px);
+  d.estimate_frontalness = false;
+  return d;
+}
+
 Result<FaceCropAligner> make_face_crop_aligner(
     const FaceCropOptions& crop, std::shared_ptr<const face_landmarks::Landmarker> landmarker,
     const FaceLocatorOptions& options) {
   if (auto s = crop.check(); !s) return tl::unexpected(s.error());
   if (!landmarker)
     return make_error(ErrorCode::kInvalidArgument, "make_face_crop_aligner: no landmarker");
-  face_detection::FaceDetectorOptions d = options.detector;
-  d.min_face_px = crop.min_face_fraction * crop.working_px;
-  d.detection_width = std::max(d.detection_width, 4 * crop.working_px);
-  d.estimate_frontalness = false;
-  auto detector = face_detection::FaceDetector::create(d);
+  auto detector = face_detection::FaceDetector::create(crop_finder_options(crop, options));
   if (!detector) return tl::unexpected(detector.error());
   auto shared_detector = std::make_shared<face_detection::FaceDetector>(std::move(*detector));
   FaceFinder finder = [shared_detector](const cv::Mat& grey) -> Result<std::vector<cv::Rect2d>> {

@@ -139,11 +139,7 @@ int main(int argc, char** argv) {
   // FER_MODE=detbox: views 0 whole image, 1 aligned crop, 2 package box, 3-5 the cascade's own
   // box (as the aligner finds it; whole image when it finds none) grown x1.0, x1.2, x1.4.
   const bool detbox = crops_mode && std::string(std::getenv("FER_MODE")) == "detbox";
-  face_detection::FaceDetectorOptions dopt;
-  dopt.min_face_px = crop.min_face_fraction * crop.working_px;
-  dopt.detection_width = std::max(dopt.detection_width, 4 * crop.working_px);
-  dopt.estimate_frontalness = false;
-  auto detector = face_detection::FaceDetector::create(dopt);
+  auto detector = face_detection::FaceDetector::create(vision::crop_finder_options(crop));
   if (!detector) return 1;
   const int T = detbox ? 12 : crops_mode ? 8 : static_cast<int>(jitters.size());
   const int per = crops_mode ? 263 : 256 + 7 + 1024 + 128, extra = crops_mode ? 1 : 256 + 128;

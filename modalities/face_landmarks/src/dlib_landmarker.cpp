@@ -9,7 +9,6 @@
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 
-#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -19,8 +18,9 @@
 #include <dlib/image_processing/shape_predictor.h>
 #include <dlib/opencv/cv_image.h>
 #include <fstream>
-#include <map>
 #include <mutex>
+#include <utility>
+#include <vector>
 
 namespace dreamsense::face_landmarks {
 namespace {
@@ -388,18 +388,15 @@ Result<std::unique_ptr<Landmarker>> make_dlib_landmarker(const DlibLandmarkerOpt
 
 Result<std::shared_ptr<const Landmarker>> shared_dlib_landmarker(
     const DlibLandmarkerOptions& options) {
-  if (auto s = options.check(); !s) return tl::unexpected(s.error());
-  std::string key = fmt::format(
-      "{}|{}|{}|{}|{}|{}|{}|", options.model.string(), options.refit_passes, options.mirror,
-      options.min_box_px, options.min_contrast, options.min_box_inside, options.quantized_leaves);
-  for (double scale : options.box_scales) key += fmt::format("{},", scale);
   static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<const Landmarker>> loaded;
+  // A few entries at most (one per distinct options): a list compared with the options' ==.
+  static std::vector<std::pair<DlibLandmarkerOptions, std::shared_ptr<const Landmarker>>> loaded;
   const std::lock_guard lock(mutex);
-  if (const auto it = loaded.find(key); it != loaded.end()) return it->second;
+  for (const auto& [o, l] : loaded)
+    if (o == options) return l;
   DS_ASSIGN_OR_RETURN(std::unique_ptr<Landmarker> made, make_dlib_landmarker(options));
   std::shared_ptr<const Landmarker> shared = std::move(made);
-  loaded.emplace(key, shared);
+  loaded.emplace_back(options, shared);
   return shared;
 }
 

@@ -25,6 +25,11 @@ struct FaceLocatorOptions {
 Result<std::shared_ptr<const face_landmarks::Landmarker>> load_landmarker(
     const FaceLocatorOptions& options = {});
 
+// The cascade options the aligner's finder uses for `crop` (options.detector with min_face_px
+// from min_face_fraction of the working size, no shrinking of the working image, no frontalness).
+face_detection::FaceDetectorOptions crop_finder_options(const FaceCropOptions& crop,
+                                                        const FaceLocatorOptions& options = {});
+
 // An aligner with a cascade of its own (not thread-safe: one per thread) and the shared
 // landmarker.
 Result<FaceCropAligner> make_face_crop_aligner(

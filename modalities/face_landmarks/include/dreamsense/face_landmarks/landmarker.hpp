@@ -82,6 +82,7 @@ struct DlibLandmarkerOptions {
   // leaves, bit-identical to dlib's own cascade (the baseline).
   bool quantized_leaves = true;
   Status check() const;
+  bool operator==(const DlibLandmarkerOptions&) const = default;
 };
 
 // Loads the model (~100 MB, about a second): create once and share. A missing model file is an
