@@ -180,9 +180,15 @@ Answer<FacesValue> get_faces(const PrimitiveContext& ctx) {
     for (const auto& f : cf.faces) list.push_back(CameraFace{f.box_px, f.score, f.frontalness});
   }
   if (sel) v.selected_camera = sel->camera;
+  // The most frontal camera by this tick's head pose, when there is one (HeadPose::
+  // frontal_camera): face detection chose `sel` from the previous tick's pose.
+  if (const auto pose = ctx.view().get(keys::kHeadPose);
+      sel && pose && pose->present() && pose->stamp == d.entry->stamp &&
+      !pose->value->frontal_camera.empty() && d.value().cameras.count(pose->value->frontal_camera))
+    v.selected_camera = pose->value->frontal_camera;
   a.confidence = d.entry->confidence;
-  if (sel)
-    a.source = sel->camera;
+  if (v.selected_camera)
+    a.source = *v.selected_camera;
   else if (!v.faces.empty())
     a.source = v.faces.front().camera;
   a.value = std::move(v);

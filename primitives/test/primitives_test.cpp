@@ -1,4 +1,6 @@
 #include "dreamsense/perception/body.hpp"
+#include "dreamsense/perception/face_detection.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 #include "dreamsense/perception/sound_direction.hpp"
 #include "dreamsense/perception/voice_id.hpp"
 #include "dreamsense/primitives/audio.hpp"
@@ -112,6 +114,53 @@ TEST(Evaluator, BodyPrimitivesOkNoDataStaleAndOffline) {
   // The skeleton stream goes silent for more than a second.
   r = ev.evaluate(tick(1400, false), bb.snapshot());
   EXPECT_EQ(status(r, PrimitiveId::kGetBody), PrimitiveStatus::kSensorOffline);
+}
+
+// getFaces' selected camera: face detection's choice (made from the previous tick's pose), or
+// the most frontal camera of this tick's head pose when that pose exists and the camera has a
+// detection this tick.
+TEST(Evaluator, GetFacesSelectsTheFrontalCameraOfThisTicksHeadPose) {
+  Evaluator ev({}, {{keys::kFaceDetections.name, {"camera_middle", "camera_right"}}});
+  ASSERT_TRUE(ev.enabled(PrimitiveId::kGetFaces));
+  Blackboard bb;
+  DetectedFace face{{600, 400, 120, 120}, 0.9f};
+  FaceDetections detections;
+  detections.cameras["camera_middle"].faces = {face};
+  detections.cameras["camera_right"].faces = {face};
+  auto faces_at = [&](int64_t t) {
+    MultiFrame mf;
+    mf.stamp = ms(t);
+    for (const char* id : {"camera_middle", "camera_right"})
+      mf.frames[id] = make_frame(id, ms(t), 0, ColorImage{});
+    const auto r = ev.evaluate(mf, bb.snapshot());
+    return r[static_cast<int>(PrimitiveId::kGetFaces) - 1];
+  };
+  auto detect = [&](int64_t t) {
+    BlackboardWriter w("face_detection");
+    w.set(keys::kFaceDetections, detections, ms(t), 0.9f);
+    w.set(keys::kSelectedCamera, SelectedCamera{"camera_middle", 0, face, 0.8f}, ms(t), 0.9f);
+    bb.commit(w, ms(t));
+  };
+  auto pose = [&](int64_t t, const SensorId& frontal) {
+    BlackboardWriter w("head_pose");
+    HeadPose p;
+    p.camera = "camera_middle";
+    p.frontal_camera = frontal;
+    w.set(keys::kHeadPose, p, ms(t), 0.8f);
+    bb.commit(w, ms(t));
+  };
+  detect(0);
+  auto r = faces_at(0);
+  ASSERT_NE(r.value_as<FacesValue>(), nullptr);
+  EXPECT_EQ(r.value_as<FacesValue>()->selected_camera, "camera_middle") << "no head pose yet";
+  pose(0, "camera_right");
+  r = faces_at(0);
+  EXPECT_EQ(r.value_as<FacesValue>()->selected_camera, "camera_right");
+  EXPECT_EQ(r.source, "camera_right");
+  detect(40);  // the pose is the previous tick's: detection's choice stands
+  EXPECT_EQ(faces_at(40).value_as<FacesValue>()->selected_camera, "camera_middle");
+  pose(40, "camera_left");  // a camera without a detection this tick is not reported
+  EXPECT_EQ(faces_at(40).value_as<FacesValue>()->selected_camera, "camera_middle");
 }
 
 TEST(Evaluator, IdentifyVoiceIsOkOnceAtTheUtterance) {

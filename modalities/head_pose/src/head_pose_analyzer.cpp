@@ -4,6 +4,7 @@
 #include "dreamsense/perception/head_pose.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 
 namespace dreamsense::head_pose {
@@ -16,9 +17,9 @@ class HeadPoseAnalyzer : public Analyzer {
 
   std::string_view name() const override { return "head_pose"; }
   AnalyzerContract contract() const override {
-    AnalyzerContract c{{}, {}, {keys::kFaceLandmarks.name}, {keys::kHeadPose.name}};
-    if (options_.multi_view) c.reads.push_back(keys::kFaceLandmarkViews.name);
-    return c;
+    // The other views are read for the multi-view fit and for frontal_camera.
+    return {
+        {}, {}, {keys::kFaceLandmarks.name, keys::kFaceLandmarkViews.name}, {keys::kHeadPose.name}};
   }
 
   Status process(const MultiFrame& in, const BlackboardView& prior,
@@ -58,6 +59,7 @@ class HeadPoseAnalyzer : public Analyzer {
     filter_.apply(pose);
     pose.views_used = views;
     pose.image = image;
+    pose.frontal_camera = frontal_camera(prior, in.stamp, l.camera, pose.gaze_direction_world);
     const double iod = cv::norm(l.right_eye_px() - l.left_eye_px());
     const double quality = std::clamp(
         1.0 - pose.reprojection_rms_px / (options_.estimator.max_rms_per_interocular * iod), 0.0,
@@ -73,6 +75,25 @@ class HeadPoseAnalyzer : public Analyzer {
   }
 
  private:
+  // Of `fitted` and the cameras of this tick's other landmark views, the one with the smallest
+  // |yaw| of `gaze_world` (ties: the first in that order).
+  SensorId frontal_camera(const BlackboardView& prior, Timestamp tick, const SensorId& fitted,
+                          const cv::Vec3d& gaze_world) const {
+    std::vector<SensorId> seen{fitted};
+    const auto views = prior.get(keys::kFaceLandmarkViews);
+    if (views && views->stamp == tick && views->present())
+      for (const FaceLandmarks& o : views->value->others) seen.push_back(o.camera);
+    SensorId best;
+    double best_yaw = 0;
+    for (const SensorId& id : seen) {
+      const auto c = options_.cameras.find(id);
+      if (c == options_.cameras.end()) continue;
+      const double yaw = std::abs(c->second.yaw_towards_deg(gaze_world));
+      if (best.empty() || yaw < best_yaw) best = id, best_yaw = yaw;
+    }
+    return best;
+  }
+
   // Issue 15: the other cameras that see the face this tick refine the selected camera's fit;
   // returns the number of views the fit explains.
   int refine_with_other_views(const BlackboardView& prior, Timestamp tick,

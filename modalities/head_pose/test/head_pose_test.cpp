@@ -421,6 +421,56 @@ TEST(HeadPoseAnalyzer, SecondCameraGivesAMultiViewPose) {
   EXPECT_EQ(pose_with(true, {unknown}).views_used, 1);
 }
 
+// D4.2's camera selection with this tick's pose: the head turned 20 degrees towards the right
+// camera (24 degrees to the side) faces it more than the middle camera whose landmarks were
+// fitted first; a camera without landmarks this tick (or without a model) is never chosen.
+TEST(HeadPoseAnalyzer, FrontalCameraIsTheFittedViewTheHeadTurnsLeastFrom) {
+  HeadPoseAnalyzerOptions o;
+  const CameraModel middle = camera_at(0), right = camera_at(0.5), left = camera_at(-0.5);
+  o.cameras["camera_middle"] = middle;
+  o.cameras["camera_right"] = right;
+  o.cameras["camera_left"] = left;
+  o.filter.enabled = false;
+  const Timestamp t = Timestamp::from_seconds(2);
+  MultiFrame mf;
+  mf.stamp = t;
+  const cv::Vec3d pos(0, -0.05, 1.1);
+  auto frontal_with = [&](double yaw_deg, const std::vector<std::string>& other_cameras) {
+    const cv::Matx33d R = rotation_from_ypr_deg(yaw_deg, 0, 0);
+    FaceLandmarks fitted;
+    fitted.camera = "camera_middle";
+    fitted.frame_stamp = t;
+    fitted.points_px = project(generic_68_points_m(), R, pos, middle);
+    std::vector<FaceLandmarks> others;
+    for (const std::string& id : other_cameras) {
+      FaceLandmarks v = fitted;
+      v.camera = id;
+      const auto m = o.cameras.find(id);
+      v.points_px =
+          project(generic_68_points_m(), R, pos, m != o.cameras.end() ? m->second : middle);
+      others.push_back(std::move(v));
+    }
+    auto a = make_head_pose_analyzer(o);
+    EXPECT_TRUE(a);
+    Blackboard bb;
+    BlackboardWriter l("face_landmarks");
+    l.set(keys::kFaceLandmarks, fitted, t, 0.8f);
+    l.set(keys::kFaceLandmarkViews, FaceLandmarkViews{others}, t, 0.8f);
+    bb.commit(l, t);
+    BlackboardWriter w("head_pose");
+    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
+    bb.commit(w, t);
+    return bb.snapshot().get(keys::kHeadPose)->value->frontal_camera;
+  };
+  EXPECT_EQ(frontal_with(-20, {"camera_right"}), "camera_right");
+  EXPECT_EQ(frontal_with(-20, {"camera_top", "camera_right", "camera_left"}), "camera_right");
+  EXPECT_EQ(frontal_with(20, {"camera_right", "camera_left"}), "camera_left");
+  EXPECT_EQ(frontal_with(3, {"camera_right", "camera_left"}), "camera_middle");
+  // The right camera would be more frontal, but it fitted no landmarks this tick.
+  EXPECT_EQ(frontal_with(-20, {}), "camera_middle");
+  EXPECT_EQ(frontal_with(-20, {"camera_left"}), "camera_middle");
+}
+
 // A face shape unlike the generic one (deeper nose, flatter brows, narrower eyes), seen by three
 // cameras while the head turns: the fit recovers it to the landmark noise, and PnP with the
 // fitted model beats PnP with the generic one on new poses.

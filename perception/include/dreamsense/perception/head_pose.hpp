@@ -45,6 +45,12 @@ struct HeadPose {
   };
   std::optional<ImagePose> image;
   int views_used = 1;  // cameras whose landmarks the pose explains
+  // D4.2's camera selection made with this tick's pose: of the cameras with a landmark fit this
+  // tick, the one towards which the head's yaw is smallest (CameraModel::yaw_towards_deg of the
+  // head-gaze direction). The face chain's own camera (`camera`) was chosen by face detection
+  // before this pose existed, from the previous tick's; during a head turn the two differ.
+  // Empty when the pose has no camera models to compare.
+  SensorId frontal_camera;
   // This pose with the image pose's rotation and positions in place of the multi-view ones
   // (yaw/pitch/roll and the head-gaze ray stay the multi-view pose's).
   HeadPose as_image_pose() const {

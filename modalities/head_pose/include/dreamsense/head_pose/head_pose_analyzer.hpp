@@ -7,8 +7,9 @@
 //  - otherwise kHeadPose (smoothed unless options.filter.enabled is false), confidence = the
 //    landmarks' confidence * (1 - rms / (max_rms_per_interocular * inter-ocular px)).
 // A landmarks camera without a CameraModel in options.cameras is an error (configuration).
-// With options.multi_view it also reads keys::kFaceLandmarkViews (the same face in the other
-// cameras) and fits one pose to every view that agrees.
+// It also reads keys::kFaceLandmarkViews (the same face in the other cameras): with
+// options.multi_view it fits one pose to every view that agrees; always, HeadPose::frontal_camera
+// is the camera of these views the head turns least away from.
 
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/core/camera_model.hpp"
