@@ -24,6 +24,7 @@ struct ViewPoints {
   std::vector<cv::Point3d> model;
   std::vector<cv::Point2d> image;
   double iod_px = 0;
+  double weight = 1;  // scale of this view's residuals in the multi-view fit
 };
 
 std::optional<ViewPoints> view_points(const PoseView& v, const FaceModel3d& m) {
@@ -50,6 +51,8 @@ Status HeadPoseEstimatorOptions::check() const {
   if (!(max_rms_per_interocular > 0)) bad += " max_rms_per_interocular must be > 0;";
   if (!(max_angle_to_camera_deg > 0 && max_angle_to_camera_deg <= 180))
     bad += " max_angle_to_camera_deg must be in (0, 180];";
+  if (!(view_weight_power >= 0 && view_weight_power <= 10))
+    bad += " view_weight_power must be in [0, 10];";
   if (!bad.empty())
     return make_error(ErrorCode::kInvalidArgument, "HeadPoseEstimatorOptions:{}", bad);
   return ok_status();
@@ -103,9 +106,14 @@ Result<std::optional<PnpFit>> fit_head_pose(const std::vector<cv::Point2d>& land
 
 namespace {
 
-// Reprojection residuals (x, y per point) of the pose world_from_model = (R, t) in one view.
+// The smallest cosine a view's weight is computed from (an 87-degree view keeps a little say).
+constexpr double kMinViewFacing = 0.05;
+
+// Reprojection residuals (x, y per point) of the pose world_from_model = (R, t) in one view,
+// scaled by the view's weight when `weighted`.
 void add_residuals(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t,
-                   std::vector<double>& r) {
+                   std::vector<double>& r, bool weighted = true) {
+  const double w = weighted ? v.weight : 1.0;
   const cv::Matx33d Rc = v.camera->R * R;
   const cv::Vec3d tc = v.camera->R * t + v.camera->t;
   cv::Vec3d rvec;
@@ -113,8 +121,8 @@ void add_residuals(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t
   std::vector<cv::Point2d> proj;
   cv::projectPoints(v.model, rvec, tc, cv::Mat(v.camera->K), v.camera->distortion, proj);
   for (size_t i = 0; i < proj.size(); ++i) {
-    r.push_back(proj[i].x - v.image[i].x);
-    r.push_back(proj[i].y - v.image[i].y);
+    r.push_back(w * (proj[i].x - v.image[i].x));
+    r.push_back(w * (proj[i].y - v.image[i].y));
   }
 }
 
@@ -124,9 +132,10 @@ double sum_squares(const std::vector<double>& r) {
   return s;
 }
 
+// Unweighted: the view's own reprojection error in its pixels.
 double view_rms(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t) {
   std::vector<double> r;
-  add_residuals(v, R, t, r);
+  add_residuals(v, R, t, r, /*weighted=*/false);
   return std::sqrt(2 * sum_squares(r) / static_cast<double>(r.size()));
 }
 
@@ -217,6 +226,14 @@ std::optional<MultiViewFit> refine_head_pose_multi_view(const PnpFit& start, con
     auto v = view_points(o, options.model);
     if (v && view_rms(*v, R, t) <= view_gate_per_interocular * v->iod_px)
       views.push_back(std::move(*v));
+  }
+  if (options.view_weight_power > 0) {
+    const cv::Vec3d forward = R * cv::Vec3d(0, 0, -1);  // the face's direction at the start pose
+    for (ViewPoints& v : views) {
+      const cv::Vec3d to_camera = v.camera->centre_world() - t;
+      const double facing = forward.dot(to_camera) / cv::norm(to_camera);
+      v.weight = std::pow(std::max(facing, kMinViewFacing), options.view_weight_power);
+    }
   }
   while (views.size() >= 2) {
     cv::Matx33d Rf = R;

@@ -17,6 +17,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
     HeadPoseAnalyzerOptions o;
     DS_RETURN_IF_ERROR(options.get("max_rms_per_interocular", o.estimator.max_rms_per_interocular));
     DS_RETURN_IF_ERROR(options.get("multi_view", o.multi_view));
+    DS_RETURN_IF_ERROR(options.get("view_weight_power", o.estimator.view_weight_power));
     DS_RETURN_IF_ERROR(options.child("filter").get("enabled", o.filter.enabled));
     o.cameras = ctx.cameras_with_role(roles::kChildCamera);
     if (o.cameras.empty())

@@ -21,6 +21,13 @@ struct HeadPoseEstimatorOptions {
   // Reject poses whose face normal points away from the camera by more than this (deg): the
   // camera would not see the face (PnP's mirror solution, a false landmark fit).
   double max_angle_to_camera_deg = 85;
+  // Multi-view fit: each view's reprojection residuals are scaled by cos(a)^view_weight_power,
+  // a = the angle between the face's direction (at the start pose) and the direction to that
+  // camera. dlib's fit of a strongly turned face is pulled towards the frontal mean shape, and
+  // with equal weights those views drew the pose's yaw towards themselves: yaw error grew with
+  // yaw (slope -0.07...-0.12 on the glasses child, ~0 with one view; README "Multi-view head
+  // pose"). 0 = every view counts the same.
+  double view_weight_power = 3;
   Status check() const;
 };
 
