@@ -341,6 +341,27 @@ TEST(PoseFilter, SmoothsJitterAndFollowsTurns) {
   }
 }
 
+// The head pose a fresh analyser writes for one tick at `t` with `fitted` landmarks and the other
+// cameras' views (keys::kFaceLandmarkViews).
+HeadPose pose_of_one_tick(const HeadPoseAnalyzerOptions& o, Timestamp t,
+                          const FaceLandmarks& fitted, const std::vector<FaceLandmarks>& others) {
+  auto a = make_head_pose_analyzer(o);
+  EXPECT_TRUE(a);
+  MultiFrame mf;
+  mf.stamp = t;
+  Blackboard bb;
+  BlackboardWriter l("face_landmarks");
+  l.set(keys::kFaceLandmarks, fitted, t, 0.8f);
+  l.set(keys::kFaceLandmarkViews, FaceLandmarkViews{others}, t, 0.8f);
+  bb.commit(l, t);
+  BlackboardWriter w("head_pose");
+  EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
+  bb.commit(w, t);
+  const auto e = bb.snapshot().get(keys::kHeadPose);
+  EXPECT_TRUE(e && e->present());
+  return e && e->present() ? *e->value : HeadPose{};
+}
+
 TEST(HeadPoseAnalyzer, BlackboardBehaviour) {
   HeadPoseAnalyzerOptions o;
   EXPECT_FALSE(o.check()) << "no camera models";
@@ -412,8 +433,6 @@ TEST(HeadPoseAnalyzer, SecondCameraGivesAMultiViewPose) {
   o.cameras["camera_right"] = right;
   o.filter.enabled = false;
   const Timestamp t = Timestamp::from_seconds(2);
-  MultiFrame mf;
-  mf.stamp = t;
   const cv::Matx33d R = rotation_from_ypr_deg(10, 0, 0);
   const cv::Vec3d pos(0, -0.05, 1.1);
   FaceLandmarks selected;
@@ -431,17 +450,7 @@ TEST(HeadPoseAnalyzer, SecondCameraGivesAMultiViewPose) {
   auto pose_with = [&](bool multi_view, const std::vector<FaceLandmarks>& others) {
     HeadPoseAnalyzerOptions oo = o;
     oo.multi_view = multi_view;
-    auto a = make_head_pose_analyzer(oo);
-    EXPECT_TRUE(a);
-    Blackboard bb;
-    BlackboardWriter l("face_landmarks");
-    l.set(keys::kFaceLandmarks, selected, t, 0.8f);
-    l.set(keys::kFaceLandmarkViews, FaceLandmarkViews{others}, t, 0.8f);
-    bb.commit(l, t);
-    BlackboardWriter w("head_pose");
-    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
-    bb.commit(w, t);
-    return *bb.snapshot().get(keys::kHeadPose)->value;
+    return pose_of_one_tick(oo, t, selected, others);
   };
   const HeadPose one = pose_with(false, {other});
   const HeadPose two = pose_with(true, {unknown, other});
@@ -475,8 +484,6 @@ TEST(HeadPoseAnalyzer, FrontalCameraIsTheFittedViewTheHeadTurnsLeastFrom) {
   o.cameras["camera_left"] = left;
   o.filter.enabled = false;
   const Timestamp t = Timestamp::from_seconds(2);
-  MultiFrame mf;
-  mf.stamp = t;
   const cv::Vec3d pos(0, -0.05, 1.1);
   auto frontal_with = [&](double yaw_deg, const std::vector<std::string>& other_cameras) {
     const cv::Matx33d R = rotation_from_ypr_deg(yaw_deg, 0, 0);
@@ -493,17 +500,7 @@ TEST(HeadPoseAnalyzer, FrontalCameraIsTheFittedViewTheHeadTurnsLeastFrom) {
           project(generic_68_points_m(), R, pos, m != o.cameras.end() ? m->second : middle);
       others.push_back(std::move(v));
     }
-    auto a = make_head_pose_analyzer(o);
-    EXPECT_TRUE(a);
-    Blackboard bb;
-    BlackboardWriter l("face_landmarks");
-    l.set(keys::kFaceLandmarks, fitted, t, 0.8f);
-    l.set(keys::kFaceLandmarkViews, FaceLandmarkViews{others}, t, 0.8f);
-    bb.commit(l, t);
-    BlackboardWriter w("head_pose");
-    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
-    bb.commit(w, t);
-    return bb.snapshot().get(keys::kHeadPose)->value->frontal_camera;
+    return pose_of_one_tick(o, t, fitted, others).frontal_camera;
   };
   EXPECT_EQ(frontal_with(-20, {"camera_right"}), "camera_right");
   EXPECT_EQ(frontal_with(-20, {"camera_top", "camera_right", "camera_left"}), "camera_right");
