@@ -29,11 +29,10 @@ cv::Vec2d yaw_pitch_deg(const cv::Vec3d& d) {
   return {std::atan2(d[0], -d[2]) * kDegreesPerRadian, std::atan2(d[1], -d[2]) * kDegreesPerRadian};
 }
 
-// How squarely a fit's face looks into its camera: cosine between the head's forward direction
-// and the direction from the head to the camera (1 = facing it).
+// How squarely a fit's face looks into its camera (1 = facing it).
 double frontality(const head_pose::PnpFit& fit) {
-  const cv::Vec3d forward = fit.camera_from_head * cv::Vec3d(0, 0, -1);
-  return forward.dot(-cv::normalize(fit.position_camera_m));
+  return head_pose::facing_cosine(fit.camera_from_head * cv::Vec3d(0, 0, -1),
+                                  -fit.position_camera_m);
 }
 
 // The gaze's offset from the target (yaw, pitch; head frame, degrees) at one tick, or nullopt

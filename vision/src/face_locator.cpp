@@ -4,9 +4,7 @@ namespace dreamsense::vision {
 
 Result<std::shared_ptr<const face_landmarks::Landmarker>> load_landmarker(
     const FaceLocatorOptions& options) {
-  auto l = face_landmarks::make_dlib_landmarker(options.landmarks);
-  if (!l) return tl::unexpected(l.error());
-  return std::shared_ptr<const face_landmarks::Landmarker>(std::move(*l));
+  return face_landmarks::shared_dlib_landmarker(options.landmarks);
 }
 
 face_detection::FaceDetectorOptions crop_finder_options(const FaceCropOptions& crop,

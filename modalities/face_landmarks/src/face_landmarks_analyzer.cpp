@@ -189,7 +189,7 @@ Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
 Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
     const FaceLandmarksAnalyzerOptions& options) {
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
-  auto l = make_dlib_landmarker(options.dlib);
+  auto l = shared_dlib_landmarker(options.dlib);
   if (!l) return tl::unexpected(l.error());
   std::shared_ptr<const Landmarker> cnn;
   if (options.cnn_fallback) {
@@ -197,8 +197,7 @@ Result<std::unique_ptr<Analyzer>> make_face_landmarks_analyzer(
     if (!c) return tl::unexpected(c.error());
     cnn = std::move(*c);
   }
-  return make_face_landmarks_analyzer(options, std::shared_ptr<const Landmarker>(std::move(*l)),
-                                      std::move(cnn));
+  return make_face_landmarks_analyzer(options, *l, std::move(cnn));
 }
 
 }  // namespace dreamsense::face_landmarks

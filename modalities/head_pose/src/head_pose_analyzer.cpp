@@ -45,6 +45,12 @@ class HeadPoseAnalyzer : public Analyzer {
       f.camera_from_head = f.camera_from_head * options_.model_from_head;
       return make_head_pose(f, cam->second, l.camera, l.frame_stamp);
     };
+    // The same face in the other cameras this tick (null: none).
+    const auto views_entry = prior.get(keys::kFaceLandmarkViews);
+    const FaceLandmarkViews* others =
+        views_entry && views_entry->stamp == in.stamp && views_entry->present()
+            ? views_entry->value.get()
+            : nullptr;
     std::optional<HeadPose::ImagePose> image;
     int views = 1;
     if (options_.multi_view) {
@@ -53,13 +59,13 @@ class HeadPoseAnalyzer : public Analyzer {
       image_filter_.apply(single);
       image = HeadPose::ImagePose{single.camera_from_head, single.position_camera_m,
                                   single.world_from_head, single.position_world_m};
-      views = refine_with_other_views(prior, in.stamp, l, cam->second, **fit);
+      views = refine_with_other_views(others, l, cam->second, **fit);
     }
     HeadPose pose = pose_of(**fit);
     filter_.apply(pose);
     pose.views_used = views;
     pose.image = image;
-    pose.frontal_camera = frontal_camera(prior, in.stamp, l.camera, pose.gaze_direction_world);
+    pose.frontal_camera = frontal_camera(others, l.camera, pose.gaze_direction_world);
     const double iod = cv::norm(l.right_eye_px() - l.left_eye_px());
     const double quality = std::clamp(
         1.0 - pose.reprojection_rms_px / (options_.estimator.max_rms_per_interocular * iod), 0.0,
@@ -77,12 +83,11 @@ class HeadPoseAnalyzer : public Analyzer {
  private:
   // Of `fitted` and the cameras of this tick's other landmark views, the one with the smallest
   // |yaw| of `gaze_world` (ties: the first in that order).
-  SensorId frontal_camera(const BlackboardView& prior, Timestamp tick, const SensorId& fitted,
+  SensorId frontal_camera(const FaceLandmarkViews* others, const SensorId& fitted,
                           const cv::Vec3d& gaze_world) const {
     std::vector<SensorId> seen{fitted};
-    const auto views = prior.get(keys::kFaceLandmarkViews);
-    if (views && views->stamp == tick && views->present())
-      for (const FaceLandmarks& o : views->value->others) seen.push_back(o.camera);
+    if (others != nullptr)
+      for (const FaceLandmarks& o : others->others) seen.push_back(o.camera);
     SensorId best;
     double best_yaw = 0;
     for (const SensorId& id : seen) {
@@ -96,13 +101,11 @@ class HeadPoseAnalyzer : public Analyzer {
 
   // Issue 15: the other cameras that see the face this tick refine the selected camera's fit;
   // returns the number of views the fit explains.
-  int refine_with_other_views(const BlackboardView& prior, Timestamp tick,
-                              const FaceLandmarks& selected, const CameraModel& camera,
-                              PnpFit& fit) const {
-    const auto views = prior.get(keys::kFaceLandmarkViews);
-    if (!views || views->stamp != tick || !views->present()) return 1;
+  int refine_with_other_views(const FaceLandmarkViews* views, const FaceLandmarks& selected,
+                              const CameraModel& camera, PnpFit& fit) const {
+    if (views == nullptr) return 1;
     std::vector<PoseView> others;
-    for (const FaceLandmarks& o : views->value->others) {
+    for (const FaceLandmarks& o : views->others) {
       const auto c = options_.cameras.find(o.camera);
       if (c != options_.cameras.end()) others.push_back({&c->second, &o.points_px});
     }

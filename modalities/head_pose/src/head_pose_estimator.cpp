@@ -96,9 +96,9 @@ Result<std::optional<PnpFit>> fit_head_pose(const std::vector<cv::Point2d>& land
   fit.rms_px = std::sqrt(ss / static_cast<double>(proj.size()));
 
   if (!(fit.position_camera_m[2] > 0)) return Out{};
-  const cv::Vec3d forward = fit.camera_from_head * cv::Vec3d(0, 0, -1);
-  const cv::Vec3d to_camera = -fit.position_camera_m / cv::norm(fit.position_camera_m);
-  const double angle = std::acos(std::clamp(forward.dot(to_camera), -1.0, 1.0)) * kRadToDeg;
+  const double facing =
+      facing_cosine(fit.camera_from_head * cv::Vec3d(0, 0, -1), -fit.position_camera_m);
+  const double angle = std::acos(std::clamp(facing, -1.0, 1.0)) * kRadToDeg;
   if (angle > options.max_angle_to_camera_deg) return Out{};
   if (fit.rms_px > options.max_rms_per_interocular * iod_px) return Out{};
   return Out{fit};
@@ -110,10 +110,9 @@ namespace {
 constexpr double kMinViewFacing = 0.05;
 
 // Reprojection residuals (x, y per point) of the pose world_from_model = (R, t) in one view,
-// scaled by the view's weight when `weighted`.
-void add_residuals(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t,
-                   std::vector<double>& r, bool weighted = true) {
-  const double w = weighted ? v.weight : 1.0;
+// times `w`.
+void add_residuals(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t, double w,
+                   std::vector<double>& r) {
   const cv::Matx33d Rc = v.camera->R * R;
   const cv::Vec3d tc = v.camera->R * t + v.camera->t;
   cv::Vec3d rvec;
@@ -135,7 +134,7 @@ double sum_squares(const std::vector<double>& r) {
 // Unweighted: the view's own reprojection error in its pixels.
 double view_rms(const ViewPoints& v, const cv::Matx33d& R, const cv::Vec3d& t) {
   std::vector<double> r;
-  add_residuals(v, R, t, r, /*weighted=*/false);
+  add_residuals(v, R, t, 1.0, r);
   return std::sqrt(2 * sum_squares(r) / static_cast<double>(r.size()));
 }
 
@@ -150,7 +149,7 @@ void apply_step(const cv::Vec<double, 6>& d, cv::Matx33d& R, cv::Vec3d& t) {
 std::vector<double> all_residuals(const std::vector<ViewPoints>& views, const cv::Matx33d& R,
                                   const cv::Vec3d& t) {
   std::vector<double> r;
-  for (const auto& v : views) add_residuals(v, R, t, r);
+  for (const auto& v : views) add_residuals(v, R, t, v.weight, r);
   return r;
 }
 
@@ -230,8 +229,7 @@ std::optional<MultiViewFit> refine_head_pose_multi_view(const PnpFit& start, con
   if (options.view_weight_power > 0) {
     const cv::Vec3d forward = R * cv::Vec3d(0, 0, -1);  // the face's direction at the start pose
     for (ViewPoints& v : views) {
-      const cv::Vec3d to_camera = v.camera->centre_world() - t;
-      const double facing = forward.dot(to_camera) / cv::norm(to_camera);
+      const double facing = facing_cosine(forward, v.camera->centre_world() - t);
       v.weight = std::pow(std::max(facing, kMinViewFacing), options.view_weight_power);
     }
   }
@@ -264,6 +262,10 @@ std::optional<MultiViewFit> refine_head_pose_multi_view(const PnpFit& start, con
     return out;
   }
   return std::nullopt;
+}
+
+double facing_cosine(const cv::Vec3d& forward, const cv::Vec3d& head_to_camera) {
+  return forward.dot(head_to_camera) / cv::norm(head_to_camera);
 }
 
 cv::Vec3d ypr_deg_from_rotation(const cv::Matx33d& R) {

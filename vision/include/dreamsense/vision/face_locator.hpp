@@ -21,7 +21,8 @@ struct FaceLocatorOptions {
   face_landmarks::DlibLandmarkerOptions landmarks;
 };
 
-// Loads the dlib model (~1 s, 100 MB): create once and share.
+// The process's dlib landmarker for options.landmarks (face_landmarks::shared_dlib_landmarker:
+// the 100 MB model is loaded once, on first use, and shared with the pipeline).
 Result<std::shared_ptr<const face_landmarks::Landmarker>> load_landmarker(
     const FaceLocatorOptions& options = {});
 

@@ -66,6 +66,10 @@ std::optional<MultiViewFit> refine_head_pose_multi_view(const PnpFit& start, con
                                                         const std::vector<PoseView>& others,
                                                         const HeadPoseEstimatorOptions& options,
                                                         double view_gate_per_interocular = 0.5);
+// How squarely a face looks into a camera: the cosine between the face's forward direction
+// (head -z, unit) and the direction from the head to the camera, in any one frame (1 = facing
+// it).
+double facing_cosine(const cv::Vec3d& forward, const cv::Vec3d& head_to_camera);
 // Fills the world-frame fields (rotation, position, yaw/pitch/roll, head-gaze ray) of a HeadPose
 // from a camera-frame fit and the camera's extrinsics.
 HeadPose make_head_pose(const PnpFit& fit, const CameraModel& camera, const SensorId& camera_id,
