@@ -137,6 +137,7 @@ Status apply_analysis_flags(const AnalyzeFlags& flags, runner::AnalysisOptions& 
   o.blur_faces = flags.blur_faces;
   apply_subject_flags(flags.subject, o);
   o.policy = flags.policy == "live" ? SyncPolicy::kLatestWithinTolerance : SyncPolicy::kSettled;
+  o.threads = flags.pipeline.threads;
   runner::PlanOptions& plan = o.plan;
   auto set = [&plan](std::string analyzer, std::string key, std::string value) {
     plan.overrides.push_back({std::move(analyzer), std::move(key), std::move(value)});
@@ -169,6 +170,11 @@ void add_pipeline_flags(CLI::App& cmd, PipelineFlags& flags) {
                  "gaze.mutual.radius_m=0.25");
   cmd.add_option("--enable", flags.enable, "Run these analysers (names as --print-pipeline shows)");
   cmd.add_option("--disable", flags.disable, "Do not run these analysers");
+  cmd.add_option("--threads", flags.threads,
+                 "Threads that run each tick's analysers (those that share no blackboard key run "
+                 "at the same time; the results do not depend on it); 0: 1 below 4 cores, else "
+                 "the cores less one, at most 4")
+      ->check(CLI::Range(0, PipelineOptions::kMaxThreads));
 }
 
 // After the verb's own shorthands (so that an explicit --set wins over them).

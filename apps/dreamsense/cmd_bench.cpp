@@ -41,6 +41,7 @@ void add_bench(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     (void)g;
     runner::AnalysisOptions o;
     o.session_dir = flags->session;  // no out_dir: primitives are evaluated, nothing is written
+    o.threads = flags->pipeline.threads;
     if (auto s = apply_pipeline_flags(flags->pipeline, o.plan); !s) {
       exit_code = fail(s.error());
       return;

@@ -79,6 +79,7 @@ struct PipelineFlags {
   std::string pipeline;          // pipeline.yaml
   std::vector<std::string> set;  // ANALYSER.KEY=VALUE
   std::vector<std::string> enable, disable;
+  int threads = 0;  // --threads: runner::AnalysisOptions::threads
 };
 void add_pipeline_flags(CLI::App& cmd, PipelineFlags& flags);
 Status apply_pipeline_flags(const PipelineFlags& flags, runner::PlanOptions& plan);

@@ -700,6 +700,12 @@ TEST_F(Cli, HelpAndUsageErrors) {
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("'bogus'"), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find("pyramid_lda"), std::string::npos) << bad.err;
+  // --threads outside [0, 64] is refused by name before any data is read.
+  for (const char* threads : {"-1", "65"}) {
+    const RunResult r = run("analyze no-such-session --out x --threads " + std::string(threads));
+    EXPECT_NE(r.exit_code, 0) << threads;
+    EXPECT_NE(r.err.find("--threads"), std::string::npos) << r.err;
+  }
 }
 
 }  // namespace

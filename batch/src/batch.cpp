@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -225,6 +226,12 @@ std::vector<std::string> analyze_command(const fs::path& executable, const fs::p
                                          const std::vector<std::string>& analyze_args) {
   std::vector<std::string> argv = {executable.string(), "analyze", input.string(), "--out",
                                    out.string(),        "-q"};
+  // The batch's parallelism is its jobs (one per core, or Slurm's allocations): one thread per
+  // analysis unless the flags say otherwise.
+  const bool threads_given = std::any_of(
+      analyze_args.begin(), analyze_args.end(),
+      [](const std::string& a) { return a == "--threads" || a.rfind("--threads=", 0) == 0; });
+  if (!threads_given) argv.insert(argv.end(), {"--threads", "1"});
   argv.insert(argv.end(), analyze_args.begin(), analyze_args.end());
   return argv;
 }

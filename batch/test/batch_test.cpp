@@ -76,6 +76,17 @@ struct Fixture {
   }
 };
 
+TEST(Batch, AnalysesRunOneThreadEachUnlessTheFlagsSayOtherwise) {
+  using Argv = std::vector<std::string>;
+  EXPECT_EQ(
+      analyze_command("ds", "in", "out", {"--disable", "speech"}),
+      (Argv{"ds", "analyze", "in", "--out", "out", "-q", "--threads", "1", "--disable", "speech"}));
+  EXPECT_EQ(analyze_command("ds", "in", "out", {"--threads", "3"}),
+            (Argv{"ds", "analyze", "in", "--out", "out", "-q", "--threads", "3"}));
+  EXPECT_EQ(analyze_command("ds", "in", "out", {"--threads=2"}),
+            (Argv{"ds", "analyze", "in", "--out", "out", "-q", "--threads=2"}));
+}
+
 TEST(Batch, RunsEveryInputOneFailureDoesNotStopTheOthers) {
   Fixture f;
   make_demo(f.t / "in" / "s1", 11);
@@ -161,7 +172,8 @@ TEST(Batch, RerunKeepsFinishedAndRedoesPartial) {
   auto flagged = run_batch(o);
   ASSERT_TRUE(flagged);
   EXPECT_EQ(runs(f.t).size(), 11u);
-  EXPECT_EQ(f.row(*flagged, "/s1").figures.at("extra"), "--overlay");
+  // The analysis gets one thread (the batch's jobs are its parallelism), then the flags.
+  EXPECT_EQ(f.row(*flagged, "/s1").figures.at("extra"), "--threads 1 --overlay");
 }
 
 TEST(Batch, CollectRebuildsTheSameTable) {

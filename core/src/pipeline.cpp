@@ -2,6 +2,7 @@
 
 #include "dreamsense/core/log.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -79,7 +80,16 @@ std::map<std::string, std::vector<SensorId>, std::less<>> key_sensors(
   return out;
 }
 
+int PipelineOptions::auto_threads(unsigned cores) {
+  if (cores < 4) return 1;
+  return std::min(static_cast<int>(cores) - 1, kMaxAutoThreads);
+}
+
 Status PipelineOptions::check() const {
+  if (threads < 0 || threads > kMaxThreads)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "PipelineOptions: threads must be in [0, {}] (0: auto), got {}", kMaxThreads,
+                      threads);
   if (auto s = sync.check(); !s) return s;
   return blackboard.check();
 }
@@ -92,6 +102,46 @@ Pipeline::Pipeline(PipelineOptions options, SourceInfo info,
       blackboard_(options_.blackboard) {
   for (const auto& a : analyzers_)
     stats_.analyzers.push_back(AnalyzerStats{std::string(a->name())});
+  const size_t n = analyzers_.size();
+  threads_ = options_.threads > 0
+                 ? options_.threads
+                 : PipelineOptions::auto_threads(std::thread::hardware_concurrency());
+  if (n < 2) threads_ = 1;
+  if (threads_ == 1) return;
+  // j (later) waits for i when one of them writes a key the other reads, in this tick or as
+  // feedback: then the order between them is what each sees.
+  std::vector<AnalyzerContract> contracts;
+  for (const auto& a : analyzers_) contracts.push_back(a->contract());
+  auto reads_what_writes = [&](const AnalyzerContract& reader, const AnalyzerContract& writer) {
+    for (const auto& k : writer.writes)
+      if (std::find(reader.reads.begin(), reader.reads.end(), k) != reader.reads.end() ||
+          std::find(reader.reads_previous.begin(), reader.reads_previous.end(), k) !=
+              reader.reads_previous.end())
+        return true;
+    return false;
+  };
+  must_wait_for_.resize(n);
+  unblocks_.resize(n);
+  for (size_t j = 0; j < n; ++j)
+    for (size_t i = 0; i < j; ++i)
+      if (reads_what_writes(contracts[j], contracts[i]) ||
+          reads_what_writes(contracts[i], contracts[j])) {
+        must_wait_for_[j].push_back(i);
+        unblocks_[i].push_back(j);
+      }
+  waiting_on_.assign(n, 0);
+  path_ms_.assign(n, 0);
+  latency_sum_ms_.assign(n, 0);
+  for (int t = 1; t < threads_; ++t) workers_.emplace_back([this] { worker_loop(); });
+}
+
+Pipeline::~Pipeline() {
+  {
+    std::lock_guard<std::mutex> lock(tick_mutex_);
+    stopping_ = true;
+  }
+  tick_cv_.notify_all();
+  for (auto& w : workers_) w.join();
 }
 
 Result<std::unique_ptr<Pipeline>> Pipeline::build(
@@ -148,31 +198,113 @@ std::vector<StreamSpec> Pipeline::stream_specs() const {
   return specs;
 }
 
-Status Pipeline::process_tick(const MultiFrame& frame, const TickCallback& on_tick) {
-  const auto t_tick = Clock::now();
-  for (size_t i = 0; i < analyzers_.size(); ++i) {
-    Analyzer& a = *analyzers_[i];
-    AnalyzerStats& st = stats_.analyzers[i];
-    BlackboardWriter writer{std::string(a.name())};
-    const auto t0 = Clock::now();
-    try {
-      Status s = a.process(frame, blackboard_.snapshot(), writer);
-      if (!s) {
-        st.errors++;
-        if (st.errors <= 5)
-          log::warn("{} at {}: {}", a.name(), frame.stamp.to_string(), s.error().message);
-        continue;
-      }
-      blackboard_.commit(writer, frame.stamp);
-    } catch (const CheckFailure& e) {
-      // A broken precondition inside an analyser: log, reset it, keep the pipeline running.
+void Pipeline::run_analyzer(size_t i, const MultiFrame& frame) {
+  Analyzer& a = *analyzers_[i];
+  AnalyzerStats& st = stats_.analyzers[i];
+  BlackboardWriter writer{std::string(a.name())};
+  const auto t0 = Clock::now();
+  try {
+    Status s = a.process(frame, blackboard_.snapshot(), writer);
+    if (!s) {
       st.errors++;
       if (st.errors <= 5)
-        log::error("{} at {}: {}; resetting it", a.name(), frame.stamp.to_string(), e.what());
-      a.reset();
+        log::warn("{} at {}: {}", a.name(), frame.stamp.to_string(), s.error().message);
+      return;
     }
-    st.calls++;
-    st.latency_ms.push_back(ms_since(t0));
+    blackboard_.commit(writer, frame.stamp);
+  } catch (const CheckFailure& e) {
+    // A broken precondition inside an analyser: log, reset it, keep the pipeline running.
+    st.errors++;
+    if (st.errors <= 5)
+      log::error("{} at {}: {}; resetting it", a.name(), frame.stamp.to_string(), e.what());
+    a.reset();
+  }
+  st.calls++;
+  st.latency_ms.push_back(ms_since(t0));
+  if (!latency_sum_ms_.empty()) latency_sum_ms_[i] += st.latency_ms.back();
+}
+
+std::optional<size_t> Pipeline::take_ready() {
+  if (tick_frame_ == nullptr || tick_exception_ || ready_.empty()) return std::nullopt;
+  auto best = ready_.begin();
+  for (auto it = ready_.begin(); it != ready_.end(); ++it)
+    if (path_ms_[*it] > path_ms_[*best] || (path_ms_[*it] == path_ms_[*best] && *it < *best))
+      best = it;
+  const size_t i = *best;
+  ready_.erase(best);
+  return i;
+}
+
+// Runs analyser i of the current tick outside the lock, then releases what waited for it.
+// Called with `lock` held; returns with it held.
+void Pipeline::run_one(size_t i, std::unique_lock<std::mutex>& lock) {
+  const MultiFrame& frame = *tick_frame_;
+  running_++;
+  lock.unlock();
+  std::exception_ptr error;
+  try {
+    run_analyzer(i, frame);
+  } catch (...) {
+    error = std::current_exception();
+  }
+  lock.lock();
+  running_--;
+  finished_++;
+  if (error && !tick_exception_) tick_exception_ = error;
+  for (size_t j : unblocks_[i])
+    if (--waiting_on_[j] == 0) ready_.push_back(j);
+  tick_cv_.notify_all();
+}
+
+void Pipeline::worker_loop() {
+  std::unique_lock<std::mutex> lock(tick_mutex_);
+  while (true) {
+    tick_cv_.wait(lock, [this] {
+      return stopping_ || (tick_frame_ != nullptr && !tick_exception_ && !ready_.empty());
+    });
+    if (stopping_) return;
+    if (auto i = take_ready()) run_one(*i, lock);
+  }
+}
+
+void Pipeline::run_analyzers_in_parallel(const MultiFrame& frame) {
+  const size_t n = analyzers_.size();
+  // Longest path to the end of the tick through each analyser, by mean latency so far: the
+  // analyser that others wait on longest starts first.
+  for (size_t k = n; k-- > 0;) {
+    double tail = 0;
+    for (size_t j : unblocks_[k]) tail = std::max(tail, path_ms_[j]);
+    const uint64_t calls = stats_.analyzers[k].calls;
+    path_ms_[k] = tail + (calls > 0 ? latency_sum_ms_[k] / static_cast<double>(calls) : 0.0);
+  }
+  std::unique_lock<std::mutex> lock(tick_mutex_);
+  tick_frame_ = &frame;
+  finished_ = 0;
+  tick_exception_ = nullptr;
+  ready_.clear();
+  for (size_t i = 0; i < n; ++i) {
+    waiting_on_[i] = must_wait_for_[i].size();
+    if (waiting_on_[i] == 0) ready_.push_back(i);
+  }
+  tick_cv_.notify_all();
+  while (finished_ < n && !(tick_exception_ && running_ == 0)) {
+    if (auto i = take_ready())
+      run_one(*i, lock);
+    else
+      tick_cv_.wait(lock);
+  }
+  tick_frame_ = nullptr;
+  const std::exception_ptr error = tick_exception_;
+  lock.unlock();
+  if (error) std::rethrow_exception(error);
+}
+
+Status Pipeline::process_tick(const MultiFrame& frame, const TickCallback& on_tick) {
+  const auto t_tick = Clock::now();
+  if (threads_ > 1) {
+    run_analyzers_in_parallel(frame);
+  } else {
+    for (size_t i = 0; i < analyzers_.size(); ++i) run_analyzer(i, frame);
   }
   stats_.ticks++;
   if (on_tick) {

@@ -4,7 +4,12 @@
 
 #include <atomic>
 #include <chrono>
+#include <map>
+#include <stdexcept>
+#include <string>
 #include <thread>
+#include <tuple>
+#include <vector>
 
 namespace dreamsense {
 namespace {
@@ -269,6 +274,199 @@ TEST(Pipeline, SettledReplayDoesNotWaitForAStreamThatEnded) {
     else
       EXPECT_EQ(read_at_5s, src.size());
   }
+}
+
+// An analyser of a dependency graph: writes a number mixing its call count with every value it
+// read (this tick's `reads`, and `previous` as feedback from earlier ticks); sleeps a varying
+// 0-0.4 ms so that the threads interleave differently from tick to tick. A feedback read that
+// sees this tick's value is an error.
+inline constexpr Key<int64_t> kA{"test.a"}, kB{"test.b"}, kC{"test.c"}, kD{"test.d"}, kE{"test.e"},
+    kX{"test.x"}, kY{"test.y"};
+
+class MixingAnalyzer : public Analyzer {
+ public:
+  MixingAnalyzer(std::string name, std::vector<Key<int64_t>> reads, Key<int64_t> writes,
+                 std::vector<Key<int64_t>> previous = {}, bool needs_skeleton = false,
+                 int extra_sleep_us = 0)
+      : name_(std::move(name)),
+        reads_(std::move(reads)),
+        previous_(std::move(previous)),
+        writes_(writes),
+        needs_skeleton_(needs_skeleton),
+        extra_sleep_us_(extra_sleep_us) {}
+  std::string_view name() const override { return name_; }
+  AnalyzerContract contract() const override {
+    AnalyzerContract c;
+    if (needs_skeleton_) c.required_inputs = {"skel"};
+    for (const auto& k : reads_) c.reads.push_back(k.name);
+    for (const auto& k : previous_) c.reads_previous.push_back(k.name);
+    c.writes = {writes_.name};
+    return c;
+  }
+  Status process(const MultiFrame& in, const BlackboardView& prior,
+                 BlackboardWriter& out) override {
+    ++calls_;
+    int64_t v = calls_ * 1000 + static_cast<int64_t>(name_.size());
+    for (const auto& k : reads_) {
+      const auto e = prior.get(k);
+      if (!e || e->stamp != in.stamp)
+        return make_error(ErrorCode::kInternal, "{}: {} of this tick not visible", name_, k.name);
+      v = v * 31 + *e->value;
+    }
+    for (const auto& k : previous_) {
+      const auto e = prior.get(k);
+      if (e && e->stamp >= in.stamp)
+        return make_error(ErrorCode::kInternal, "{}: saw this tick's {}", name_, k.name);
+      v = v * 17 + (e ? *e->value : -1);
+    }
+    std::this_thread::sleep_for(
+        std::chrono::microseconds(200 * ((calls_ * 7 + v) % 3) + extra_sleep_us_));
+    out.set(writes_, v, in.stamp, 1.f);
+    return ok_status();
+  }
+
+ private:
+  std::string name_;
+  std::vector<Key<int64_t>> reads_, previous_;
+  Key<int64_t> writes_;
+  bool needs_skeleton_;
+  int extra_sleep_us_;
+  int64_t calls_ = 0;
+};
+
+// Every key's value after every tick, and the errors, with `threads` threads.
+std::tuple<std::vector<std::vector<int64_t>>, uint64_t, int> run_graph(int threads) {
+  FakeSource src(2);
+  std::vector<std::unique_ptr<Analyzer>> a;
+  a.push_back(std::make_unique<MixingAnalyzer>("source", std::vector<Key<int64_t>>{}, kA,
+                                               std::vector<Key<int64_t>>{}, true));
+  // Slow: "feedback" starts late, after d's writer could have finished.
+  a.push_back(std::make_unique<MixingAnalyzer>("alone", std::vector<Key<int64_t>>{}, kX,
+                                               std::vector<Key<int64_t>>{}, false, 1500));
+  // Reads d of the previous tick: must run before d's writer in every tick.
+  a.push_back(
+      std::make_unique<MixingAnalyzer>("feedback", std::vector{kA, kX}, kE, std::vector{kD}));
+  a.push_back(std::make_unique<MixingAnalyzer>("left", std::vector{kA}, kB));
+  a.push_back(std::make_unique<MixingAnalyzer>("right", std::vector{kA}, kC));
+  a.push_back(std::make_unique<MixingAnalyzer>("join", std::vector{kB, kC}, kD));
+  a.push_back(std::make_unique<MixingAnalyzer>("after_alone", std::vector{kX, kE}, kY));
+  PipelineOptions o;
+  o.sync.start = Timestamp::from_ns(0);
+  o.threads = threads;
+  auto p = Pipeline::build(o, src.info(), std::move(a));
+  EXPECT_TRUE(p) << p.error().message;
+  if (!p) return {};
+  std::vector<std::vector<int64_t>> seen;
+  auto st = (*p)->run(src, [&](const MultiFrame&, const BlackboardView& v) -> Status {
+    std::vector<int64_t> row;
+    for (const auto& k : {kA, kB, kC, kD, kE, kX, kY})
+      row.push_back(v.get(k) ? *v.get(k)->value : 0);
+    seen.push_back(row);
+    return ok_status();
+  });
+  EXPECT_TRUE(st);
+  uint64_t errors = 0;
+  for (const auto& s : (*p)->stats().analyzers) errors += s.errors;
+  return {seen, errors, (*p)->threads()};
+}
+
+TEST(Pipeline, ParallelTicksGiveTheResultsOfTheSequentialOrder) {
+  const auto [sequential, sequential_errors, one] = run_graph(1);
+  EXPECT_EQ(one, 1);
+  ASSERT_EQ(sequential.size(), 50u);
+  EXPECT_EQ(sequential_errors, 0u);
+  for (const int threads : {2, 3, 8}) {
+    const auto [parallel, errors, used] = run_graph(threads);
+    EXPECT_EQ(used, threads);
+    EXPECT_EQ(errors, 0u) << threads << " threads";
+    EXPECT_EQ(parallel, sequential) << threads << " threads";
+  }
+}
+
+// Each of two independent analysers waits (up to 2 s) for the other to have started the same
+// tick: they meet only if they run at the same time.
+class MeetingAnalyzer : public Analyzer {
+ public:
+  MeetingAnalyzer(std::string name, Key<int64_t> writes, std::atomic<int>* arrivals)
+      : name_(std::move(name)), writes_(writes), arrivals_(arrivals) {}
+  std::string_view name() const override { return name_; }
+  AnalyzerContract contract() const override { return {{}, {}, {}, {writes_.name}}; }
+  Status process(const MultiFrame& in, const BlackboardView&, BlackboardWriter& out) override {
+    ++calls_;
+    arrivals_->fetch_add(1);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    while (arrivals_->load() < 2 * calls_ && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
+    met += arrivals_->load() >= 2 * calls_;
+    out.set(writes_, int64_t{calls_}, in.stamp, 1.f);
+    return ok_status();
+  }
+  int met = 0;
+
+ private:
+  std::string name_;
+  Key<int64_t> writes_;
+  std::atomic<int>* arrivals_;
+  int calls_ = 0;
+};
+
+TEST(Pipeline, IndependentAnalysersOfATickRunAtTheSameTime) {
+  FakeSource src(1);
+  std::atomic<int> arrivals{0};
+  auto first = std::make_unique<MeetingAnalyzer>("first", kX, &arrivals);
+  auto second = std::make_unique<MeetingAnalyzer>("second", kY, &arrivals);
+  MeetingAnalyzer* f = first.get();
+  MeetingAnalyzer* s = second.get();
+  std::vector<std::unique_ptr<Analyzer>> a;
+  a.push_back(std::move(first));
+  a.push_back(std::move(second));
+  PipelineOptions o;
+  o.sync.start = Timestamp::from_ns(0);
+  o.threads = 2;
+  auto p = Pipeline::build(o, src.info(), std::move(a));
+  ASSERT_TRUE(p);
+  ASSERT_TRUE((*p)->run(src, nullptr));
+  const int ticks = static_cast<int>((*p)->stats().ticks);
+  EXPECT_GT(ticks, 0);
+  EXPECT_EQ(f->met, ticks);
+  EXPECT_EQ(s->met, ticks);
+}
+
+class ExceptionAnalyzer : public Analyzer {
+ public:
+  std::string_view name() const override { return "exception"; }
+  AnalyzerContract contract() const override { return {}; }
+  Status process(const MultiFrame&, const BlackboardView&, BlackboardWriter&) override {
+    throw std::runtime_error("broken analyser");
+  }
+};
+
+TEST(Pipeline, AnExceptionInAnAnalyserLeavesTheRunWithAnyNumberOfThreads) {
+  for (const int threads : {1, 2}) {
+    FakeSource src(1);
+    std::vector<std::unique_ptr<Analyzer>> a;
+    a.push_back(std::make_unique<CountingAnalyzer>());
+    a.push_back(std::make_unique<ExceptionAnalyzer>());
+    PipelineOptions o;
+    o.threads = threads;
+    auto p = Pipeline::build(o, src.info(), std::move(a));
+    ASSERT_TRUE(p);
+    EXPECT_THROW((void)(*p)->run(src, nullptr), std::runtime_error) << threads;
+  }
+}
+
+TEST(Pipeline, ThreadsOutsideTheRangeAreRejected) {
+  PipelineOptions o;
+  o.threads = -1;
+  EXPECT_FALSE(o.check());
+  o.threads = PipelineOptions::kMaxThreads + 1;
+  EXPECT_FALSE(o.check());
+  o.threads = 0;
+  EXPECT_TRUE(o.check());
+  EXPECT_EQ(PipelineOptions::auto_threads(0), 1);  // unknown
+  EXPECT_EQ(PipelineOptions::auto_threads(2), 1);
+  EXPECT_EQ(PipelineOptions::auto_threads(4), 3);
+  EXPECT_EQ(PipelineOptions::auto_threads(64), PipelineOptions::kMaxAutoThreads);
 }
 
 }  // namespace

@@ -22,6 +22,10 @@ namespace fs = std::filesystem;
 Status AnalysisOptions::check() const {
   if (session_dir.empty())
     return make_error(ErrorCode::kInvalidArgument, "analysis: no session folder given");
+  if (threads < 0 || threads > PipelineOptions::kMaxThreads)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "analysis: threads must be in [0, {}] (0: auto), got {}",
+                      PipelineOptions::kMaxThreads, threads);
   DS_RETURN_IF_ERROR(plan.check());
   return evaluator.check();
 }
@@ -405,6 +409,7 @@ Result<AnalysisSummary> analyze_video(const AnalysisOptions& options,
   DS_RETURN_IF_ERROR(check_output_folder(options));
   PipelineOptions po = pipeline_options(info.manifest);
   po.sync.policy = options.policy;
+  po.threads = options.threads;
   po.sync.start = Timestamp::from_ns(0);
   po.pace_source = options.pace_source;
   const SourceInfo si = v.source->info();
@@ -484,6 +489,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
 
   PipelineOptions po = pipeline_options(manifest);
   po.sync.policy = options.policy;
+  po.threads = options.threads;
   po.sync.start = full_info.start;  // ticks on the session clock, whatever streams are read
   po.pace_source = options.pace_source;
   // Damage of every stream: found when opening (all streams), and while reading (those analysed).
@@ -525,6 +531,7 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   PipelineOptions po = pipeline_options(manifest);
   po.sync.policy = SyncPolicy::kLatestWithinTolerance;
   po.pace_source = false;  // the devices deliver in real time
+  po.threads = options.threads;
   // The live configuration's session name may name the participant: "live" unless names are in.
   const std::string session_name =
       options.plan.include_names && !manifest.name.empty() ? manifest.name : std::string("live");

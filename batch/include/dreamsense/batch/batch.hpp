@@ -59,7 +59,8 @@ struct BatchEvents {
   std::function<void(const std::string&)> message;  // one human line per reuse, redo, result
 };
 
-// The argv of one analysis.
+// The argv of one analysis: `analyze INPUT --out OUT -q`, `--threads 1` unless analyze_args
+// set --threads, then analyze_args.
 std::vector<std::string> analyze_command(const std::filesystem::path& executable,
                                          const std::filesystem::path& input,
                                          const std::filesystem::path& out,

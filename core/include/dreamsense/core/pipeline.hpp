@@ -1,16 +1,23 @@
 #pragma once
 // Runs analysers over a Source: frames -> synchroniser -> analysers (in order, each seeing the
 // commits of those before it) -> blackboard -> per-tick callback (primitives, outputs).
+// Analysers of one tick that share no blackboard key may run at the same time
+// (PipelineOptions::threads); the results are those of the one-after-the-other order.
 
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/core/blackboard.hpp"
 #include "dreamsense/core/source.hpp"
 #include "dreamsense/core/synchronizer.hpp"
 
+#include <condition_variable>
+#include <exception>
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace dreamsense {
@@ -21,6 +28,19 @@ struct PipelineOptions {
   // Live policy only: pace the source by its stamps (replay in real time), so that a slow
   // pipeline drops frames as it would with real sensors.
   bool pace_source = true;
+  // Threads that run one tick's analysers, the calling thread included. Two analysers run at the
+  // same time only when neither reads a key the other writes (this tick's or, through
+  // reads_previous, an earlier tick's), so every analyser sees exactly what it would see one
+  // after the other and the outputs do not depend on this number (tested). 1: one after the
+  // other on the calling thread. 0 (auto): 1 on machines with fewer than 4 cores, else the cores
+  // less one (left to the session reader's decoding), at most kMaxAutoThreads. On the 2-core
+  // reference machine 2 threads were not faster: both cores are already busy (docs/
+  // architecture.md, "Parallel ticks").
+  int threads = 0;
+  static constexpr int kMaxAutoThreads = 4;
+  static constexpr int kMaxThreads = 64;
+  // What threads = 0 means on a machine with `cores` cores.
+  static int auto_threads(unsigned cores);
   Status check() const;
 };
 
@@ -64,6 +84,9 @@ class Pipeline {
   // by an analyser earlier in the list, no key has two writers, names are unique.
   static Result<std::unique_ptr<Pipeline>> build(PipelineOptions options, SourceInfo source_info,
                                                  std::vector<std::unique_ptr<Analyzer>> analyzers);
+  ~Pipeline();
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
 
   // Processes the whole source. Stops at the first source error (returned) or callback error.
   Status run(Source& source, const TickCallback& on_tick,
@@ -72,10 +95,18 @@ class Pipeline {
   const PipelineStats& stats() const { return stats_; }
   const Blackboard& blackboard() const { return blackboard_; }
   const std::vector<std::unique_ptr<Analyzer>>& analyzers() const { return analyzers_; }
+  // Threads that run a tick's analysers (PipelineOptions::threads resolved).
+  int threads() const { return threads_; }
 
  private:
   Pipeline(PipelineOptions options, SourceInfo info, std::vector<std::unique_ptr<Analyzer>> a);
   Status process_tick(const MultiFrame& frame, const TickCallback& on_tick);
+  void run_analyzer(size_t i, const MultiFrame& frame);
+  void run_analyzers_in_parallel(const MultiFrame& frame);
+  void worker_loop();
+  void run_one(size_t i, std::unique_lock<std::mutex>& lock);
+  // Takes the ready analyser on the longest remaining path (by mean latency so far), or nullopt.
+  std::optional<size_t> take_ready();
   Status run_settled(Source& source, const TickCallback& on_tick, const ProgressCallback& p);
   Status run_live(Source& source, const TickCallback& on_tick, const ProgressCallback& p);
   std::vector<StreamSpec> stream_specs() const;
@@ -86,6 +117,22 @@ class Pipeline {
   std::vector<std::unique_ptr<Analyzer>> analyzers_;
   Blackboard blackboard_;
   PipelineStats stats_;
+
+  // Parallel ticks (threads_ > 1). must_wait_for_[i]: analysers that run before i (a key one
+  // writes and the other reads); unblocks_[i]: the converse.
+  int threads_ = 1;
+  std::vector<std::vector<size_t>> must_wait_for_, unblocks_;
+  std::vector<std::thread> workers_;
+  std::mutex tick_mutex_;
+  std::condition_variable tick_cv_;
+  const MultiFrame* tick_frame_ = nullptr;  // the tick being processed, or null between ticks
+  std::vector<size_t> waiting_on_;          // per analyser: dependencies not yet done
+  std::vector<size_t> ready_;
+  std::vector<double> path_ms_;  // per analyser: its mean latency plus its longest dependent path
+  std::vector<double> latency_sum_ms_;  // per analyser, over its calls
+  size_t finished_ = 0, running_ = 0;
+  std::exception_ptr tick_exception_;
+  bool stopping_ = false;
 };
 
 }  // namespace dreamsense

@@ -37,6 +37,9 @@ struct AnalysisOptions {
   std::filesystem::path out_dir;             // empty: run without writing outputs (benchmarks)
   SyncPolicy policy = SyncPolicy::kSettled;  // replay: settled (deterministic)
   bool pace_source = true;                   // live policy only
+  // Threads per tick for the analysers (PipelineOptions::threads; 0: auto; the outputs are the
+  // same with any number). `batch` runs its analyses with 1.
+  int threads = 0;
   primitives::EvaluatorOptions evaluator;
   // The analysis graph: pipeline.yaml, command-line options and the child's calibration.
   PlanOptions plan;
