@@ -132,8 +132,9 @@ Answer<EyeGazeValue> get_eye_gaze(const PrimitiveContext& ctx, const EyeQuery& q
   return a;
 }
 
-// 2-D centres from the eye-centre locator; 3-D positions from the gaze rays' origins (head pose
-// + half the interpupillary distance), so only with a gaze of the same frame.
+// 2-D centres from the eye-centre locator; 3-D positions from the gaze rays' origins (the pupils:
+// on the eyeballs, or with eq. 4 the head pose + half the interpupillary distance), so only with
+// a gaze of the same frame.
 Answer<EyesValue> get_eyes(const PrimitiveContext& ctx) {
   const auto c = ctx.observe(keys::kEyeCenters);
   auto a = Answer<EyesValue>::from(c);

@@ -7,7 +7,8 @@
 //  - mutual_gaze_f1: per tick with a truth face, checkMutualGaze's `mutual` (false when there is
 //    no face or no gaze) against the truth mutual_gaze.
 //  - eye_center_median_px: getEyes pixel centres against the truth pupil pixels in the same
-//    camera (eyes_px), over found eyes.
+//    camera (eyes_px), over found eyes; eye_position_median_m: getEyes 3-D eye positions against
+//    the truth pupils (eyes_m), over eyes with a 3-D position.
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/eval/metrics.hpp"
@@ -32,7 +33,8 @@ MetricGroup head_and_gaze_metrics() {
                {"mutual_gaze_f1", PrimitiveId::kCheckMutualGaze},
                {"mutual_gaze_precision", PrimitiveId::kCheckMutualGaze},
                {"mutual_gaze_recall", PrimitiveId::kCheckMutualGaze},
-               {"eye_center_median_px", PrimitiveId::kGetEyes}};
+               {"eye_center_median_px", PrimitiveId::kGetEyes},
+               {"eye_position_median_m", PrimitiveId::kGetEyes}};
   g.compute = [](const SessionData& d, nlohmann::json& metrics, nlohmann::json& not_evaluated) {
     std::map<int64_t, const nlohmann::json*> truth_faces;
     for (const auto* t : d.truth_of("face")) truth_faces[t->value("stamp_ns", int64_t{0})] = t;
@@ -42,7 +44,7 @@ MetricGroup head_and_gaze_metrics() {
       for (const auto& [cam, tc] : (*tf)["cameras"].items()) visible |= tc.value("visible", false);
       visible_ticks[stamp] = visible;
     }
-    std::vector<double> pose_err, head_gaze_err, head_pos_err, gaze_err, eye_err;
+    std::vector<double> pose_err, head_gaze_err, head_pos_err, gaze_err, eye_err, eye_pos_err;
     int face_ticks = 0, gaze_ticks = 0, tp = 0, fp = 0, fn = 0, mutual_ticks = 0;
     for (const auto& r : d.records) {
       const PrimitiveId id = r.id;
@@ -82,6 +84,11 @@ MetricGroup head_and_gaze_metrics() {
         ++gaze_ticks;
         gaze_err.push_back(angle_between_deg(e->both.direction, truth_vec3(tf["eye_gaze_dir"])));
       } else if (const auto* eyes = r.value_as<primitives::EyesValue>()) {
+        if (tf.contains("eyes_m"))
+          for (auto [name, m] :
+               {std::pair{"right", &eyes->right_m}, std::pair{"left", &eyes->left_m}})
+            if (*m && tf["eyes_m"].contains(name) && !tf["eyes_m"][name].is_null())
+              eye_pos_err.push_back(cv::norm(**m - truth_vec3(tf["eyes_m"][name])));
         if (!tf["cameras"].contains(eyes->camera) ||
             !tf["cameras"][eyes->camera].contains("eyes_px"))
           continue;
@@ -105,6 +112,7 @@ MetricGroup head_and_gaze_metrics() {
     put("head_position_median_m", head_pos_err, "no ok getHead record at a truth face tick");
     put("gaze_median_deg", gaze_err, "no ok getEyeGaze record at a truth face tick");
     put("eye_center_median_px", eye_err, "no found eye centre in a camera with truth pupils");
+    put("eye_position_median_m", eye_pos_err, "no 3-D eye position at a truth face tick");
     if (face_ticks > 0) metrics["gaze_coverage"] = static_cast<double>(gaze_ticks) / face_ticks;
     if (mutual_ticks > 0) {
       metrics["mutual_gaze_f1"] =

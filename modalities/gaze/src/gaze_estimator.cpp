@@ -63,7 +63,11 @@ GazeRay eyeball_ray_of(const EyeCenter& pupil, const std::optional<cv::Vec2d>& o
   r.theta_deg = a.theta_deg;
   r.phi_deg = a.phi_deg;
   r.direction_world = head.world_from_head * *d;
-  r.origin_world_m = head.position_world_m + head.world_from_head * eye.centre_head_m;
+  // The ray starts at the pupil on the eyeball (C + r d: the same line as from the centre), so
+  // getEyes' 3-D position is the point its pixel centre shows, not the centre of rotation 10-12 mm
+  // behind it.
+  r.origin_world_m =
+      head.position_world_m + head.world_from_head * (eye.centre_head_m + eye.radius_m * *d);
   return r;
 }
 

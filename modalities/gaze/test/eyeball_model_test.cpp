@@ -4,6 +4,9 @@
 #include "dreamsense/gaze/eyeball_model.hpp"
 
 #include "dreamsense/gaze/gaze_estimator.hpp"
+#include "dreamsense/perception/eye_centers.hpp"
+#include "dreamsense/perception/face_landmarks.hpp"
+#include "dreamsense/perception/head_pose.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <tuple>
 
 namespace dreamsense::gaze {
 namespace {
@@ -47,6 +51,40 @@ TEST(EyeballModel, DirectionOfAnExactPupilIsTheEyeDirection) {
       EXPECT_LT(std::acos(std::clamp(got->dot(d), -1.0, 1.0)) * 180 / CV_PI, 0.01)
           << "head yaw " << yaw << " eye " << eye_theta;
     }
+}
+
+// getEyes' 3-D eye positions are the per-eye rays' origins: with the eyeball method the pupil on
+// the eyeball, i.e. the point the pupil's pixel shows, on the ray from the centre.
+TEST(EyeballModel, EyeRayStartsAtThePupilItsPixelShows) {
+  const Scene s(15, 5);
+  const EyeballModel left{{0.031, 0.002, 0.011}, 0.0118};
+  const cv::Vec3d d = rotation_from_ypr_deg(-10, 6, 0) * cv::Vec3d(0, 0, -1);
+  EyeCenters pupils;
+  pupils.right = {true, s.pixel(kEye.centre_head_m + kEye.radius_m * d), 1};
+  pupils.left = {true, s.pixel(left.centre_head_m + left.radius_m * d), 1};
+  FaceLandmarks lm;
+  lm.camera = "cam";
+  lm.points_px.assign(kFaceLandmarkCount, {640, 480});
+  HeadPose head;  // the camera is the world
+  head.camera_from_head = head.world_from_head = s.camera_from_head;
+  head.position_camera_m = head.position_world_m = s.head_position_camera;
+  GazeEstimatorOptions o;
+  o.method = GazeMethod::kEyeball;
+  o.right_eyeball = kEye;
+  o.left_eyeball = left;
+  const auto g = estimate_gaze(lm, pupils, head, s.camera, o);
+  ASSERT_TRUE(g);
+  for (const auto& [ray, eye, px] : {std::tuple{g->right, kEye, pupils.right.center_px},
+                                     std::tuple{g->left, left, pupils.left.center_px}}) {
+    ASSERT_TRUE(ray.valid);
+    const cv::Vec3d pupil_world =
+        s.camera_from_head * (eye.centre_head_m + eye.radius_m * d) + s.head_position_camera;
+    EXPECT_LT(cv::norm(ray.origin_world_m - pupil_world), 1e-6);
+    const auto shown = s.camera.project_camera_point(ray.origin_world_m);
+    ASSERT_TRUE(shown);
+    EXPECT_LT(cv::norm(*shown - px), 1e-6);
+    EXPECT_NEAR(ray.direction_world.dot(s.camera_from_head * d), 1.0, 1e-9);
+  }
 }
 
 TEST(EyeballModel, FitRecoversCentreAndRadius) {

@@ -19,6 +19,8 @@ namespace dreamsense {
 // down.
 struct GazeRay {
   bool valid = false;
+  // Per eye: the pupil (eyeball method: on the eyeball; eq. 4: the eye's place in the head's
+  // frontal plane). Fused: the head's position.
   cv::Vec3d origin_world_m{0, 0, 0};
   cv::Vec3d direction_world{0, 0, -1};  // unit
   double theta_deg = 0;                 // eye-in-head horizontal angle (D4.2 eq. 4)
