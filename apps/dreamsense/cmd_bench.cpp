@@ -77,20 +77,22 @@ void add_bench(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                    {"dropped_frames", l.sync.dropped_frames()},
                    {"latency_p95_ms", p95(l.tick_latency_ms)}};
     }
-    nlohmann::json out = {{"task", "pipeline"},
-                          {"dataset", {{"name", flags->session}, {"items", p.ticks}}},
-                          {"protocol",
-                           "replay (settled policy, as fast as possible) for fps, "
-                           "realtime_factor and latency; real-time paced replay with "
-                           "the live policy for dropped_frames"},
-                          {"metrics", metrics},
-                          {"timing", {{"replay_wall_seconds", p.wall_seconds}}},
-                          {"per_class", nlohmann::json::object()},
-                          {"stages", replay->to_json()["stages"]},
-                          {"live", live_json}};
-    std::fprintf(stderr, "fps %.1f, realtime factor %.1f, latency p95 %.2f ms, dropped %s\n", fps,
-                 metrics["realtime_factor"].get<double>(), metrics["latency_p95_ms"].get<double>(),
-                 metrics["dropped_frames"].dump().c_str());
+    nlohmann::json out = {
+        {"task", "pipeline"},
+        {"dataset", {{"name", flags->session}, {"items", p.ticks}}},
+        {"protocol",
+         "replay (settled policy, as fast as possible) for fps, "
+         "realtime_factor and latency; real-time paced replay with "
+         "the live policy for dropped_frames"},
+        {"metrics", metrics},
+        {"timing", {{"replay_wall_seconds", p.wall_seconds}, {"threads", p.threads}}},
+        {"per_class", nlohmann::json::object()},
+        {"stages", replay->to_json()["stages"]},
+        {"live", live_json}};
+    std::fprintf(
+        stderr, "fps %.1f, realtime factor %.1f, latency p95 %.2f ms, dropped %s, threads %d\n",
+        fps, metrics["realtime_factor"].get<double>(), metrics["latency_p95_ms"].get<double>(),
+        metrics["dropped_frames"].dump().c_str(), p.threads);
     if (auto s = write_json(flags->json, out); !s) exit_code = fail(s.error());
   });
 }

@@ -396,6 +396,11 @@ TEST_F(Cli, BenchPipelineReportsTheContractKeys) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const json& stage : json::parse(slurp(off))["stages"])
     EXPECT_NE(stage["name"], "face_detection");
+  // Parallel ticks: the threads used are reported.
+  const fs::path three = root() / "bench_threads.json";
+  r = run("bench pipeline " + demo().string() + " --no-live --threads 3 --json " + three.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(slurp(three))["timing"]["threads"], 3);
   r = run("bench pipeline " + demo().string() + " --no-live --set face_detection.no_such=1");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("no_such"), std::string::npos) << r.err;

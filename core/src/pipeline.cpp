@@ -107,6 +107,7 @@ Pipeline::Pipeline(PipelineOptions options, SourceInfo info,
                  ? options_.threads
                  : PipelineOptions::auto_threads(std::thread::hardware_concurrency());
   if (n < 2) threads_ = 1;
+  stats_.threads = threads_;
   if (threads_ == 1) return;
   // j (later) waits for i when one of them writes a key the other reads, in this tick or as
   // feedback: then the order between them is what each sees.

@@ -56,6 +56,7 @@ struct PipelineStats {
   uint64_t frames = 0;
   double wall_seconds = 0;
   double media_seconds = 0;             // span of session time processed
+  int threads = 1;                      // that ran each tick's analysers (PipelineOptions)
   std::vector<double> tick_latency_ms;  // per tick: from MultiFrame ready to callback done
   std::vector<AnalyzerStats> analyzers;
   SyncStats sync;
