@@ -103,12 +103,11 @@ Pipeline::Pipeline(PipelineOptions options, SourceInfo info,
   for (const auto& a : analyzers_)
     stats_.analyzers.push_back(AnalyzerStats{std::string(a->name())});
   const size_t n = analyzers_.size();
-  threads_ = options_.threads > 0
-                 ? options_.threads
-                 : PipelineOptions::auto_threads(std::thread::hardware_concurrency());
-  if (n < 2) threads_ = 1;
-  stats_.threads = threads_;
-  if (threads_ == 1) return;
+  stats_.threads = options_.threads > 0
+                       ? options_.threads
+                       : PipelineOptions::auto_threads(std::thread::hardware_concurrency());
+  if (n < 2) stats_.threads = 1;
+  if (stats_.threads == 1) return;
   // j (later) waits for i when one of them writes a key the other reads, in this tick or as
   // feedback: then the order between them is what each sees.
   std::vector<AnalyzerContract> contracts;
@@ -121,19 +120,18 @@ Pipeline::Pipeline(PipelineOptions options, SourceInfo info,
         return true;
     return false;
   };
-  must_wait_for_.resize(n);
+  dependencies_.assign(n, 0);
   unblocks_.resize(n);
   for (size_t j = 0; j < n; ++j)
     for (size_t i = 0; i < j; ++i)
       if (reads_what_writes(contracts[j], contracts[i]) ||
           reads_what_writes(contracts[i], contracts[j])) {
-        must_wait_for_[j].push_back(i);
+        dependencies_[j]++;
         unblocks_[i].push_back(j);
       }
   waiting_on_.assign(n, 0);
   path_ms_.assign(n, 0);
-  latency_sum_ms_.assign(n, 0);
-  for (int t = 1; t < threads_; ++t) workers_.emplace_back([this] { worker_loop(); });
+  for (int t = 1; t < stats_.threads; ++t) workers_.emplace_back([this] { worker_loop(); });
 }
 
 Pipeline::~Pipeline() {
@@ -222,7 +220,7 @@ void Pipeline::run_analyzer(size_t i, const MultiFrame& frame) {
   }
   st.calls++;
   st.latency_ms.push_back(ms_since(t0));
-  if (!latency_sum_ms_.empty()) latency_sum_ms_[i] += st.latency_ms.back();
+  st.latency_total_ms += st.latency_ms.back();
 }
 
 std::optional<size_t> Pipeline::take_ready() {
@@ -275,8 +273,8 @@ void Pipeline::run_analyzers_in_parallel(const MultiFrame& frame) {
   for (size_t k = n; k-- > 0;) {
     double tail = 0;
     for (size_t j : unblocks_[k]) tail = std::max(tail, path_ms_[j]);
-    const uint64_t calls = stats_.analyzers[k].calls;
-    path_ms_[k] = tail + (calls > 0 ? latency_sum_ms_[k] / static_cast<double>(calls) : 0.0);
+    const AnalyzerStats& st = stats_.analyzers[k];
+    path_ms_[k] = tail + (st.calls > 0 ? st.latency_total_ms / static_cast<double>(st.calls) : 0.0);
   }
   std::unique_lock<std::mutex> lock(tick_mutex_);
   tick_frame_ = &frame;
@@ -284,7 +282,7 @@ void Pipeline::run_analyzers_in_parallel(const MultiFrame& frame) {
   tick_exception_ = nullptr;
   ready_.clear();
   for (size_t i = 0; i < n; ++i) {
-    waiting_on_[i] = must_wait_for_[i].size();
+    waiting_on_[i] = dependencies_[i];
     if (waiting_on_[i] == 0) ready_.push_back(i);
   }
   tick_cv_.notify_all();
@@ -302,7 +300,7 @@ void Pipeline::run_analyzers_in_parallel(const MultiFrame& frame) {
 
 Status Pipeline::process_tick(const MultiFrame& frame, const TickCallback& on_tick) {
   const auto t_tick = Clock::now();
-  if (threads_ > 1) {
+  if (stats_.threads > 1) {
     run_analyzers_in_parallel(frame);
   } else {
     for (size_t i = 0; i < analyzers_.size(); ++i) run_analyzer(i, frame);

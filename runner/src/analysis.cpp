@@ -13,7 +13,6 @@
 #include "dreamsense/sources/video_file.hpp"
 
 #include <algorithm>
-#include <numeric>
 #include <sys/resource.h>
 
 namespace dreamsense::runner {
@@ -22,10 +21,9 @@ namespace fs = std::filesystem;
 Status AnalysisOptions::check() const {
   if (session_dir.empty())
     return make_error(ErrorCode::kInvalidArgument, "analysis: no session folder given");
-  if (threads < 0 || threads > PipelineOptions::kMaxThreads)
-    return make_error(ErrorCode::kInvalidArgument,
-                      "analysis: threads must be in [0, {}] (0: auto), got {}",
-                      PipelineOptions::kMaxThreads, threads);
+  PipelineOptions threads_only;  // checked before any data is read
+  threads_only.threads = threads;
+  DS_RETURN_IF_ERROR(threads_only.check());
   DS_RETURN_IF_ERROR(plan.check());
   return evaluator.check();
 }
@@ -84,7 +82,7 @@ nlohmann::json AnalysisSummary::to_json() const {
                       {"latency_ms_p95", v.empty() ? 0.0 : v[v.size() * 95 / 100]},
                       // The total decides throughput: a stage that is slow only now and then
                       // shows in neither the median nor the p95.
-                      {"latency_ms_total", std::accumulate(v.begin(), v.end(), 0.0)}});
+                      {"latency_ms_total", a.latency_total_ms}});
   }
   nlohmann::json outs = nlohmann::json::array();
   for (const auto& o : outputs) outs.push_back(o.filename().string());
@@ -361,8 +359,10 @@ Status check_output_folder(const AnalysisOptions& options) {
   return ok_status();
 }
 
-PipelineOptions pipeline_options(const sources::SessionManifest& manifest) {
+PipelineOptions pipeline_options(const sources::SessionManifest& manifest,
+                                 const AnalysisOptions& options) {
   PipelineOptions po;
+  po.threads = options.threads;
   po.sync.tick_period = period_from_rate(manifest.frame_rate > 0 ? manifest.frame_rate : 25.0);
   po.sync.tolerance = po.sync.tick_period / 2;
   return po;
@@ -407,9 +407,8 @@ Result<AnalysisSummary> analyze_video(const AnalysisOptions& options,
   auto plan = plan_pipeline(v.plan, info.manifest, info.path.parent_path());
   if (!plan) return tl::unexpected(plan.error());
   DS_RETURN_IF_ERROR(check_output_folder(options));
-  PipelineOptions po = pipeline_options(info.manifest);
+  PipelineOptions po = pipeline_options(info.manifest, options);
   po.sync.policy = options.policy;
-  po.threads = options.threads;
   po.sync.start = Timestamp::from_ns(0);
   po.pace_source = options.pace_source;
   const SourceInfo si = v.source->info();
@@ -487,9 +486,8 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   if (!reader) return tl::unexpected(in_session(reader.error(), options.session_dir));
   full = {};
 
-  PipelineOptions po = pipeline_options(manifest);
+  PipelineOptions po = pipeline_options(manifest, options);
   po.sync.policy = options.policy;
-  po.threads = options.threads;
   po.sync.start = full_info.start;  // ticks on the session clock, whatever streams are read
   po.pace_source = options.pace_source;
   // Damage of every stream: found when opening (all streams), and while reading (those analysed).
@@ -528,10 +526,9 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   plan_options.absolute_paths_allowed = true;
   auto plan = plan_pipeline(plan_options, manifest, fs::current_path());
   if (!plan) return tl::unexpected(plan.error());
-  PipelineOptions po = pipeline_options(manifest);
+  PipelineOptions po = pipeline_options(manifest, options);
   po.sync.policy = SyncPolicy::kLatestWithinTolerance;
   po.pace_source = false;  // the devices deliver in real time
-  po.threads = options.threads;
   // The live configuration's session name may name the participant: "live" unless names are in.
   const std::string session_name =
       options.plan.include_names && !manifest.name.empty() ? manifest.name : std::string("live");

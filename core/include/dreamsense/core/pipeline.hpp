@@ -49,6 +49,7 @@ struct AnalyzerStats {
   uint64_t calls = 0;
   uint64_t errors = 0;             // process() returned an error or broke a check
   std::vector<double> latency_ms;  // one sample per call
+  double latency_total_ms = 0;     // their sum
 };
 
 struct PipelineStats {
@@ -97,7 +98,7 @@ class Pipeline {
   const Blackboard& blackboard() const { return blackboard_; }
   const std::vector<std::unique_ptr<Analyzer>>& analyzers() const { return analyzers_; }
   // Threads that run a tick's analysers (PipelineOptions::threads resolved).
-  int threads() const { return threads_; }
+  int threads() const { return stats_.threads; }
 
  private:
   Pipeline(PipelineOptions options, SourceInfo info, std::vector<std::unique_ptr<Analyzer>> a);
@@ -119,10 +120,10 @@ class Pipeline {
   Blackboard blackboard_;
   PipelineStats stats_;
 
-  // Parallel ticks (threads_ > 1). must_wait_for_[i]: analysers that run before i (a key one
-  // writes and the other reads); unblocks_[i]: the converse.
-  int threads_ = 1;
-  std::vector<std::vector<size_t>> must_wait_for_, unblocks_;
+  // Parallel ticks (threads() > 1). dependencies_[i]: the earlier analysers that i waits for (a
+  // key one writes and the other reads); unblocks_[i]: the later ones that wait for i.
+  std::vector<size_t> dependencies_;
+  std::vector<std::vector<size_t>> unblocks_;
   std::vector<std::thread> workers_;
   std::mutex tick_mutex_;
   std::condition_variable tick_cv_;
@@ -130,7 +131,6 @@ class Pipeline {
   std::vector<size_t> waiting_on_;          // per analyser: dependencies not yet done
   std::vector<size_t> ready_;
   std::vector<double> path_ms_;  // per analyser: its mean latency plus its longest dependent path
-  std::vector<double> latency_sum_ms_;  // per analyser, over its calls
   size_t finished_ = 0, running_ = 0;
   std::exception_ptr tick_exception_;
   bool stopping_ = false;
