@@ -42,7 +42,8 @@ void add_demo(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   cmd->add_option(
          "--child", flags->child,
          "Which demo child (0 = the original, whose calibration ships; sim/demo_children.hpp); "
-         "default: 0 on odd seeds, 1 and 2 alternately on even seeds")
+         "default: 0 on odd seeds, 1 and 2 alternately on even seeds; 3 is held out: no seed "
+         "shows it")
       ->check(CLI::Range(0, static_cast<int>(sim::demo_children().size()) - 1));
   cmd->add_flag("--no-analyze", flags->no_analyze, "Only build the session");
   cmd->add_option("--child-voice-shift", flags->child_voice_shift,

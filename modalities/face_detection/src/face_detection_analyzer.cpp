@@ -209,7 +209,8 @@ class FaceDetectionAnalyzer : public Analyzer {
       if (!cam.last_guided)
         if (auto r = box_on_extent(fit->box_px, extent)) cam.box_on_fit = r;
       if (cam.box_on_fit && extent.area() > 0)
-        out.push_back({fit->box_px, place_box(*cam.box_on_fit, extent)});
+        out.push_back(
+            {fit->box_px, place_box(*cam.box_on_fit, extent), landmarks_roll_deg(fit->points_px)});
     }
     return out;
   }

@@ -2,26 +2,87 @@
 
 #include "dreamsense/perception/face_detection.hpp"
 
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <cmath>
 
 namespace dreamsense::face_detection {
 namespace {
 
+// A face of this frame and the in-plane angle it was found (or placed) at.
+struct Found {
+  DetectedFace face;
+  double roll_deg = 0;
+};
+
+std::vector<Found> at_roll(const std::vector<DetectedFace>& faces, double roll_deg) {
+  std::vector<Found> out;
+  for (const DetectedFace& f : faces) out.push_back({f, roll_deg});
+  return out;
+}
+
 // Keeps the better of overlapping detections; result best score first.
-std::vector<DetectedFace> merge(std::vector<DetectedFace> faces, double merge_iou) {
+std::vector<Found> merge(std::vector<Found> faces, double merge_iou) {
   std::stable_sort(faces.begin(), faces.end(),
-                   [](const DetectedFace& a, const DetectedFace& b) { return a.score > b.score; });
-  std::vector<DetectedFace> kept;
-  for (const DetectedFace& f : faces) {
+                   [](const Found& a, const Found& b) { return a.face.score > b.face.score; });
+  std::vector<Found> kept;
+  for (const Found& f : faces) {
     bool dup = false;
-    for (const DetectedFace& k : kept) dup = dup || box_iou(f.box_px, k.box_px) > merge_iou;
+    for (const Found& k : kept) dup = dup || box_iou(f.face.box_px, k.face.box_px) > merge_iou;
     if (!dup) kept.push_back(f);
   }
   return kept;
 }
 
 }  // namespace
+
+double landmarks_roll_deg(const std::vector<cv::Point2d>& points) {
+  if (points.size() != 68) return 0;
+  cv::Point2d right(0, 0), left(0, 0);
+  for (size_t i = 36; i < 42; ++i) right += points[i] * (1.0 / 6);
+  for (size_t i = 42; i < 48; ++i) left += points[i] * (1.0 / 6);
+  const cv::Point2d d = left - right;
+  if (!(std::isfinite(d.x) && std::isfinite(d.y)) || (d.x == 0 && d.y == 0)) return 0;
+  return std::atan2(d.y, d.x) * 180.0 / CV_PI;
+}
+
+std::vector<DetectedFace> detect_rolled(FaceDetector& detector, const cv::Mat& image,
+                                        const cv::Rect& region, double roll_deg, double min_face_px,
+                                        double max_face_px) {
+  if (roll_deg == 0)
+    return detector.detect(image, SearchRegion{region, min_face_px, max_face_px}, false);
+  if (region.empty() || image.empty()) return {};
+  // The region's centre stays the canvas centre; the image turns by roll_deg about it (OpenCV:
+  // positive = counter-clockwise on screen, which makes a face rolled by +roll_deg upright).
+  const cv::Point2f centre(static_cast<float>(region.x + region.width / 2.0),
+                           static_cast<float>(region.y + region.height / 2.0));
+  cv::Mat M = cv::getRotationMatrix2D(centre, roll_deg, 1.0);
+  const double shift_x = region.width / 2.0 - centre.x, shift_y = region.height / 2.0 - centre.y;
+  M.at<double>(0, 2) += shift_x;
+  M.at<double>(1, 2) += shift_y;
+  cv::Mat canvas;
+  cv::warpAffine(image, canvas, M, region.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  std::vector<DetectedFace> faces = detector.detect(
+      canvas, SearchRegion{cv::Rect(0, 0, canvas.cols, canvas.rows), min_face_px, max_face_px},
+      false);
+  cv::Mat back;
+  cv::invertAffineTransform(M, back);
+  for (DetectedFace& f : faces) {
+    const cv::Point2d c(f.box_px.x + f.box_px.width / 2, f.box_px.y + f.box_px.height / 2);
+    const cv::Point2d p(
+        back.at<double>(0, 0) * c.x + back.at<double>(0, 1) * c.y + back.at<double>(0, 2),
+        back.at<double>(1, 0) * c.x + back.at<double>(1, 1) * c.y + back.at<double>(1, 2));
+    f.box_px.x = p.x - f.box_px.width / 2;
+    f.box_px.y = p.y - f.box_px.height / 2;
+  }
+  // Keep faces whose centre lies in the image (the replicated border holds no real face).
+  std::erase_if(faces, [&](const DetectedFace& f) {
+    const double cx = f.box_px.x + f.box_px.width / 2, cy = f.box_px.y + f.box_px.height / 2;
+    return cx < 0 || cy < 0 || cx >= image.cols || cy >= image.rows;
+  });
+  return faces;
+}
 
 Status FaceTrackerOptions::check() const {
   std::string bad;
@@ -51,6 +112,16 @@ Status FaceTrackerOptions::check() const {
   if (cascade_interval < 1) add(fmt::format("cascade_interval {} < 1", cascade_interval));
   if (!(guide_min_iou > 0 && guide_min_iou <= 1))
     add(fmt::format("guide_min_iou {} not in (0, 1]", guide_min_iou));
+  if (!(roll_min_deg >= 0 && roll_min_deg <= 90))
+    add(fmt::format("roll_min_deg {} not in [0, 90]", roll_min_deg));
+  if (!(roll_step_deg >= 0 && roll_step_deg <= 90))
+    add(fmt::format("roll_step_deg {} not in [0, 90]", roll_step_deg));
+  if (!(lost_roll_deg >= 0 && lost_roll_deg <= 90))
+    add(fmt::format("lost_roll_deg {} not in [0, 90]", lost_roll_deg));
+  if (lost_roll_search_interval < 1)
+    add(fmt::format("lost_roll_search_interval {} < 1", lost_roll_search_interval));
+  if (!(lost_roll_max_yaw_deg >= 0 && lost_roll_max_yaw_deg <= 180))
+    add(fmt::format("lost_roll_max_yaw_deg {} not in [0, 180]", lost_roll_max_yaw_deg));
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "FaceTrackerOptions: " + bad);
   return ok_status();
 }
@@ -78,19 +149,51 @@ void FaceTracker::reset() {
   tracked_.clear();
   frames_since_full_ = 0;
   guided_in_a_row_ = 0;
+  lost_full_searches_ = 0;
 }
 
-std::vector<DetectedFace> FaceTracker::guided_faces(const std::vector<FaceGuide>& guides) const {
-  std::vector<DetectedFace> faces;
+std::vector<std::pair<DetectedFace, double>> FaceTracker::guided_faces(
+    const std::vector<FaceGuide>& guides) const {
+  std::vector<std::pair<DetectedFace, double>> faces;
   for (const Track& t : tracked_) {
     // The guide of this face: the one made from the box this tracker returned for it.
     const auto g = std::find_if(guides.begin(), guides.end(), [&](const FaceGuide& c) {
       return box_iou(c.tracked_box, t.box) > 0.999;
     });
     if (g == guides.end() || !(box_iou(g->box, t.box) >= options_.guide_min_iou)) return {};
-    faces.push_back(DetectedFace{g->box, t.score, t.view, t.frontalness});
+    faces.emplace_back(DetectedFace{g->box, t.score, t.view, t.frontalness}, g->roll_deg);
   }
   return faces;
+}
+
+std::vector<DetectedFace> FaceTracker::search_region(const cv::Mat& image, const Track& track,
+                                                     double roll_deg) {
+  const cv::Rect2d& t = track.box;
+  const double size = std::max(t.width, t.height);
+  const double m = options_.roi_margin * size;
+  const cv::Rect2d grown(t.x - m, t.y - m, t.width + 2 * m, t.height + 2 * m);
+  // Upright: the region clipped to the image. Rotated: the same region about the face's centre
+  // (detect_rolled samples outside the image as its replicated border).
+  const cv::Rect region_px =
+      roll_deg == 0 ? cv::Rect(grown) & cv::Rect(0, 0, image.cols, image.rows) : cv::Rect(grown);
+  if (region_px.empty()) return {};
+  std::vector<DetectedFace> found;
+  if (options_.roi_narrow_first) {
+    found =
+        detect_rolled(detector_, image, region_px, roll_deg, options_.roi_narrow_min_scale * size,
+                      options_.roi_narrow_max_scale * size);
+    // A box near the range's edge means the face may be beyond it (the windows stop there
+    // and pull the box towards the last size): let the wide range decide.
+    const bool settled = std::all_of(found.begin(), found.end(), [&](const DetectedFace& f) {
+      const double change = std::max(f.box_px.width, f.box_px.height) / size;
+      return std::abs(std::log(change)) <= std::log1p(options_.roi_narrow_max_change);
+    });
+    if (!settled) found.clear();
+  }
+  if (found.empty())
+    found = detect_rolled(detector_, image, region_px, roll_deg, options_.roi_min_scale * size,
+                          options_.roi_max_scale * size);
+  return found;
 }
 
 TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontalness& known,
@@ -112,57 +215,60 @@ TrackedFrameFaces FaceTracker::process(const cv::Mat& image, const KnownFrontaln
     full = (index + options_.full_search_phase) % options_.full_search_interval == 0;
   }
 
-  std::vector<DetectedFace> faces;
+  std::vector<Found> faces;
   if (!full && !tracked_.empty() && guided_in_a_row_ + 1 < options_.cascade_interval) {
-    faces = guided_faces(guides);
+    for (auto& [face, roll] : guided_faces(guides)) faces.push_back({face, roll});
     out.guided = !faces.empty();
   }
   guided_in_a_row_ = out.guided ? guided_in_a_row_ + 1 : 0;
   if (!full && !tracked_.empty() && !out.guided) {
-    // Around each tracked face: the narrow size range first, the wide one if that finds nothing.
+    // Around each tracked face: upright, or rotated upright when it is rolled; then, if that
+    // finds nothing and rotated searches are on, rolled a step further either way.
     for (const Track& track : tracked_) {
-      const cv::Rect2d& t = track.box;
-      const double size = std::max(t.width, t.height);
-      const double m = options_.roi_margin * size;
-      const cv::Rect region_px =
-          cv::Rect(cv::Rect2d(t.x - m, t.y - m, t.width + 2 * m, t.height + 2 * m)) &
-          cv::Rect(0, 0, image.cols, image.rows);
-      if (region_px.empty()) continue;
-      std::vector<DetectedFace> found;
-      if (options_.roi_narrow_first) {
-        found = detector_.detect(image,
-                                 SearchRegion{region_px, options_.roi_narrow_min_scale * size,
-                                              options_.roi_narrow_max_scale * size},
-                                 false);
-        // A box near the range's edge means the face may be beyond it (the windows stop there
-        // and pull the box towards the last size): let the wide range decide.
-        const bool settled = std::all_of(found.begin(), found.end(), [&](const DetectedFace& f) {
-          const double change = std::max(f.box_px.width, f.box_px.height) / size;
-          return std::abs(std::log(change)) <= std::log1p(options_.roi_narrow_max_change);
-        });
-        if (!settled) found.clear();
-      }
-      if (found.empty())
-        found = detector_.detect(
-            image,
-            SearchRegion{region_px, options_.roi_min_scale * size, options_.roi_max_scale * size},
-            false);
-      faces.insert(faces.end(), found.begin(), found.end());
+      const double roll = std::abs(track.roll_deg) >= options_.roll_min_deg ? track.roll_deg : 0;
+      std::vector<DetectedFace> found = search_region(image, track, roll);
+      double found_roll = roll;
+      if (found.empty() && options_.roll_step_deg > 0)
+        for (const double step : {-options_.roll_step_deg, options_.roll_step_deg}) {
+          found = search_region(image, track, track.roll_deg + step);
+          found_roll = track.roll_deg + step;
+          if (!found.empty()) break;
+        }
+      for (const Found& f : at_roll(found, found_roll)) faces.push_back(f);
     }
     if (faces.empty() && options_.full_search_on_miss) full = true;
   }
   if (full) {
-    faces = detector_.detect(image, std::nullopt, false);
+    faces = at_roll(detector_.detect(image, std::nullopt, false), 0);
     frames_since_full_ = 0;
+    // Rotated full searches while lost: in the first lost frame, then every
+    // lost_roll_search_interval frames; not while the head is known to face away from this
+    // camera (the frontal cascade would not find it rotated either).
+    const bool facing = !head_yaw_deg || std::abs(*head_yaw_deg) <= options_.lost_roll_max_yaw_deg;
+    bool rotated = false;
+    if (!faces.empty() || !tracked_.empty())
+      lost_full_searches_ = 0;
+    else
+      rotated = options_.lost_roll_deg > 0 && facing &&
+                lost_full_searches_++ % options_.lost_roll_search_interval == 0;
+    if (rotated) {
+      // Nothing upright and nothing tracked: a face may be rolled beyond the cascade's reach.
+      const cv::Rect whole(0, 0, image.cols, image.rows);
+      for (const double roll : {-options_.lost_roll_deg, options_.lost_roll_deg}) {
+        for (const Found& f : at_roll(detect_rolled(detector_, image, whole, roll), roll))
+          faces.push_back(f);
+      }
+    }
   }
-  out.faces = merge(std::move(faces), options_.merge_iou);
+  const std::vector<Found> kept = merge(std::move(faces), options_.merge_iou);
+  for (const Found& f : kept) out.faces.push_back(f.face);
   out.full_search = full;
   // Frontalness: carried over from the same face in the previous frame while young enough.
   std::vector<Track> next;
   const bool estimate = detector_.options().estimate_frontalness;
   for (size_t i = 0; i < out.faces.size(); ++i) {
     DetectedFace& f = out.faces[i];
-    Track t{f.box_px, f.frontalness, 0, f.score, f.view};
+    Track t{f.box_px, f.frontalness, 0, f.score, f.view, kept[i].roll_deg};
     const std::optional<float> given =
         known && f.view == FaceView::kFrontal ? known(out.faces, i) : std::nullopt;
     if (given) {

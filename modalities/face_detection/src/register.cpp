@@ -33,6 +33,12 @@ void register_analyzers(AnalyzerRegistry& registry) {
         options.get("turned_away_search_interval", o.tracker.turned_away_search_interval));
     DS_RETURN_IF_ERROR(options.get("cascade_interval", o.tracker.cascade_interval));
     DS_RETURN_IF_ERROR(options.get("guide_min_iou", o.tracker.guide_min_iou));
+    DS_RETURN_IF_ERROR(options.get("roll_min_deg", o.tracker.roll_min_deg));
+    DS_RETURN_IF_ERROR(options.get("roll_step_deg", o.tracker.roll_step_deg));
+    DS_RETURN_IF_ERROR(options.get("lost_roll_deg", o.tracker.lost_roll_deg));
+    DS_RETURN_IF_ERROR(
+        options.get("lost_roll_search_interval", o.tracker.lost_roll_search_interval));
+    DS_RETURN_IF_ERROR(options.get("lost_roll_max_yaw_deg", o.tracker.lost_roll_max_yaw_deg));
     DS_RETURN_IF_ERROR(options.get("parallel", o.parallel));
     PlannedAnalyzers p;
     // The calibrations give the faces' 3-D positions and the yaw-based camera selection.

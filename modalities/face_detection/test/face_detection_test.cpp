@@ -315,6 +315,83 @@ TEST(FaceTracker, LostFaceTurnedAwaySearchesTheFullFrameLessOften) {
   EXPECT_EQ(searches(-80.0), 12);
 }
 
+// A head tilted sideways: the demo frame turned by 35 degrees about the face, beyond the frontal
+// cascade's reach. Upright searches alone (the baseline) never find it; with rotated searches
+// the lost tracker finds it in its first frame (the full frame rotated by -lost_roll_deg) and
+// then follows it in its region rotated by the roll it was found at, without full searches, as
+// it tilts 10 degrees further. The boxes are where the upright face's box turns to.
+TEST(FaceTracker, RolledFaceIsFoundAndFollowedByRotatedSearches) {
+  const cv::Mat& image = image_of(demo().ticks[0], "camera_middle");
+  const auto upright = make_detector().detect(image);
+  ASSERT_FALSE(upright.empty());
+  const cv::Rect2d b = upright[0].box_px;
+  const cv::Point2d c(b.x + b.width / 2, b.y + b.height / 2);
+  // Turned by -35 deg on screen (clockwise): the eye line then descends to the right, roll +35.
+  auto turned = [&](double deg) {
+    cv::Mat out;
+    cv::warpAffine(image, out, cv::getRotationMatrix2D(c, -deg, 1.0), image.size(),
+                   cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    return out;
+  };
+  const cv::Mat rolled = turned(35), further = turned(45);
+  auto found_at_face = [&](const TrackedFrameFaces& r) {
+    for (const DetectedFace& f : r.faces)
+      if (std::hypot(f.box_px.x + f.box_px.width / 2 - c.x,
+                     f.box_px.y + f.box_px.height / 2 - c.y) < 0.25 * b.width)
+        return true;
+    return false;
+  };
+  // The sign convention of FaceGuide::roll_deg: this face's eye line descends to the right
+  // (roll +35), and the search rotated by +35 finds it where -35 does not.
+  FaceDetector detector = make_detector();
+  const cv::Rect around(cv::Rect2d(c.x - b.width, c.y - b.height, 2 * b.width, 2 * b.height));
+  EXPECT_FALSE(detect_rolled(detector, rolled, around, 35).empty());
+  EXPECT_TRUE(detect_rolled(detector, rolled, around, -35).empty());
+  FaceTrackerOptions baseline;
+  baseline.roll_step_deg = 0;
+  baseline.lost_roll_deg = 0;
+  FaceTracker plain(make_detector(), baseline);
+  for (int i = 0; i < 3; ++i) EXPECT_FALSE(found_at_face(plain.process(rolled))) << i;
+
+  FaceTrackerOptions o;
+  o.lost_roll_deg = 35;
+  FaceTracker tracker(make_detector(), o);
+  const TrackedFrameFaces first = tracker.process(rolled);
+  EXPECT_TRUE(first.full_search);
+  ASSERT_TRUE(found_at_face(first));
+  EXPECT_NEAR(first.faces[0].box_px.width, b.width, 0.25 * b.width);
+  for (int i = 0; i < 2; ++i) {
+    const TrackedFrameFaces r = tracker.process(rolled);
+    EXPECT_FALSE(r.full_search) << i;
+    EXPECT_TRUE(found_at_face(r)) << i;
+  }
+  // Ten degrees further: the region at 35 misses it, a step of roll_step_deg finds it.
+  const TrackedFrameFaces r = tracker.process(further);
+  EXPECT_FALSE(r.full_search);
+  EXPECT_TRUE(found_at_face(r));
+  // An upright face stays an upright search: same box as the detector's.
+  FaceTracker fresh(make_detector(), o);
+  const TrackedFrameFaces u = fresh.process(image);
+  ASSERT_EQ(u.faces.size(), upright.size());
+  EXPECT_GT(box_iou(u.faces[0].box_px, b), 0.99);
+}
+
+TEST(FaceTracker, LandmarksRollIsTheEyeLineAngle) {
+  std::vector<cv::Point2d> points(68, cv::Point2d(0, 0));
+  for (size_t i = 36; i < 42; ++i) points[i] = {100, 200};  // subject's right eye (image left)
+  for (size_t i = 42; i < 48; ++i) points[i] = {160, 200};
+  EXPECT_NEAR(landmarks_roll_deg(points), 0, 1e-9);
+  for (size_t i = 42; i < 48; ++i) points[i] = {160, 260};  // descends to the right
+  EXPECT_NEAR(landmarks_roll_deg(points), 45, 1e-9);
+  EXPECT_EQ(landmarks_roll_deg(std::vector<cv::Point2d>(10)), 0);
+  FaceTrackerOptions bad;
+  bad.lost_roll_search_interval = 0;
+  EXPECT_FALSE(bad.check());
+  bad = {};
+  bad.roll_step_deg = -1;
+  EXPECT_FALSE(bad.check());
+}
+
 TEST(FaceTracker, BoxOnExtentPlacesTheBoxItWasLearnedFrom) {
   const cv::Rect2d box(100, 80, 60, 70), extent(104, 95, 50, 52);
   const auto r = box_on_extent(box, extent);

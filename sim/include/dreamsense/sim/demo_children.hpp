@@ -39,9 +39,12 @@ struct DemoChild {
   bool in_shipped_gallery = false;
 };
 
-// Child 0 = the original demo child (astronaut.png); the others in a fixed order.
+// Child 0 = the original demo child (astronaut.png); the others in a fixed order. Child 3 is
+// held out: no seed shows it (`demo --child 3`), so settings are not chosen on it by accident.
+inline constexpr int kHeldOutDemoChild = 3;
 const std::vector<DemoChild>& demo_children();
-// The child a seed shows: seed % demo_children().size() (seeds 3, 6, 9, ... show child 0).
+// The child a seed shows: 0 for odd seeds, 1 and 2 alternately for even seeds (2, 6, 10, ...
+// child 1; 4, 8, 12, ... child 2); never the held-out child.
 int demo_child_for_seed(uint64_t seed);
 
 }  // namespace dreamsense::sim
