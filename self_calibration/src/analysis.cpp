@@ -43,6 +43,7 @@ Status apply_overrides(const std::vector<runner::OptionOverride>& overrides,
   DS_RETURN_IF_ERROR(node.get("enough_frames", so.enough_frames));
   DS_RETURN_IF_ERROR(node.get("guided_search", so.guided_search));
   DS_RETURN_IF_ERROR(node.get("size_guided_search", so.size_guided_search));
+  DS_RETURN_IF_ERROR(node.get("rolled_search_min_deg", so.rolled_search_min_deg));
   DS_RETURN_IF_ERROR(node.get("gaze_level", so.gaze_level.enabled));
   DS_RETURN_IF_ERROR(node.get("gaze_level_eye_yaw", so.gaze_level.eye_yaw));
   DS_RETURN_IF_ERROR(node.get("gaze_level_max_yaw_deg", so.gaze_level.max_yaw_deg));

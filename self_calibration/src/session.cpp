@@ -4,6 +4,7 @@
 #include "dreamsense/core/sensor_frame.hpp"
 #include "dreamsense/eye_centers/eye_center_locator.hpp"
 #include "dreamsense/face_detection/face_detector.hpp"
+#include "dreamsense/face_detection/face_tracker.hpp"
 #include "dreamsense/face_landmarks/landmarker.hpp"
 #include "dreamsense/gaze/gaze_estimator.hpp"
 #include "dreamsense/head_pose/face_shape_fit.hpp"
@@ -44,6 +45,19 @@ std::optional<cv::Vec3d> eye_openings_centre(const head_pose::TriangulatedFace& 
   return s * (1.0 / n);
 }
 
+// A head tilted beyond the upright cascade's reach (face_detection README, "Tilted heads"): the
+// region around the camera's last face searched rotated upright by that face's roll, when the
+// roll is at least min_roll_deg (0 = never).
+std::vector<DetectedFace> rolled_search(face_detection::FaceDetector& detector,
+                                        const cv::Mat& image, const cv::Rect2d& last,
+                                        double roll_deg, double min_roll_deg) {
+  if (!(min_roll_deg > 0) || std::abs(roll_deg) < min_roll_deg) return {};
+  const double size = std::max(last.width, last.height), m = 0.75 * size;
+  const cv::Rect region(
+      cv::Rect2d(last.x - m, last.y - m, last.width + 2 * m, last.height + 2 * m));
+  return face_detection::detect_rolled(detector, image, region, roll_deg, 0.5 * size, 2.0 * size);
+}
+
 // Where a camera's face is looked for first, from its box at the last searched tick (`last`,
 // null: none); nullopt: the full frame at once. The caller searches the full frame when this
 // finds nothing. See SessionSelfCalibrationOptions::guided_search and size_guided_search.
@@ -75,6 +89,9 @@ Status SessionSelfCalibrationOptions::check() const {
     return make_error(ErrorCode::kInvalidArgument,
                       "SessionSelfCalibrationOptions: max_seconds > 0, tick_step >= 1 and "
                       "enough_frames >= 1 needed");
+  if (!(rolled_search_min_deg >= 0 && rolled_search_min_deg <= 90))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "SessionSelfCalibrationOptions: rolled_search_min_deg must be in [0, 90]");
   if (auto s = eyes.check(); !s) return s;
   if (auto s = pupils.check(); !s) return s;
   if (auto s = gaze_level.check(); !s) return s;
@@ -179,6 +196,12 @@ Result<SessionSelfCalibration> self_calibrate_session(
   std::vector<head_pose::MultiViewLandmarks> ticks;
   std::vector<std::vector<EyeCenters>> pupils;  // per tick, per view of ticks[i]
   std::map<SensorId, cv::Rect2d> last_box;      // per camera: its face at the last searched tick
+  // Per camera: the last face found and its roll (kept through misses), for the rotated search.
+  struct SeenFace {
+    cv::Rect2d box;
+    double roll_deg = 0;
+  };
+  std::map<SensorId, SeenFace> last_seen;
   // Only the gaze level uses the pupils.
   const bool locate_pupils =
       options.gaze_level.enabled && face_options.fixation_target_world_m.has_value();
@@ -205,6 +228,10 @@ Result<SessionSelfCalibration> self_calibrate_session(
                                           img->image.size(), options))
         faces = detector->detect(img->image, *first, false);
       if (faces.empty()) faces = detector->detect(img->image, std::nullopt, false);
+      if (faces.empty())
+        if (const auto seen = last_seen.find(f->sensor); seen != last_seen.end())
+          faces = rolled_search(*detector, img->image, seen->second.box, seen->second.roll_deg,
+                                options.rolled_search_min_deg);
       if (faces.empty()) {
         last_box.erase(f->sensor);
         continue;
@@ -213,6 +240,7 @@ Result<SessionSelfCalibration> self_calibrate_session(
       auto pts = (*landmarker)->fit(img->image, faces.front().box_px);
       if (!pts) return tl::unexpected(pts.error());
       if (!*pts) continue;
+      last_seen[f->sensor] = {faces.front().box_px, face_detection::landmarks_roll_deg(**pts)};
       ++out.views_with_landmarks;
       mv.views.push_back({&cameras.at(f->sensor), std::move(**pts)});
       images.push_back(&img->image);

@@ -45,6 +45,10 @@ struct SessionSelfCalibrationOptions {
   // ~170 per session differed; 0.5-2 x: none on the seeds checked). The small sizes skipped are
   // most of the cascade's windows.
   bool size_guided_search = true;
+  // When both upright searches find nothing and the camera's last face (kept through misses)
+  // leaned by at least this (deg, from its landmarks' eye line), its region is searched rotated
+  // upright by that roll (face_detection's detect_rolled). 0 = upright searches only.
+  double rolled_search_min_deg = 10;
   // Colour streams used; empty = every calibrated colour stream with the role child_camera.
   std::vector<std::string> cameras;
   // face.fixation_target_world_m: when unset, the session's metadata robot_head_m (the robot's
