@@ -52,10 +52,10 @@ std::vector<DetectedFace> rolled_search(face_detection::FaceDetector& detector,
                                         const cv::Mat& image, const cv::Rect2d& last,
                                         double roll_deg, double min_roll_deg) {
   if (!(min_roll_deg > 0) || std::abs(roll_deg) < min_roll_deg) return {};
-  const double size = std::max(last.width, last.height), m = 0.75 * size;
-  const cv::Rect region(
-      cv::Rect2d(last.x - m, last.y - m, last.width + 2 * m, last.height + 2 * m));
-  return face_detection::detect_rolled(detector, image, region, roll_deg, 0.5 * size, 2.0 * size);
+  const double size = std::max(last.width, last.height);
+  return face_detection::detect_rolled(detector, image,
+                                       cv::Rect(face_detection::grown_by(last, 0.75)), roll_deg,
+                                       0.5 * size, 2.0 * size);
 }
 
 // Where a camera's face is looked for first, from its box at the last searched tick (`last`,
@@ -69,10 +69,7 @@ std::optional<face_detection::SearchRegion> first_search(const cv::Rect2d* last,
   if (o.guided_search) {
     // Around the last box (0.24 s ago at the defaults), as the face tracker searches between
     // full searches.
-    const double m = 0.75 * size;
-    const cv::Rect region =
-        cv::Rect(cv::Rect2d(last->x - m, last->y - m, last->width + 2 * m, last->height + 2 * m)) &
-        whole;
+    const cv::Rect region = cv::Rect(face_detection::grown_by(*last, 0.75)) & whole;
     if (region.empty()) return std::nullopt;
     return face_detection::SearchRegion{region, 0.6 * size, 1.6 * size};
   }
@@ -240,7 +237,7 @@ Result<SessionSelfCalibration> self_calibrate_session(
       auto pts = (*landmarker)->fit(img->image, faces.front().box_px);
       if (!pts) return tl::unexpected(pts.error());
       if (!*pts) continue;
-      last_seen[f->sensor] = {faces.front().box_px, face_detection::landmarks_roll_deg(**pts)};
+      last_seen[f->sensor] = {faces.front().box_px, eye_line_roll_deg(**pts)};
       ++out.views_with_landmarks;
       mv.views.push_back({&cameras.at(f->sensor), std::move(**pts)});
       images.push_back(&img->image);

@@ -210,7 +210,7 @@ class FaceDetectionAnalyzer : public Analyzer {
         if (auto r = box_on_extent(fit->box_px, extent)) cam.box_on_fit = r;
       if (cam.box_on_fit && extent.area() > 0)
         out.push_back(
-            {fit->box_px, place_box(*cam.box_on_fit, extent), landmarks_roll_deg(fit->points_px)});
+            {fit->box_px, place_box(*cam.box_on_fit, extent), eye_line_roll_deg(fit->points_px)});
     }
     return out;
   }

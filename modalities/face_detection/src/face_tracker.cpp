@@ -37,14 +37,9 @@ std::vector<Found> merge(std::vector<Found> faces, double merge_iou) {
 
 }  // namespace
 
-double landmarks_roll_deg(const std::vector<cv::Point2d>& points) {
-  if (points.size() != 68) return 0;
-  cv::Point2d right(0, 0), left(0, 0);
-  for (size_t i = 36; i < 42; ++i) right += points[i] * (1.0 / 6);
-  for (size_t i = 42; i < 48; ++i) left += points[i] * (1.0 / 6);
-  const cv::Point2d d = left - right;
-  if (!(std::isfinite(d.x) && std::isfinite(d.y)) || (d.x == 0 && d.y == 0)) return 0;
-  return std::atan2(d.y, d.x) * 180.0 / CV_PI;
+cv::Rect2d grown_by(const cv::Rect2d& box, double margin) {
+  const double m = margin * std::max(box.width, box.height);
+  return {box.x - m, box.y - m, box.width + 2 * m, box.height + 2 * m};
 }
 
 std::vector<DetectedFace> detect_rolled(FaceDetector& detector, const cv::Mat& image,
@@ -168,10 +163,8 @@ std::vector<std::pair<DetectedFace, double>> FaceTracker::guided_faces(
 
 std::vector<DetectedFace> FaceTracker::search_region(const cv::Mat& image, const Track& track,
                                                      double roll_deg) {
-  const cv::Rect2d& t = track.box;
-  const double size = std::max(t.width, t.height);
-  const double m = options_.roi_margin * size;
-  const cv::Rect2d grown(t.x - m, t.y - m, t.width + 2 * m, t.height + 2 * m);
+  const double size = std::max(track.box.width, track.box.height);
+  const cv::Rect2d grown = grown_by(track.box, options_.roi_margin);
   // Upright: the region clipped to the image. Rotated: the same region about the face's centre
   // (detect_rolled samples outside the image as its replicated border).
   const cv::Rect region_px =

@@ -380,10 +380,10 @@ TEST(FaceTracker, LandmarksRollIsTheEyeLineAngle) {
   std::vector<cv::Point2d> points(68, cv::Point2d(0, 0));
   for (size_t i = 36; i < 42; ++i) points[i] = {100, 200};  // subject's right eye (image left)
   for (size_t i = 42; i < 48; ++i) points[i] = {160, 200};
-  EXPECT_NEAR(landmarks_roll_deg(points), 0, 1e-9);
+  EXPECT_NEAR(eye_line_roll_deg(points), 0, 1e-9);
   for (size_t i = 42; i < 48; ++i) points[i] = {160, 260};  // descends to the right
-  EXPECT_NEAR(landmarks_roll_deg(points), 45, 1e-9);
-  EXPECT_EQ(landmarks_roll_deg(std::vector<cv::Point2d>(10)), 0);
+  EXPECT_NEAR(eye_line_roll_deg(points), 45, 1e-9);
+  EXPECT_EQ(eye_line_roll_deg(std::vector<cv::Point2d>(10)), 0);
   FaceTrackerOptions bad;
   bad.lost_roll_search_interval = 0;
   EXPECT_FALSE(bad.check());

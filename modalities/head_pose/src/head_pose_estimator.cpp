@@ -12,12 +12,6 @@ namespace dreamsense::head_pose {
 namespace {
 constexpr double kRadToDeg = 180.0 / CV_PI;
 
-cv::Point2d centroid6(const std::vector<cv::Point2d>& p, size_t first) {
-  cv::Point2d c(0, 0);
-  for (size_t i = first; i < first + 6; ++i) c += p[i];
-  return c * (1.0 / 6);
-}
-
 // The model points and their landmarks in one view (finite landmarks only).
 struct ViewPoints {
   const CameraModel* camera = nullptr;
@@ -39,7 +33,8 @@ std::optional<ViewPoints> view_points(const PoseView& v, const FaceModel3d& m) {
     out.model.push_back(m.points_m[i]);
     out.image.push_back(p);
   }
-  out.iod_px = cv::norm(centroid6(*v.landmarks_px, 36) - centroid6(*v.landmarks_px, 42));
+  out.iod_px = cv::norm(eye_contour_centroid(*v.landmarks_px, 36) -
+                        eye_contour_centroid(*v.landmarks_px, 42));
   if (out.model.size() < 4 || !(out.iod_px > 1)) return std::nullopt;
   return out;
 }

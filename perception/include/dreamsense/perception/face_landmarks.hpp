@@ -28,6 +28,20 @@ inline cv::Rect2d points_extent(const std::vector<cv::Point2d>& points) {
   return {x0, y0, x1 - x0, y1 - y0};
 }
 
+// Centroid of the six eye-contour points from `first` (36: the subject's right eye, 42: the left);
+// (0, 0) when there are fewer points.
+inline cv::Point2d eye_contour_centroid(const std::vector<cv::Point2d>& points, size_t first) {
+  cv::Point2d c(0, 0);
+  if (points.size() < first + 6) return c;
+  for (size_t i = first; i < first + 6; ++i) c += points[i];
+  return c * (1.0 / 6);
+}
+
+// In-plane roll of 68 landmarks (deg): the image angle of the line from the subject's right eye
+// to the left eye (y down: positive = that line descends to the image right; 0 = upright). 0 for
+// another point count or a degenerate line.
+double eye_line_roll_deg(const std::vector<cv::Point2d>& points);
+
 // 68 facial landmarks of the selected face in the selected camera's image, iBUG 300-W order as
 // seen in the image: 0-16 jaw contour (image left to right), 17-21 and 22-26 brows, 27-30 nose
 // bridge (27 top, 30 tip), 31-35 nostrils, 36-41 the eye on the image left (the subject's RIGHT
@@ -40,16 +54,8 @@ struct FaceLandmarks {
   cv::Rect2d box_px;                   // face box the landmarker started from
   std::vector<cv::Point2d> points_px;  // kFaceLandmarkCount points, full-resolution pixels
   // Centroid of the six contour points of the subject's right (36-41) / left (42-47) eye.
-  cv::Point2d right_eye_px() const { return centroid(36); }
-  cv::Point2d left_eye_px() const { return centroid(42); }
-
- private:
-  cv::Point2d centroid(size_t first) const {
-    cv::Point2d c(0, 0);
-    if (points_px.size() < first + 6) return c;
-    for (size_t i = first; i < first + 6; ++i) c += points_px[i];
-    return c * (1.0 / 6);
-  }
+  cv::Point2d right_eye_px() const { return eye_contour_centroid(points_px, 36); }
+  cv::Point2d left_eye_px() const { return eye_contour_centroid(points_px, 42); }
 };
 
 // The same face's landmarks in the other cameras at the same tick (issue 15: a multi-view head

@@ -86,13 +86,12 @@ struct FaceTrackerOptions {
 struct FaceGuide {
   cv::Rect2d tracked_box;  // the face's box as the tracker returned it for the previous frame
   cv::Rect2d box;          // its box in this frame, in the cascade's convention
-  // In-plane angle of the face (deg): the image angle of the line from the subject's right eye
-  // to the left eye (y down: positive = that line descends to the image right); 0 = upright.
+  // In-plane angle of the face (deg), eye_line_roll_deg of its fit (perception/face_landmarks.hpp).
   double roll_deg = 0;
 };
 
-// The in-plane roll of 68 fitted landmarks (FaceGuide::roll_deg); 0 for another point count.
-double landmarks_roll_deg(const std::vector<cv::Point2d>& points);
+// `box` grown by margin x its larger side on every side (the region searched around a face).
+cv::Rect2d grown_by(const cv::Rect2d& box, double margin);
 
 // Faces found in `image` rotated by roll_deg about the centre of `region` (so that a face rolled
 // by roll_deg stands upright), searched over `region`'s size around that centre at face sizes
