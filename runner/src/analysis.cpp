@@ -374,13 +374,20 @@ struct VideoPlan {
   PlanOptions plan;
 };
 
+// The plan options of this analysis: a live policy makes it a live plan (PlanContext::live).
+PlanOptions plan_options_of(const AnalysisOptions& options) {
+  PlanOptions p = options.plan;
+  p.live = p.live || options.policy == SyncPolicy::kLatestWithinTolerance;
+  return p;
+}
+
 Result<VideoPlan> open_video(const AnalysisOptions& options) {
   sources::VideoFileOptions vo;
   vo.calibration = options.calibration;
   VideoPlan v;
   DS_ASSIGN_OR_RETURN(v.source, sources::VideoFileSource::open(options.session_dir, vo));
   const sources::VideoFileInfo& info = v.source->video();
-  v.plan = options.plan;
+  v.plan = plan_options_of(options);
   v.plan.absolute_paths_allowed = true;  // the stream's file is the video's absolute path
   if (info.approximate_calibration) v.plan.assumed_cameras[sources::kVideoStreamId] = info.camera;
   return v;
@@ -434,7 +441,7 @@ Result<PipelinePlan> plan_session(const AnalysisOptions& options) {
   }
   auto manifest = sources::read_manifest(options.session_dir);
   if (!manifest) return tl::unexpected(in_session(manifest.error(), options.session_dir));
-  auto plan = plan_pipeline(options.plan, *manifest, options.session_dir);
+  auto plan = plan_pipeline(plan_options_of(options), *manifest, options.session_dir);
   if (!plan) return tl::unexpected(in_session(plan.error(), options.session_dir));
   return plan;
 }
@@ -474,7 +481,7 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
   const SourceInfo full_info = (*full)->info();
   std::vector<sources::StreamDamage> open_damage = (*full)->damage();
 
-  auto plan = plan_pipeline(options.plan, manifest, (*full)->dir());
+  auto plan = plan_pipeline(plan_options_of(options), manifest, (*full)->dir());
   if (!plan) return tl::unexpected(plan.error());
   const std::vector<SensorId> used = plan->used;
 
@@ -524,6 +531,7 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   // The live manifest's file references are the operator's absolute paths.
   PlanOptions plan_options = options.plan;
   plan_options.absolute_paths_allowed = true;
+  plan_options.live = true;
   auto plan = plan_pipeline(plan_options, manifest, fs::current_path());
   if (!plan) return tl::unexpected(plan.error());
   PipelineOptions po = pipeline_options(manifest, options);

@@ -160,6 +160,7 @@ Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
   ctx.frame_rate = manifest.frame_rate > 0 ? manifest.frame_rate : 25.0;
   ctx.absolute_paths_allowed = options.absolute_paths_allowed;
   ctx.include_names = options.include_names;
+  ctx.live = options.live;
 
   std::vector<std::unique_ptr<Analyzer>> planned;
   std::vector<size_t> planned_by;  // factory index of each planned analyser

@@ -39,6 +39,9 @@ void register_analyzers(AnalyzerRegistry& registry) {
     DS_RETURN_IF_ERROR(options.get("noise_suppression", o.noise_suppression));
     DS_RETURN_IF_ERROR(options.get("fade_in_s", o.fade_in_s));
     DS_RETURN_IF_ERROR(options.get("garbage_phone_weight", o.recognizer.garbage_phone_weight));
+    bool live_background_decode = true;
+    DS_RETURN_IF_ERROR(options.get("live_background_decode", live_background_decode));
+    o.background_decode = ctx.live && live_background_decode;
     if (const StreamDescription* r = ctx.first_with_role(roles::kRobotAudio); r && robot_gate) {
       o.reference_sensor = r->id;
       p.notes.push_back(fmt::format("robot voice gated with the reference stream '{}'", r->id));

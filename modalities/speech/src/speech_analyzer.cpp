@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <deque>
+#include <mutex>
+#include <thread>
 
 namespace dreamsense::speech {
 
@@ -36,7 +39,20 @@ namespace {
 class SpeechAnalyzer : public Analyzer {
  public:
   SpeechAnalyzer(SpeechAnalyzerOptions o, std::unique_ptr<Recognizer> r)
-      : options_(std::move(o)), recognizer_(std::move(r)) {}
+      : options_(std::move(o)), recognizer_(std::move(r)) {
+    if (options_.background_decode) worker_ = std::thread([this] { decode_jobs(); });
+  }
+  SpeechAnalyzer(const SpeechAnalyzer&) = delete;
+  SpeechAnalyzer& operator=(const SpeechAnalyzer&) = delete;
+  ~SpeechAnalyzer() override {
+    if (!worker_.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(jobs_mutex_);
+      stopping_ = true;
+    }
+    jobs_cv_.notify_all();
+    worker_.join();
+  }
   std::string_view name() const override { return "speech"; }
   AnalyzerContract contract() const override {
     AnalyzerContract c{{options_.audio_sensor}, {}, {}, {keys::kRecognizedSpeech.name}};
@@ -48,6 +64,7 @@ class SpeechAnalyzer : public Analyzer {
   Status process(const MultiFrame& in, const BlackboardView& prior,
                  BlackboardWriter& out) override {
     if (options_.beamforming()) note_direction(prior);
+    if (options_.background_decode) publish_decoded(out, in.stamp);
     utterances_.clear();
     if (gate_)  // the robot's reference first: the gate must know this tick before deciding
       for (const FramePtr& f : in.chunks_of(options_.reference_sensor)) {
@@ -79,12 +96,28 @@ class SpeechAnalyzer : public Analyzer {
     }
     for (auto& u : utterances_) {
       if (gate_ && !cut_robot_voice(u)) continue;
-      if (auto s = decode(u, out, in.stamp); !s) return s;
+      std::optional<cv::Vec3d> dir;
+      if (beamformer_) dir = direction_of(u);
+      if (options_.background_decode) {
+        std::lock_guard<std::mutex> lock(jobs_mutex_);
+        jobs_.push_back({std::move(u), dir});
+        jobs_cv_.notify_all();
+        continue;
+      }
+      auto r = decode(u, dir);
+      if (!r) return tl::unexpected(r.error());
+      publish(std::move(*r), out, in.stamp);
     }
     return ok_status();
   }
 
   void reset() override {
+    if (worker_.joinable()) {  // utterances of the old stream are dropped, not reported
+      std::unique_lock<std::mutex> lock(jobs_mutex_);
+      jobs_.clear();
+      jobs_cv_.wait(lock, [this] { return !busy_; });
+      decoded_.clear();
+    }
     rate_ = channels_ = 0;
     segmenter_.reset();
     beamformer_.reset();
@@ -180,10 +213,64 @@ class SpeechAnalyzer : public Analyzer {
     return sum / cv::norm(sum);
   }
 
-  Status decode(const audio::Utterance& u, BlackboardWriter& out, Timestamp tick) {
+  // An utterance waiting for the background decoder, with the direction heard during it.
+  struct Job {
+    audio::Utterance utterance;
+    std::optional<cv::Vec3d> direction;
+  };
+
+  // The background decoder (SpeechAnalyzerOptions::background_decode): one utterance at a time,
+  // in the order they ended, so the recogniser and the beamformer are only used by this thread.
+  void decode_jobs() {
+    std::unique_lock<std::mutex> lock(jobs_mutex_);
+    while (true) {
+      jobs_cv_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
+      if (stopping_) return;
+      Job job = std::move(jobs_.front());
+      jobs_.pop_front();
+      busy_ = true;
+      lock.unlock();
+      Result<std::optional<RecognizedSpeech>> r = decode(job.utterance, job.direction);
+      lock.lock();
+      busy_ = false;
+      decoded_.push_back(std::move(r));
+      jobs_cv_.notify_all();
+    }
+  }
+
+  // Writes the oldest result the background decoder has finished at this tick (one per tick: a
+  // second one would overwrite it on the blackboard; the next waits for the next tick). A
+  // decoding error is logged: it costs that utterance, not the analysis.
+  void publish_decoded(BlackboardWriter& out, Timestamp tick) {
+    while (true) {
+      std::optional<Result<std::optional<RecognizedSpeech>>> r;
+      {
+        std::lock_guard<std::mutex> lock(jobs_mutex_);
+        if (decoded_.empty()) return;
+        r = std::move(decoded_.front());
+        decoded_.pop_front();
+      }
+      if (!*r) {
+        log::warn("speech: an utterance was not decoded: {}", r->error().message);
+        continue;
+      }
+      if (!**r) continue;  // out of grammar or noise: nothing to report
+      publish(std::move(**r), out, tick);
+      return;
+    }
+  }
+
+  void publish(std::optional<RecognizedSpeech> heard, BlackboardWriter& out, Timestamp tick) {
+    if (!heard) return;  // out of grammar or noise: nothing to report
+    const float confidence = static_cast<float>(heard->confidence);
+    out.set(keys::kRecognizedSpeech, std::move(*heard), tick, confidence);
+  }
+
+  // Beamforms (towards `dir`, when given), cleans and recognises one utterance; nullopt when
+  // nothing in the grammar was said.
+  Result<std::optional<RecognizedSpeech>> decode(const audio::Utterance& u,
+                                                 const std::optional<cv::Vec3d>& dir) {
     std::vector<float> mono;
-    std::optional<cv::Vec3d> dir;
-    if (beamformer_) dir = direction_of(u);
     if (dir) {
       beamformer_->steer(*dir);
       auto y = beamformer_->apply(u.samples);
@@ -200,12 +287,8 @@ class SpeechAnalyzer : public Analyzer {
     }
     auto r = recognizer_->recognize(std::span<const float>(mono), rate_, u.start);
     if (!r) return tl::unexpected(r.error());
-    if (!*r) return ok_status();  // out of grammar or noise: nothing to report
-    RecognizedSpeech s = **r;
-    s.sensor = options_.audio_sensor;
-    const float confidence = static_cast<float>(s.confidence);
-    out.set(keys::kRecognizedSpeech, std::move(s), tick, confidence);
-    return ok_status();
+    if (*r) (*r)->sensor = options_.audio_sensor;
+    return r;
   }
 
   SpeechAnalyzerOptions options_;
@@ -216,6 +299,13 @@ class SpeechAnalyzer : public Analyzer {
   std::unique_ptr<audio::ReferenceGate> gate_;
   std::deque<HeardDirection> directions_;
   std::vector<audio::Utterance> utterances_;  // scratch
+  // Background decoding: jobs_ and decoded_ are shared with worker_ under jobs_mutex_.
+  std::mutex jobs_mutex_;
+  std::condition_variable jobs_cv_;
+  std::deque<Job> jobs_;
+  std::deque<Result<std::optional<RecognizedSpeech>>> decoded_;
+  bool busy_ = false, stopping_ = false;
+  std::thread worker_;  // last: started when everything it uses exists
 };
 
 }  // namespace

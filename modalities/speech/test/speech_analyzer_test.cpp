@@ -8,10 +8,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <thread>
 
 namespace dreamsense::speech {
 namespace {
@@ -27,15 +29,28 @@ std::vector<float> read_raw_float(const fs::path& p) {
   return out;
 }
 
+struct Heard {
+  RecognizedSpeech speech;
+  Timestamp tick;  // the tick that reported it
+};
+
 // Feeds `mono` (16 kHz) as 2-channel 40 ms chunks, one per 25 Hz tick, with low noise; returns
-// every recognised utterance written to the blackboard.
-std::vector<RecognizedSpeech> run(Analyzer& a, const std::vector<float>& mono) {
+// every recognised utterance written to the blackboard. `paced_quiet_ticks`: then this many more
+// quiet ticks, 10 ms of wall time apart (a live analysis, where a background decode finishes
+// while later ticks run), stopping at the first report.
+std::vector<Heard> run_ticks(Analyzer& a, std::vector<float> mono, int paced_quiet_ticks = 0) {
   std::mt19937 rng(1);
   std::normal_distribution<float> noise(0.f, 3e-4f);
   Blackboard bb;
-  std::vector<RecognizedSpeech> heard;
+  std::vector<Heard> heard;
   const int64_t chunk = 640;
+  const int64_t speech_ticks = (static_cast<int64_t>(mono.size()) + chunk - 1) / chunk;
+  mono.resize(static_cast<size_t>((speech_ticks + paced_quiet_ticks) * chunk), 0.f);
   for (int64_t k = 0; k * chunk < static_cast<int64_t>(mono.size()); ++k) {
+    if (k >= speech_ticks) {
+      if (!heard.empty()) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
     AudioChunk c;
     c.sample_rate = 16000;
     c.channels = 2;
@@ -50,9 +65,15 @@ std::vector<RecognizedSpeech> run(Analyzer& a, const std::vector<float>& mono) {
     EXPECT_TRUE(a.process(mf, bb.snapshot(), w));
     bb.commit(w, mf.stamp);
     auto e = bb.snapshot().get(keys::kRecognizedSpeech);
-    if (e && e->present() && e->stamp == mf.stamp) heard.push_back(*e->value);
+    if (e && e->present() && e->stamp == mf.stamp) heard.push_back({*e->value, mf.stamp});
   }
   return heard;
+}
+
+std::vector<RecognizedSpeech> run(Analyzer& a, const std::vector<float>& mono) {
+  std::vector<RecognizedSpeech> out;
+  for (Heard& h : run_ticks(a, mono)) out.push_back(std::move(h.speech));
+  return out;
 }
 
 TEST(SpeechAnalyzer, CutsTheUtteranceOutOfTheStreamAndRecognisesIt) {
@@ -73,6 +94,62 @@ TEST(SpeechAnalyzer, CutsTheUtteranceOutOfTheStreamAndRecognisesIt) {
   EXPECT_EQ(heard[0].text, "go forward ten meters");
   EXPECT_EQ(heard[0].sensor, "mic");
   EXPECT_GE(heard[0].start.seconds(), 0.5) << "stamps are on the stream's clock";
+}
+
+// A live analysis decodes on a background thread: the same utterance (words, confidence, stamps)
+// is reported, at a later tick than the one that closed it, and the tick is not held up by it.
+TEST(SpeechAnalyzer, BackgroundDecodingReportsTheSameUtteranceLater) {
+  if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
+      !fs::exists(kPocketsphinxData / "goforward.raw"))
+    GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+  SpeechAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.grammar = kPocketsphinxData / "goforward.gram";
+  std::vector<float> stream(16000, 0.f);
+  const auto speech = read_raw_float(kPocketsphinxData / "goforward.raw");
+  stream.insert(stream.end(), speech.begin(), speech.end());
+  stream.insert(stream.end(), 32000, 0.f);
+  auto tick_decoder = make_speech_analyzer(o);
+  ASSERT_TRUE(tick_decoder) << tick_decoder.error().message;
+  const auto at_tick = run_ticks(**tick_decoder, stream);
+  ASSERT_EQ(at_tick.size(), 1u);
+
+  o.background_decode = true;
+  auto background = make_speech_analyzer(o);
+  ASSERT_TRUE(background) << background.error().message;
+  const auto later = run_ticks(**background, stream, 1000);
+  ASSERT_EQ(later.size(), 1u) << "reported once the decode finished (10 s at most)";
+  EXPECT_EQ(later[0].speech.text, at_tick[0].speech.text);
+  EXPECT_EQ(later[0].speech.confidence, at_tick[0].speech.confidence);
+  EXPECT_EQ(later[0].speech.start, at_tick[0].speech.start);
+  EXPECT_EQ(later[0].speech.end, at_tick[0].speech.end);
+  EXPECT_EQ(later[0].speech.sensor, "mic");
+  EXPECT_GT(later[0].tick, at_tick[0].tick) << "the closing tick did not wait for the decode";
+}
+
+// Reset and destruction with an utterance still being decoded: nothing is reported for the old
+// stream, nothing hangs.
+TEST(SpeechAnalyzer, BackgroundDecodingStopsCleanly) {
+  if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
+      !fs::exists(kPocketsphinxData / "goforward.raw"))
+    GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+  SpeechAnalyzerOptions o;
+  o.audio_sensor = "mic";
+  o.grammar = kPocketsphinxData / "goforward.gram";
+  o.background_decode = true;
+  std::vector<float> stream(16000, 0.f);
+  const auto speech = read_raw_float(kPocketsphinxData / "goforward.raw");
+  stream.insert(stream.end(), speech.begin(), speech.end());
+  stream.insert(stream.end(), 16000, 0.f);  // long enough to close the utterance
+  {
+    auto a = make_speech_analyzer(o);
+    ASSERT_TRUE(a);
+    EXPECT_TRUE(run_ticks(**a, stream).empty()) << "the decode outlasts the unpaced ticks";
+    (*a)->reset();
+    EXPECT_TRUE(run_ticks(**a, std::vector<float>(16000, 0.f), 50).empty())
+        << "the old stream's utterance is not reported after a reset";
+    EXPECT_TRUE(run_ticks(**a, stream).empty());
+  }  // destroyed while decoding
 }
 
 TEST(SpeechAnalyzer, QuietStreamWritesNothing) {

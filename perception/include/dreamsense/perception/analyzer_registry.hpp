@@ -71,6 +71,10 @@ struct PlanContext {
   // (pseudonymous or role ids: speaker_1, child, a gallery's numeric id) to the blackboard and
   // their notes; true (`--include-names`) = also the names of enrolment folders and galleries.
   bool include_names = false;
+  // The analysis runs in real time (`dreamsense live`, `analyze --policy live`, bench's live run):
+  // ticks that take too long drop frames, so an analyser may move bursty work off the tick
+  // (its reports then depend on timing). false: a replay, reproducible to the bit.
+  bool live = false;
 
   std::vector<const StreamDescription*> with_role(std::string_view role) const;
   const StreamDescription* first_with_role(std::string_view role) const;

@@ -50,6 +50,8 @@ struct PlanOptions {
   // Privacy (--include-names): false = ids only in every output (PlanContext::include_names;
   // docs/outputs.md "Names"), the session's name and metadata values left out of the outputs.
   bool include_names = false;
+  // A live analysis (PlanContext::live); set by the runner from the sync policy.
+  bool live = false;
   // Assumed intrinsics of colour streams that have no calibration file (a plain video): the
   // factories get them as the stream's camera, flagged approximate_calibration.
   std::map<SensorId, CameraModel> assumed_cameras;

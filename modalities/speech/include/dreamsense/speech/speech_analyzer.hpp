@@ -75,6 +75,12 @@ struct SpeechAnalyzerOptions {
   // The utterance's pre-roll is faded in over at most this long before decoding
   // (audio::fade_in_pre_roll; 0 = off): its abrupt start was decoded as a word.
   double fade_in_s = 0.1;
+  // Decode each utterance on a background thread and report it at the first tick after the
+  // decode finished, instead of at the tick that closed it: the decode (~0.1-0.2 s) then no
+  // longer stalls that tick's other analysers. Reports then depend on timing, so it is for live
+  // analyses only (the plan turns it on there: PlanContext::live, option
+  // live_background_decode); a replay decodes at the closing tick and stays reproducible.
+  bool background_decode = false;
   bool beamforming() const { return steer_to_sound_direction && mic_positions_m.size() > 1; }
   Status check() const;
 };
