@@ -76,20 +76,33 @@ std::vector<RecognizedSpeech> run(Analyzer& a, const std::vector<float>& mono) {
   return out;
 }
 
-TEST(SpeechAnalyzer, CutsTheUtteranceOutOfTheStreamAndRecognisesIt) {
-  if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kPocketsphinxData / "goforward.raw"))
-    GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+bool has_goforward() {
+  return fs::exists(RecognizerOptions{}.model_dir / "mdef") &&
+         fs::exists(kPocketsphinxData / "goforward.raw");
+}
+
+// The analyser on a 2-channel stream "mic" with the test data's grammar.
+SpeechAnalyzerOptions goforward_options() {
   SpeechAnalyzerOptions o;
   o.audio_sensor = "mic";
   o.grammar = kPocketsphinxData / "goforward.gram";
-  auto a = make_speech_analyzer(o);
-  ASSERT_TRUE(a) << a.error().message;
-  std::vector<float> stream(16000, 0.f);  // 1 s of quiet, the utterance, 2 s of quiet
+  return o;
+}
+
+// 1 s of quiet, "go forward ten meters", then `quiet_after` samples of quiet.
+std::vector<float> goforward_stream(size_t quiet_after) {
+  std::vector<float> stream(16000, 0.f);
   const auto speech = read_raw_float(kPocketsphinxData / "goforward.raw");
   stream.insert(stream.end(), speech.begin(), speech.end());
-  stream.insert(stream.end(), 32000, 0.f);
-  const auto heard = run(**a, stream);
+  stream.insert(stream.end(), quiet_after, 0.f);
+  return stream;
+}
+
+TEST(SpeechAnalyzer, CutsTheUtteranceOutOfTheStreamAndRecognisesIt) {
+  if (!has_goforward()) GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+  auto a = make_speech_analyzer(goforward_options());
+  ASSERT_TRUE(a) << a.error().message;
+  const auto heard = run(**a, goforward_stream(32000));
   ASSERT_EQ(heard.size(), 1u);
   EXPECT_EQ(heard[0].text, "go forward ten meters");
   EXPECT_EQ(heard[0].sensor, "mic");
@@ -99,16 +112,9 @@ TEST(SpeechAnalyzer, CutsTheUtteranceOutOfTheStreamAndRecognisesIt) {
 // A live analysis decodes on a background thread: the same utterance (words, confidence, stamps)
 // is reported, at a later tick than the one that closed it, and the tick is not held up by it.
 TEST(SpeechAnalyzer, BackgroundDecodingReportsTheSameUtteranceLater) {
-  if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kPocketsphinxData / "goforward.raw"))
-    GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
-  SpeechAnalyzerOptions o;
-  o.audio_sensor = "mic";
-  o.grammar = kPocketsphinxData / "goforward.gram";
-  std::vector<float> stream(16000, 0.f);
-  const auto speech = read_raw_float(kPocketsphinxData / "goforward.raw");
-  stream.insert(stream.end(), speech.begin(), speech.end());
-  stream.insert(stream.end(), 32000, 0.f);
+  if (!has_goforward()) GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+  SpeechAnalyzerOptions o = goforward_options();
+  const std::vector<float> stream = goforward_stream(32000);
   auto tick_decoder = make_speech_analyzer(o);
   ASSERT_TRUE(tick_decoder) << tick_decoder.error().message;
   const auto at_tick = run_ticks(**tick_decoder, stream);
@@ -130,17 +136,10 @@ TEST(SpeechAnalyzer, BackgroundDecodingReportsTheSameUtteranceLater) {
 // Reset and destruction with an utterance still being decoded: nothing is reported for the old
 // stream, nothing hangs.
 TEST(SpeechAnalyzer, BackgroundDecodingStopsCleanly) {
-  if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kPocketsphinxData / "goforward.raw"))
-    GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
-  SpeechAnalyzerOptions o;
-  o.audio_sensor = "mic";
-  o.grammar = kPocketsphinxData / "goforward.gram";
+  if (!has_goforward()) GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+  SpeechAnalyzerOptions o = goforward_options();
   o.background_decode = true;
-  std::vector<float> stream(16000, 0.f);
-  const auto speech = read_raw_float(kPocketsphinxData / "goforward.raw");
-  stream.insert(stream.end(), speech.begin(), speech.end());
-  stream.insert(stream.end(), 16000, 0.f);  // long enough to close the utterance
+  const std::vector<float> stream = goforward_stream(16000);  // long enough to close it
   {
     auto a = make_speech_analyzer(o);
     ASSERT_TRUE(a);
@@ -153,13 +152,8 @@ TEST(SpeechAnalyzer, BackgroundDecodingStopsCleanly) {
 }
 
 TEST(SpeechAnalyzer, QuietStreamWritesNothing) {
-  if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kPocketsphinxData / "goforward.gram"))
-    GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
-  SpeechAnalyzerOptions o;
-  o.audio_sensor = "mic";
-  o.grammar = kPocketsphinxData / "goforward.gram";
-  auto a = make_speech_analyzer(o);
+  if (!has_goforward()) GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+  auto a = make_speech_analyzer(goforward_options());
   ASSERT_TRUE(a);
   EXPECT_TRUE(run(**a, std::vector<float>(48000, 0.f)).empty());
 }
@@ -216,21 +210,15 @@ std::vector<RecognizedSpeech> run_array(Analyzer& a, const std::vector<float>& m
 }
 
 TEST(SpeechAnalyzer, SteersTheArrayTowardTheSoundDirection) {
-  if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kPocketsphinxData / "goforward.raw"))
-    GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
-  SpeechAnalyzerOptions o;
-  o.audio_sensor = "mic";
-  o.grammar = kPocketsphinxData / "goforward.gram";
+  if (!has_goforward()) GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+  SpeechAnalyzerOptions o = goforward_options();
   o.mic_positions_m = {{0.113, 0, 0}, {-0.036, 0, 0}, {-0.076, 0, 0}, {-0.113, 0, 0}};
   auto a = make_speech_analyzer(o);
   ASSERT_TRUE(a) << a.error().message;
   const auto reads = (*a)->contract().reads;
   EXPECT_NE(std::find(reads.begin(), reads.end(), keys::kSoundDirection.name), reads.end());
-  std::vector<float> stream(16000, 0.f);
+  const std::vector<float> stream = goforward_stream(32000);
   const auto speech = read_raw_float(kPocketsphinxData / "goforward.raw");
-  stream.insert(stream.end(), speech.begin(), speech.end());
-  stream.insert(stream.end(), 32000, 0.f);
   double rms = 0;
   for (float v : speech) rms += v * v;
   rms = std::sqrt(rms / static_cast<double>(speech.size()));
@@ -246,12 +234,8 @@ TEST(SpeechAnalyzer, SteersTheArrayTowardTheSoundDirection) {
 }
 
 TEST(SpeechAnalyzer, ArrayWithTheWrongChannelCountIsAnError) {
-  if (!fs::exists(RecognizerOptions{}.model_dir / "mdef") ||
-      !fs::exists(kPocketsphinxData / "goforward.gram"))
-    GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
-  SpeechAnalyzerOptions o;
-  o.audio_sensor = "mic";
-  o.grammar = kPocketsphinxData / "goforward.gram";
+  if (!has_goforward()) GTEST_SKIP() << "needs pocketsphinx-en-us and pocketsphinx-testdata";
+  SpeechAnalyzerOptions o = goforward_options();
   o.mic_positions_m = {{0.1, 0, 0}, {0, 0, 0}, {-0.1, 0, 0}};
   auto a = make_speech_analyzer(o);
   ASSERT_TRUE(a);
