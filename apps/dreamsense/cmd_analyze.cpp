@@ -248,6 +248,10 @@ void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
                  "Acoustic model folder for recognizeSpeech, e.g. adapted to the child by "
                  "`dreamsense train speech` (overrides the subject's; default: en-us)")
       ->check(CLI::ExistingDirectory);
+  cmd.add_option("--subjects-dir", flags.subjects_dir,
+                 "Where the children's calibration folders are found (<dir>/<metadata subject>) "
+                 "and --save-subject writes them (default: data/subjects of this installation)")
+      ->check(CLI::ExistingDirectory);
 }
 
 void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o) {
@@ -258,6 +262,7 @@ void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o) 
   o.plan.face_model = flags.face_model;
   o.plan.gaze_model = flags.gaze_model;
   o.plan.speech_model = flags.speech_model;
+  if (!flags.subjects_dir.empty()) o.plan.subjects_dir = flags.subjects_dir;
 }
 
 void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
@@ -324,6 +329,40 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   });
 }
 
+namespace {
+
+// `live --record R --save-subject`: a live analysis cannot self-calibrate while it runs (the
+// self-calibration searches the session's first seconds again with guided detections); after
+// it, the recording is self-calibrated and saved as the subject's folder for the next session,
+// and its status added to the live summary.json.
+Status save_subject_from_recording(const runner::AnalysisOptions& live,
+                                   const std::filesystem::path& recording, SelfCalibrationMode mode,
+                                   std::vector<runner::OptionOverride> overrides, bool quiet) {
+  runner::AnalysisOptions o = live;
+  o.session_dir = recording;
+  o.policy = SyncPolicy::kSettled;
+  if (!self_calibration::needs_self_calibration(o, mode)) {
+    if (!quiet)
+      std::fprintf(stderr,
+                   "--save-subject: nothing saved (the subject has a calibration folder or model "
+                   "files were given, or the recording has fewer than two calibrated cameras)\n");
+    return ok_status();
+  }
+  self_calibration::ForAnalysisOptions so;
+  so.overrides = std::move(overrides);
+  so.mode = mode;
+  so.save_subject = true;
+  if (!quiet)
+    so.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  DS_ASSIGN_OR_RETURN(const nlohmann::json status,
+                      self_calibration::self_calibrate_for_analysis(o, so));
+  if (!quiet && status.contains("saved_to"))
+    std::fprintf(stderr, "subject saved to %s\n", status["saved_to"].get<std::string>().c_str());
+  return self_calibration::add_self_calibration_to_summary(live.out_dir, status);
+}
+
+}  // namespace
+
 void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   auto flags = std::make_shared<AnalyzeFlags>();
   CLI::App* cmd = app.add_subcommand(
@@ -369,6 +408,10 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                   "any other address needs the access token printed with the URL)")
       ->default_val(flags->ui_host);
   add_analysis_flags(*cmd, *flags);
+  cmd->add_flag("--save-subject", flags->save_subject,
+                "After the session (needs --record): self-calibrate the child's face and eyes "
+                "from the recording and save them as the subject folder (<subjects dir>/<metadata "
+                "subject>, must not exist), so that the next session starts calibrated");
   cmd->callback([flags, &g, &exit_code] {
     live::LiveAnalysisOptions lo;
     lo.analysis.out_dir = flags->out;
@@ -376,6 +419,20 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       exit_code = fail(s.error());
       return;
     }
+    if (flags->save_subject && flags->record.empty()) {
+      exit_code = fail(
+          "live: --save-subject needs --record (the self-calibration reads the "
+          "recording after the session)");
+      return;
+    }
+    // The planner knows only analysers: `--set self_calibration.K=V` is for --save-subject.
+    auto self_calibration_overrides =
+        self_calibration::take_self_calibration_overrides(lo.analysis.plan.overrides);
+    if (!self_calibration_overrides.empty() && !flags->save_subject)
+      log::info(
+          "--set self_calibration.{}: a live analysis self-calibrates only with "
+          "--save-subject, the option is not used",
+          self_calibration_overrides.front().key);
     lo.config = flags->config;
     if (!flags->record.empty()) lo.record = flags->record;
     lo.duration_s = flags->duration_s;
@@ -425,6 +482,13 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
         std::fprintf(stderr, "DDS: %llu messages published, %llu refused\n",
                      static_cast<unsigned long long>(r->dds->published),
                      static_cast<unsigned long long>(r->dds->failed));
+    }
+    if (flags->save_subject) {
+      if (auto s = save_subject_from_recording(lo.analysis, flags->record,
+                                               self_calibration_mode(flags->subject),
+                                               std::move(self_calibration_overrides), g.quiet);
+          !s)
+        exit_code = fail(s.error());
     }
   });
 }

@@ -87,7 +87,7 @@ Status apply_pipeline_flags(const PipelineFlags& flags, runner::PlanOptions& pla
 // The child's calibration for analyses (cmd_analyze.cpp): --subject DIR|none, --face-model,
 // --gaze-model, --speech-model.
 struct SubjectFlags {
-  std::string subject, face_model, gaze_model, speech_model;
+  std::string subject, face_model, gaze_model, speech_model, subjects_dir;
 };
 void add_subject_flags(CLI::App& cmd, SubjectFlags& flags);
 void apply_subject_flags(const SubjectFlags& flags, runner::AnalysisOptions& o);

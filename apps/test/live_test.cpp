@@ -79,3 +79,65 @@ TEST(Live, CameraThatRunsOutIsMarkedOfflineAndTheOtherIsStillAnalysed) {
 }
 
 }  // namespace
+
+namespace {
+
+// Issue 15 in a live session: a child with no calibration folder is analysed with the generic
+// face model; with --record --save-subject the recording is self-calibrated after the session
+// and saved as the subject's folder, which the next session (live or analyze) then uses.
+TEST(Live, SaveSubjectCalibratesTheRecordingForTheNextSession) {
+  const fs::path demo = DREAMSENSE_CLI_DEMO_DIR;
+  ASSERT_TRUE(fs::exists(demo / "session.yaml")) << "run the fixture cli_demo_fixture first";
+  const fs::path dir =
+      fs::temp_directory_path() / ("ds_live_subject_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "subjects");
+  std::ofstream config(dir / "live.yaml");
+  config << "session: {name: live-new-child, metadata: {subject: new_child}}\ncameras:\n";
+  for (const char* id : {"camera_left", "camera_middle", "camera_right"}) {
+    write_video(demo, id, 3, dir / (std::string(id) + ".avi"));  // 12 s
+    if (HasFatalFailure()) return;
+    config << "  - {id: " << id << ", device: " << id
+           << ".avi, calibration: " << (demo / "calib" / (std::string(id) + ".yaml")).string()
+           << "}\n";
+  }
+  config.close();
+  const std::string live = std::string(DREAMSENSE_EXE) + " live --config " +
+                           (dir / "live.yaml").string() + " --subjects-dir " +
+                           (dir / "subjects").string();
+  // Without --record, --save-subject is refused before anything starts.
+  const std::string refused = live + " --duration 1 --out " + (dir / "no").string() +
+                              " --save-subject 2> " + (dir / "refused.txt").string();
+  const int refused_status = std::system(refused.c_str());
+  EXPECT_TRUE(WIFEXITED(refused_status) && WEXITSTATUS(refused_status) != 0);
+  EXPECT_NE(slurp(dir / "refused.txt").find("--save-subject needs --record"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "no" / "summary.json"));
+
+  const std::string cmd = live + " --duration 11 --out " + (dir / "out").string() + " --record " +
+                          (dir / "rec").string() + " --save-subject 2> " +
+                          (dir / "err.txt").string();
+  const int status = std::system(cmd.c_str());
+  const std::string err = slurp(dir / "err.txt");
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << err;
+  EXPECT_NE(err.find("no calibration for subject 'new_child'"), std::string::npos)
+      << "the live analysis itself ran uncalibrated: " << err;
+  const fs::path saved = dir / "subjects" / "new_child";
+  EXPECT_TRUE(fs::exists(saved / "face_model.yaml")) << err;
+  EXPECT_TRUE(fs::exists(saved / "gaze.yaml")) << err;
+  const json summary = json::parse(slurp(dir / "out" / "summary.json"));
+  ASSERT_TRUE(summary.contains("self_calibration")) << summary.dump();
+  EXPECT_EQ(summary["self_calibration"].value("saved_to", ""), saved.string());
+
+  // A second session of the same child finds the folder: nothing to self-calibrate or save.
+  const std::string again = live + " --out " + (dir / "out2").string() + " --record " +
+                            (dir / "rec2").string() + " --save-subject --duration 2 2> " +
+                            (dir / "err2.txt").string();
+  const int again_status = std::system(again.c_str());
+  const std::string err2 = slurp(dir / "err2.txt");
+  ASSERT_TRUE(WIFEXITED(again_status) && WEXITSTATUS(again_status) == 0) << err2;
+  EXPECT_EQ(err2.find("no calibration for subject"), std::string::npos) << err2;
+  EXPECT_NE(err2.find("nothing saved"), std::string::npos) << err2;
+  fs::remove_all(dir);
+}
+
+}  // namespace
