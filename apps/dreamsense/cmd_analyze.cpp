@@ -234,8 +234,9 @@ void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
   cmd.add_option("--subject", flags.subject,
                  "The child's calibration folder (face_model.yaml, gaze.yaml, speech_model/), "
                  "'none' (generic face model, built-in gaze constants) or 'auto' (self-calibrate "
-                 "from the session itself); default: data/subjects/<the session's metadata "
-                 "subject> if it exists, else auto")
+                 "from the session itself; live: generic during the session, the recording "
+                 "after it with --record --save-subject); default: data/subjects/<the "
+                 "session's metadata subject> if it exists, else auto")
       ->check(CLI::ExistingDirectory | CLI::IsMember({"none", "auto"}));
   cmd.add_option("--face-model", flags.face_model,
                  "3-D face model from `dreamsense train face` (overrides the subject's)")
