@@ -201,6 +201,25 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
   return run_analysis_with_progress(o, quiet, SelfCalibrationMode::kWhenNoSubject);
 }
 
+namespace {
+
+// The self-calibration of session `o` (writes OUT/self_calibration/, points `o` at its files),
+// its progress lines on stderr unless quiet.
+Result<nlohmann::json> self_calibrate_with_progress(runner::AnalysisOptions& o,
+                                                    SelfCalibrationMode mode,
+                                                    std::vector<runner::OptionOverride> overrides,
+                                                    bool save_subject, bool quiet) {
+  self_calibration::ForAnalysisOptions so;
+  so.overrides = std::move(overrides);
+  so.mode = mode;
+  so.save_subject = save_subject;
+  if (!quiet)
+    so.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  return self_calibration::self_calibrate_for_analysis(o, so);
+}
+
+}  // namespace
+
 Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::AnalysisOptions& o_in,
                                                            bool quiet, SelfCalibrationMode mode,
                                                            bool save_subject) {
@@ -209,13 +228,9 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
   auto self_calibration_overrides =
       self_calibration::take_self_calibration_overrides(o.plan.overrides);
   if (!o.out_dir.empty() && self_calibration::needs_self_calibration(o, mode)) {
-    self_calibration::ForAnalysisOptions so;
-    so.overrides = std::move(self_calibration_overrides);
-    so.mode = mode;
-    so.save_subject = save_subject;
-    if (!quiet)
-      so.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
-    DS_ASSIGN_OR_RETURN(calibration_status, self_calibration::self_calibrate_for_analysis(o, so));
+    DS_ASSIGN_OR_RETURN(calibration_status,
+                        self_calibrate_with_progress(o, mode, std::move(self_calibration_overrides),
+                                                     save_subject, quiet));
   } else if (!self_calibration_overrides.empty()) {
     log::info(
         "--set self_calibration.{}: no self-calibration in this analysis (a subject "
@@ -341,22 +356,15 @@ Status save_subject_from_recording(const runner::AnalysisOptions& live,
                                    std::vector<runner::OptionOverride> overrides, bool quiet) {
   runner::AnalysisOptions o = live;
   o.session_dir = recording;
-  o.policy = SyncPolicy::kSettled;
   if (!self_calibration::needs_self_calibration(o, mode)) {
     if (!quiet)
       std::fprintf(stderr,
                    "--save-subject: nothing saved (the subject has a calibration folder or model "
-                   "files were given, or the recording has fewer than two calibrated cameras)\n");
+                   "files were given, or the recording has no calibrated camera)\n");
     return ok_status();
   }
-  self_calibration::ForAnalysisOptions so;
-  so.overrides = std::move(overrides);
-  so.mode = mode;
-  so.save_subject = true;
-  if (!quiet)
-    so.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   DS_ASSIGN_OR_RETURN(const nlohmann::json status,
-                      self_calibration::self_calibrate_for_analysis(o, so));
+                      self_calibrate_with_progress(o, mode, std::move(overrides), true, quiet));
   if (!quiet && status.contains("saved_to"))
     std::fprintf(stderr, "subject saved to %s\n", status["saved_to"].get<std::string>().c_str());
   return self_calibration::add_self_calibration_to_summary(live.out_dir, status);

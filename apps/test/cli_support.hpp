@@ -28,11 +28,13 @@ inline std::string slurp(const std::filesystem::path& p) {
   return ss.str();
 }
 
-// `dreamsense -q ARGS`, stderr captured (stdout goes to the test's own).
-inline RunResult run(const std::string& args) {
+// `dreamsense -q ARGS` (without -q when !quiet: the info lines too), stderr captured (stdout
+// goes to the test's own).
+inline RunResult run(const std::string& args, bool quiet = true) {
   const std::filesystem::path err_file =
       std::filesystem::temp_directory_path() / ("ds_cli_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(DREAMSENSE_EXE) + " -q " + args + " 2> " + err_file.string();
+  const std::string cmd =
+      std::string(DREAMSENSE_EXE) + (quiet ? " -q " : " ") + args + " 2> " + err_file.string();
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

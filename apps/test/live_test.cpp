@@ -24,6 +24,8 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+using dreamsense::cli_support::run;
+using dreamsense::cli_support::RunResult;
 using dreamsense::cli_support::slurp;
 using dreamsense::cli_support::write_video;
 
@@ -102,41 +104,36 @@ TEST(Live, SaveSubjectCalibratesTheRecordingForTheNextSession) {
            << "}\n";
   }
   config.close();
-  const std::string live = std::string(DREAMSENSE_EXE) + " live --config " +
-                           (dir / "live.yaml").string() + " --subjects-dir " +
+  const std::string live = "live --config " + (dir / "live.yaml").string() + " --subjects-dir " +
                            (dir / "subjects").string();
+  const bool verbose = false;  // the info lines are checked
   // Without --record, --save-subject is refused before anything starts.
-  const std::string refused = live + " --duration 1 --out " + (dir / "no").string() +
-                              " --save-subject 2> " + (dir / "refused.txt").string();
-  const int refused_status = std::system(refused.c_str());
-  EXPECT_TRUE(WIFEXITED(refused_status) && WEXITSTATUS(refused_status) != 0);
-  EXPECT_NE(slurp(dir / "refused.txt").find("--save-subject needs --record"), std::string::npos);
+  const RunResult refused =
+      run(live + " --duration 1 --out " + (dir / "no").string() + " --save-subject", verbose);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("--save-subject needs --record"), std::string::npos);
   EXPECT_FALSE(fs::exists(dir / "no" / "summary.json"));
 
-  const std::string cmd = live + " --duration 11 --out " + (dir / "out").string() + " --record " +
-                          (dir / "rec").string() + " --save-subject 2> " +
-                          (dir / "err.txt").string();
-  const int status = std::system(cmd.c_str());
-  const std::string err = slurp(dir / "err.txt");
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << err;
-  EXPECT_NE(err.find("no calibration for subject 'new_child'"), std::string::npos)
-      << "the live analysis itself ran uncalibrated: " << err;
+  const RunResult first = run(live + " --duration 11 --out " + (dir / "out").string() +
+                                  " --record " + (dir / "rec").string() + " --save-subject",
+                              verbose);
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  EXPECT_NE(first.err.find("no calibration for subject 'new_child'"), std::string::npos)
+      << "the live analysis itself ran uncalibrated: " << first.err;
   const fs::path saved = dir / "subjects" / "new_child";
-  EXPECT_TRUE(fs::exists(saved / "face_model.yaml")) << err;
-  EXPECT_TRUE(fs::exists(saved / "gaze.yaml")) << err;
+  EXPECT_TRUE(fs::exists(saved / "face_model.yaml")) << first.err;
+  EXPECT_TRUE(fs::exists(saved / "gaze.yaml")) << first.err;
   const json summary = json::parse(slurp(dir / "out" / "summary.json"));
   ASSERT_TRUE(summary.contains("self_calibration")) << summary.dump();
   EXPECT_EQ(summary["self_calibration"].value("saved_to", ""), saved.string());
 
   // A second session of the same child finds the folder: nothing to self-calibrate or save.
-  const std::string again = live + " --out " + (dir / "out2").string() + " --record " +
-                            (dir / "rec2").string() + " --save-subject --duration 2 2> " +
-                            (dir / "err2.txt").string();
-  const int again_status = std::system(again.c_str());
-  const std::string err2 = slurp(dir / "err2.txt");
-  ASSERT_TRUE(WIFEXITED(again_status) && WEXITSTATUS(again_status) == 0) << err2;
-  EXPECT_EQ(err2.find("no calibration for subject"), std::string::npos) << err2;
-  EXPECT_NE(err2.find("nothing saved"), std::string::npos) << err2;
+  const RunResult again = run(live + " --out " + (dir / "out2").string() + " --record " +
+                                  (dir / "rec2").string() + " --save-subject --duration 2",
+                              verbose);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.err.find("no calibration for subject"), std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("nothing saved"), std::string::npos) << again.err;
   fs::remove_all(dir);
 }
 
