@@ -249,9 +249,9 @@ void add_subject_flags(CLI::App& cmd, SubjectFlags& flags) {
   cmd.add_option("--subject", flags.subject,
                  "The child's calibration folder (face_model.yaml, gaze.yaml, speech_model/), "
                  "'none' (generic face model, built-in gaze constants) or 'auto' (self-calibrate "
-                 "from the session itself; live: generic during the session, the recording "
-                 "after it with --record --save-subject); default: data/subjects/<the "
-                 "session's metadata subject> if it exists, else auto")
+                 "from the session itself; live: during the session, generic models until it "
+                 "converges); default: data/subjects/<the session's metadata subject> if it "
+                 "exists, else auto")
       ->check(CLI::ExistingDirectory | CLI::IsMember({"none", "auto"}));
   cmd.add_option("--face-model", flags.face_model,
                  "3-D face model from `dreamsense train face` (overrides the subject's)")
@@ -347,15 +347,17 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
 
 namespace {
 
-// `live --record R --save-subject`: a live analysis cannot self-calibrate while it runs (the
-// self-calibration searches the session's first seconds again with guided detections); after
-// it, the recording is self-calibrated and saved as the subject's folder for the next session,
-// and its status added to the live summary.json.
+// `live --record R --save-subject`: after the session the recording is self-calibrated (every
+// searched tick, none skipped for lack of CPU as during the session) and saved as the subject's
+// folder for the next session, and its status added to the live summary.json.
 Status save_subject_from_recording(const runner::AnalysisOptions& live,
                                    const std::filesystem::path& recording, SelfCalibrationMode mode,
                                    std::vector<runner::OptionOverride> overrides, bool quiet) {
   runner::AnalysisOptions o = live;
   o.session_dir = recording;
+  // The live self-calibration's own keys (live_nice, live_attempts) do not apply here.
+  std::erase_if(overrides,
+                [](const runner::OptionOverride& k) { return k.key.rfind("live_", 0) == 0; });
   if (!self_calibration::needs_self_calibration(o, mode)) {
     if (!quiet)
       std::fprintf(stderr,
@@ -434,14 +436,12 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
           "recording after the session)");
       return;
     }
-    // The planner knows only analysers: `--set self_calibration.K=V` is for --save-subject.
+    // The planner knows only analysers: `--set self_calibration.K=V` is for the live
+    // self-calibration and --save-subject.
     auto self_calibration_overrides =
         self_calibration::take_self_calibration_overrides(lo.analysis.plan.overrides);
-    if (!self_calibration_overrides.empty() && !flags->save_subject)
-      log::info(
-          "--set self_calibration.{}: a live analysis self-calibrates only with "
-          "--save-subject, the option is not used",
-          self_calibration_overrides.front().key);
+    lo.self_calibration = self_calibration_mode(flags->subject);
+    lo.self_calibration_overrides = self_calibration_overrides;
     lo.config = flags->config;
     if (!flags->record.empty()) lo.record = flags->record;
     lo.duration_s = flags->duration_s;
@@ -482,6 +482,17 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
     }
     if (!g.quiet) {
       print_summary(r->analysis, lo.analysis.out_dir);
+      if (r->self_calibration) {
+        const nlohmann::json& c = *r->self_calibration;
+        std::fprintf(stderr, "  self-calibration during the session: %s%s\n",
+                     c.value("state", "").c_str(),
+                     c["used_from_ns"].is_number()
+                         ? fmt::format(" ({:.1f} s of the session searched); the child's "
+                                       "models used from then on",
+                                       c.value("seconds_searched", 0.0))
+                               .c_str()
+                         : "");
+      }
       for (const auto& [id, st] : r->capture.streams)
         std::fprintf(stderr, "  %s: %llu frames captured, %llu dropped, %llu overruns\n",
                      id.c_str(), static_cast<unsigned long long>(st.frames_written),

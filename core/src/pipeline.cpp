@@ -174,6 +174,27 @@ Result<std::unique_ptr<Pipeline>> Pipeline::build(
       new Pipeline(options, std::move(source_info), std::move(analyzers)));
 }
 
+Status Pipeline::replace_analyzers(std::vector<std::unique_ptr<Analyzer>> replacements) {
+  auto same = [](const AnalyzerContract& a, const AnalyzerContract& b) {
+    return a.required_inputs == b.required_inputs && a.optional_inputs == b.optional_inputs &&
+           a.reads == b.reads && a.writes == b.writes && a.reads_previous == b.reads_previous;
+  };
+  std::vector<size_t> at;
+  for (const auto& r : replacements) {
+    if (!r) return make_error(ErrorCode::kInvalidArgument, "pipeline: null replacement analyser");
+    const auto it = std::find_if(analyzers_.begin(), analyzers_.end(),
+                                 [&](const auto& a) { return a->name() == r->name(); });
+    if (it == analyzers_.end())
+      return make_error(ErrorCode::kNotFound, "pipeline: no analyser '{}' to replace", r->name());
+    if (!same((*it)->contract(), r->contract()))
+      return make_error(ErrorCode::kFailedPrecondition,
+                        "pipeline: the replacement of '{}' has another contract", r->name());
+    at.push_back(static_cast<size_t>(it - analyzers_.begin()));
+  }
+  for (size_t k = 0; k < replacements.size(); ++k) analyzers_[at[k]] = std::move(replacements[k]);
+  return ok_status();
+}
+
 void Pipeline::finish_stats(const Synchronizer& sync, Timestamp first, Timestamp last) {
   stats_.sync = sync.stats();
   if (first.is_set())

@@ -104,6 +104,52 @@ TEST(Pipeline, LaterAnalysersSeeEarlierResultsOfTheSameTick) {
   EXPECT_EQ((*p)->stats().analyzers[0].latency_ms.size(), 50u);
 }
 
+// A doubler that claims the counter's name: another contract under a known name.
+class CounterNamedDoubler : public DoublingAnalyzer {
+ public:
+  std::string_view name() const override { return "counter"; }
+};
+
+TEST(Pipeline, AnalysersReplacedBetweenTicksRunFromTheNextTickOn) {
+  FakeSource src(2);
+  std::vector<std::unique_ptr<Analyzer>> a;
+  a.push_back(std::make_unique<CountingAnalyzer>());
+  a.push_back(std::make_unique<DoublingAnalyzer>());
+  PipelineOptions o;
+  o.sync.start = Timestamp::from_ns(0);
+  auto p = Pipeline::build(o, src.info(), std::move(a));
+  ASSERT_TRUE(p) << p.error().message;
+  std::vector<int> seen;
+  auto st = (*p)->run(src, [&](const MultiFrame&, const BlackboardView& v) -> Status {
+    auto s = v.get(kSeen);
+    seen.push_back(s && s->present() ? *s->value : -1);
+    if (seen.size() == 10) {
+      // Refused, nothing replaced: another contract, an unknown name, a null analyser.
+      std::vector<std::unique_ptr<Analyzer>> wrong;
+      wrong.push_back(std::make_unique<CounterNamedDoubler>());
+      EXPECT_FALSE((*p)->replace_analyzers(std::move(wrong)));
+      std::vector<std::unique_ptr<Analyzer>> unknown;
+      unknown.push_back(std::make_unique<ThrowingAnalyzer>());
+      EXPECT_FALSE((*p)->replace_analyzers(std::move(unknown)));
+      std::vector<std::unique_ptr<Analyzer>> null;
+      null.emplace_back();
+      EXPECT_FALSE((*p)->replace_analyzers(std::move(null)));
+      // A fresh counter: its count starts again at the next tick.
+      std::vector<std::unique_ptr<Analyzer>> fresh;
+      fresh.push_back(std::make_unique<CountingAnalyzer>());
+      return (*p)->replace_analyzers(std::move(fresh));
+    }
+    return ok_status();
+  });
+  ASSERT_TRUE(st) << st.error().message;
+  ASSERT_EQ(seen.size(), 50u);
+  EXPECT_EQ(seen[9], 10);  // the first counter's tenth tick
+  EXPECT_EQ(seen[10], 1);  // the replacement's first
+  EXPECT_EQ(seen[49], 40);
+  EXPECT_EQ((*p)->analyzers().size(), 2u);
+  EXPECT_EQ((*p)->stats().analyzers[1].errors, 0u);  // the doubler saw every tick's count
+}
+
 TEST(Pipeline, BuildRejectsBadWiring) {
   FakeSource src(1);
   {

@@ -1,5 +1,8 @@
 #include "dreamsense/live/live_analysis.hpp"
 
+#include "dreamsense/core/log.hpp"
+#include "dreamsense/self_calibration/live.hpp"
+
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -47,6 +50,29 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
   DS_ASSIGN_OR_RETURN(auto capture,
                       sources::LiveCapture::open(config, options.record, {}, capture_options));
   if (feed) feed->set_capture(*capture, options.record);
+  // A new child: self-calibrated while the session runs (issue 15), when the analysis writes an
+  // output folder for its files.
+  std::unique_ptr<self_calibration::LiveSelfCalibration> calibration;
+  if (!o.out_dir.empty() && self_calibration::needs_self_calibration(o.plan, capture->manifest(),
+                                                                     options.self_calibration)) {
+    self_calibration::LiveSelfCalibrationOptions lo;
+    DS_ASSIGN_OR_RETURN(lo.search, self_calibration::self_calibration_options(
+                                       o.plan, options.self_calibration_overrides, &lo));
+    lo.work_dir = o.out_dir / "self_calibration";
+    DS_ASSIGN_OR_RETURN(calibration, self_calibration::LiveSelfCalibration::start(
+                                         capture->manifest(), std::filesystem::current_path(), lo));
+    const auto subject = capture->manifest().metadata.find("subject");
+    log::info(
+        "live: no calibration for subject '{}': self-calibrating during the session (generic "
+        "face model and gaze constants until it converges)",
+        subject == capture->manifest().metadata.end() ? "" : subject->second);
+    if (options.self_calibration == self_calibration::SelfCalibrationMode::kAlways)
+      o.plan.subject_from_session = false;
+    o.live_subject_models = [c = calibration.get()](const MultiFrame& tick) {
+      return c->offer(tick);
+    };
+    if (feed) feed->set_face_model_status([c = calibration.get()] { return c->model_in_use(); });
+  }
   g_stop_live = false;
   if (options.stop_on_signals) {
     std::signal(SIGINT, on_live_stop_signal);
@@ -86,6 +112,17 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
   s.analysis = std::move(*result);
   s.capture = std::move(*stats);
   if (publisher) s.dds = publisher->stats();
+  if (calibration) {
+    nlohmann::json j = calibration->status();
+    j["used_from_ns"] = s.analysis.subject_models_from_ns
+                            ? nlohmann::json(*s.analysis.subject_models_from_ns)
+                            : nlohmann::json();
+    calibration.reset();  // the search stops
+    if (!o.out_dir.empty())
+      DS_RETURN_IF_ERROR(
+          self_calibration::add_self_calibration_to_summary(o.out_dir, j, "live_self_calibration"));
+    s.self_calibration = std::move(j);
+  }
   return s;
 }
 

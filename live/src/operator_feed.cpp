@@ -46,6 +46,11 @@ void OperatorFeed::set_capture(const sources::LiveCapture& capture,
     page_.set_camera_models(std::move(*models));
 }
 
+void OperatorFeed::set_face_model_status(std::function<std::string()> status) {
+  std::lock_guard lock(mutex_);
+  face_model_status_ = std::move(status);
+}
+
 void OperatorFeed::end() {
   std::lock_guard lock(mutex_);
   ended_ = true;
@@ -85,6 +90,7 @@ void OperatorFeed::on_tick(const MultiFrame& tick, const BlackboardView& view) {
               {"ticks", ++ticks_},
               {"recording", {{"on", record_dir_.has_value()}, {"bytes", record_bytes_}}},
               {"streams", streams}};
+    if (face_model_status_) status["face_model"] = face_model_status_();
   }
   page_.set_status(std::move(status));
 }

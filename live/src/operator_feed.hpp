@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -32,6 +33,9 @@ class OperatorFeed {
                    const std::optional<std::filesystem::path>& record_dir);
   // The analysis has ended: later markers are refused (they would miss the event table).
   void end();
+  // What head pose and gaze use (a live self-calibration's LiveSelfCalibration::model_in_use),
+  // shown in the status strip; called on the analysis thread every tick.
+  void set_face_model_status(std::function<std::string()> status);
 
  private:
   void on_tick(const MultiFrame& tick, const BlackboardView& view);
@@ -55,6 +59,7 @@ class OperatorFeed {
   uint64_t record_bytes_ = 0;
   uint64_t ticks_ = 0;
   bool ended_ = false;
+  std::function<std::string()> face_model_status_;
 };
 
 }  // namespace dreamsense::live

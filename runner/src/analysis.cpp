@@ -171,7 +171,9 @@ Result<AnalysisSummary> run_plan(
     const AnalysisOptions& options, PipelinePlan plan, const sources::SessionManifest& manifest,
     Source& source, const PipelineOptions& po, const AnalysisProgress& progress, Timestamp t0,
     Timestamp t1, const fs::path& error_dir, const std::string& session_name, nlohmann::json input,
-    const std::function<std::vector<sources::StreamDamage>()>& damage_of) {
+    const std::function<std::vector<sources::StreamDamage>()>& damage_of,
+    const std::function<Result<std::vector<std::unique_ptr<Analyzer>>>(const SubjectFiles&)>&
+        replan_subject = nullptr) {
   // Outputs are written into a staging folder and appear together at the end (or not at all).
   const bool write = !options.out_dir.empty();
   StagedOutputDir staging;
@@ -281,6 +283,16 @@ Result<AnalysisSummary> run_plan(
       summary.status_counts[primitives::info(r.id).name][primitives::to_string(r.status)]++;
     }
     if (options.on_records) DS_RETURN_IF_ERROR(options.on_records(records));
+    if (options.live_subject_models && replan_subject && !summary.subject_models_from_ns) {
+      if (const auto files = options.live_subject_models(tick)) {
+        DS_ASSIGN_OR_RETURN(auto analyzers, replan_subject(*files));
+        DS_RETURN_IF_ERROR((*pipeline)->replace_analyzers(std::move(analyzers)));
+        summary.subject_models_from_ns = tick.stamp.ns();
+        summary.subject_models_face_model = files->face_model;
+        log::info("live: the child's face model and gaze constants are used from {} on ({})",
+                  tick.stamp.to_string(), files->face_model.string());
+      }
+    }
     if (!write) return ok_status();
     DS_RETURN_IF_ERROR(jsonl.write(records));
     DS_RETURN_IF_ERROR(events.write(records));
@@ -541,8 +553,13 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   const std::string session_name =
       options.plan.include_names && !manifest.name.empty() ? manifest.name : std::string("live");
   if (options.on_ready) options.on_ready();
+  auto replan = [&](const SubjectFiles& files) {
+    return replan_subject_analyzers(plan_options, manifest, fs::current_path(), files.face_model,
+                                    files.gaze_model);
+  };
   return run_plan(options, std::move(*plan), manifest, capture, po, nullptr, Timestamp::unset(),
-                  Timestamp::unset(), fs::path("live"), session_name, {{"kind", "live"}}, nullptr);
+                  Timestamp::unset(), fs::path("live"), session_name, {{"kind", "live"}}, nullptr,
+                  replan);
 }
 
 }  // namespace dreamsense::runner

@@ -113,9 +113,13 @@ std::string known_names(const AnalyzerRegistry& registry) {
 
 }  // namespace
 
-Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
-                                   const sources::SessionManifest& manifest_in,
-                                   const fs::path& dir) {
+namespace {
+
+// plan_pipeline; with subject_models_only, only the factories that use the child's face and gaze
+// models are planned (replan_subject_analyzers) and nothing is dropped for reads without writer.
+Result<PipelinePlan> plan_factories(const PlanOptions& options,
+                                    const sources::SessionManifest& manifest_in,
+                                    const fs::path& dir, bool subject_models_only) {
   DS_RETURN_IF_ERROR(options.check());
   const AnalyzerRegistry& registry = builtin_analyzers();
   PipelineConfig config;
@@ -165,6 +169,7 @@ Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
   std::vector<std::unique_ptr<Analyzer>> planned;
   std::vector<size_t> planned_by;  // factory index of each planned analyser
   for (const AnalyzerFactory& factory : registry.factories()) {
+    if (subject_models_only && !factory.uses_subject_models) continue;
     FactoryOutcome outcome{factory.name, factory.summary, factory.roles, {}, {}, {}, {}};
     bool enabled = factory.enabled_by_default;
     const auto cfg = config.analyzers.find(factory.name);
@@ -198,7 +203,7 @@ Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
   }
 
   // Analysers whose same-tick reads have no writer cannot run (e.g. their producer is disabled).
-  for (bool changed = true; changed;) {
+  for (bool changed = !subject_models_only; changed;) {
     changed = false;
     std::set<std::string> written;
     for (const auto& a : planned)
@@ -237,6 +242,23 @@ Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
   for (const auto& s : plan.streams)
     if (s.kind == SensorKind::kColor && s.camera) plan.cameras.emplace(s.id, *s.camera);
   return plan;
+}
+
+}  // namespace
+
+Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
+                                   const sources::SessionManifest& manifest, const fs::path& dir) {
+  return plan_factories(options, manifest, dir, false);
+}
+
+Result<std::vector<std::unique_ptr<Analyzer>>> replan_subject_analyzers(
+    const PlanOptions& options, const sources::SessionManifest& manifest, const fs::path& dir,
+    const fs::path& face_model, const fs::path& gaze_model) {
+  PlanOptions o = options;
+  o.face_model = face_model;
+  o.gaze_model = gaze_model;
+  DS_ASSIGN_OR_RETURN(PipelinePlan plan, plan_factories(o, manifest, dir, true));
+  return std::move(plan.analyzers);
 }
 
 std::string PipelinePlan::describe() const {

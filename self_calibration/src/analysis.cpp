@@ -13,22 +13,28 @@
 namespace dreamsense::self_calibration {
 namespace fs = std::filesystem;
 
-bool needs_self_calibration(const runner::AnalysisOptions& o, SelfCalibrationMode mode) {
+bool needs_self_calibration(const runner::PlanOptions& plan,
+                            const sources::SessionManifest& manifest, SelfCalibrationMode mode) {
   if (mode == SelfCalibrationMode::kAlways) return true;
   if (mode == SelfCalibrationMode::kNever) return false;
-  if (!o.plan.subject_from_session || !o.plan.subject_dir.empty() || !o.plan.face_model.empty() ||
-      !o.plan.gaze_model.empty())
+  if (!plan.subject_from_session || !plan.subject_dir.empty() || !plan.face_model.empty() ||
+      !plan.gaze_model.empty())
     return false;
-  auto manifest = sources::read_manifest(o.session_dir);
-  if (!manifest) return false;  // the analysis reports the error
   // Only sessions with calibrated colour cameras (the self-calibration triangulates).
   bool colour = false;
-  for (const auto& s : manifest->streams)
+  for (const auto& s : manifest.streams)
     if (s.kind == SensorKind::kColor && !s.calibration.empty()) colour = true;
   if (!colour) return false;
-  const auto it = manifest->metadata.find("subject");
-  if (it == manifest->metadata.end() || it->second.empty()) return true;
-  return !fs::is_directory(o.plan.subjects_dir / it->second);
+  const auto it = manifest.metadata.find("subject");
+  if (it == manifest.metadata.end() || it->second.empty()) return true;
+  return !fs::is_directory(plan.subjects_dir / it->second);
+}
+
+bool needs_self_calibration(const runner::AnalysisOptions& o, SelfCalibrationMode mode) {
+  if (mode == SelfCalibrationMode::kNever) return false;
+  auto manifest = sources::read_manifest(o.session_dir);
+  if (!manifest) return mode == SelfCalibrationMode::kAlways;  // the analysis reports the error
+  return needs_self_calibration(o.plan, *manifest, mode);
 }
 
 namespace {
@@ -36,9 +42,14 @@ namespace {
 // `--set self_calibration.KEY=VALUE` read as an analyser's options are (typed reads, one-line
 // errors naming the key, unread keys unknown).
 Status apply_overrides(const std::vector<runner::OptionOverride>& overrides,
-                       SessionSelfCalibrationOptions& so) {
+                       SessionSelfCalibrationOptions& so, LiveSelfCalibrationOptions* live) {
   OptionsNode node("self_calibration", YAML::Node(YAML::NodeType::Map));
   for (const auto& o : overrides) DS_RETURN_IF_ERROR(node.set(o.key, o.value));
+  if (live != nullptr) {
+    DS_RETURN_IF_ERROR(node.get("live_nice", live->nice));
+    DS_RETURN_IF_ERROR(node.get("live_attempts", live->attempts));
+  }
+  DS_RETURN_IF_ERROR(node.get("max_seconds", so.max_seconds));
   DS_RETURN_IF_ERROR(node.get("tick_step", so.tick_step));
   DS_RETURN_IF_ERROR(node.get("enough_frames", so.enough_frames));
   DS_RETURN_IF_ERROR(node.get("guided_search", so.guided_search));
@@ -55,6 +66,24 @@ Status apply_overrides(const std::vector<runner::OptionOverride>& overrides,
 }
 
 }  // namespace
+
+Result<SessionSelfCalibrationOptions> self_calibration_options(
+    const runner::PlanOptions& plan, const std::vector<runner::OptionOverride>& overrides,
+    LiveSelfCalibrationOptions* live) {
+  // The robot's head given on the command line (--robot-head, as the gaze analyser's option)
+  // wins over the session's metadata, as it does for mutual gaze.
+  SessionSelfCalibrationOptions so;
+  for (const auto& over : plan.overrides)
+    if (over.analyzer == "gaze" && over.key == "mutual.robot_head_m") {
+      std::string v = over.value;
+      for (char& ch : v)
+        if (ch == '[' || ch == ']') ch = ' ';
+      so.face.fixation_target_world_m = parse_vec3(v);
+    }
+  DS_RETURN_IF_ERROR(apply_overrides(overrides, so, live));
+  DS_RETURN_IF_ERROR(so.check());
+  return so;
+}
 
 std::vector<runner::OptionOverride> take_self_calibration_overrides(
     std::vector<runner::OptionOverride>& overrides) {
@@ -74,18 +103,8 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
     if (options.progress) options.progress(line);
   };
   progress("self-calibration: the child's face from the session...");
-  // The robot's head given on the command line (--robot-head, as the gaze analyser's option)
-  // wins over the session's metadata, as it does for mutual gaze.
-  SessionSelfCalibrationOptions so;
-  for (const auto& over : o.plan.overrides)
-    if (over.analyzer == "gaze" && over.key == "mutual.robot_head_m") {
-      std::string v = over.value;
-      for (char& ch : v)
-        if (ch == '[' || ch == ']') ch = ' ';
-      so.face.fixation_target_world_m = parse_vec3(v);
-    }
-  DS_RETURN_IF_ERROR(apply_overrides(options.overrides, so));
-  DS_RETURN_IF_ERROR(so.check());
+  DS_ASSIGN_OR_RETURN(const SessionSelfCalibrationOptions so,
+                      self_calibration_options(o.plan, options.overrides));
   DS_ASSIGN_OR_RETURN(const SessionSelfCalibration c, self_calibrate_session(o.session_dir, so));
   const fs::path dir = o.out_dir / "self_calibration";
   DS_RETURN_IF_ERROR(write_self_calibration(c, dir));
@@ -139,7 +158,8 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
   return j;
 }
 
-Status add_self_calibration_to_summary(const fs::path& out_dir, const nlohmann::json& j) {
+Status add_self_calibration_to_summary(const fs::path& out_dir, const nlohmann::json& j,
+                                       const std::string& key) {
   const fs::path path = out_dir / "summary.json";
   nlohmann::json summary;
   {
@@ -151,7 +171,7 @@ Status add_self_calibration_to_summary(const fs::path& out_dir, const nlohmann::
       return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.what());
     }
   }
-  summary["self_calibration"] = j;
+  summary[key] = j;
   const fs::path partial = path.string() + ".partial";
   {
     std::ofstream f(partial);

@@ -139,30 +139,165 @@ nlohmann::json SessionSelfCalibration::to_json() const {
   return j;
 }
 
-Result<SessionSelfCalibration> self_calibrate_session(
-    const std::filesystem::path& dir, const SessionSelfCalibrationOptions& options) {
+struct TickSelfCalibration::State {
+  std::map<SensorId, CameraModel> cameras;
+  SessionSelfCalibrationOptions options;
+  std::shared_ptr<const face_landmarks::Landmarker> landmarker;
+  face_detection::FaceDetector detector;
+  eye_centers::EyeCenterLocator pupil_locator;
+  std::vector<head_pose::MultiViewLandmarks> ticks;
+  std::vector<std::vector<EyeCenters>> pupils;  // per tick, per view of ticks[i]
+  std::map<SensorId, cv::Rect2d> last_box;      // per camera: its face at the last searched tick
+  // Per camera: the last face found and its roll (kept through misses), for the rotated search.
+  struct SeenFace {
+    cv::Rect2d box;
+    double roll_deg = 0;
+  };
+  std::map<SensorId, SeenFace> last_seen;
+  int ticks_searched = 0, views_with_landmarks = 0;
+  int triangulated = 0, multi_view = 0;
+};
+
+TickSelfCalibration::TickSelfCalibration(std::unique_ptr<State> state) : state_(std::move(state)) {}
+TickSelfCalibration::~TickSelfCalibration() = default;
+
+Result<std::unique_ptr<TickSelfCalibration>> TickSelfCalibration::create(
+    std::map<SensorId, CameraModel> cameras, const SessionSelfCalibrationOptions& options) {
   if (auto s = options.check(); !s) return tl::unexpected(s.error());
-  // dlib's model is the process's shared one (the analysis's face_landmarks uses it too, so it
-  // is loaded once); its load (~1 s) is not a cost of self-calibrating, so the clock starts after.
   auto landmarker = face_landmarks::shared_dlib_landmarker();
   if (!landmarker) return tl::unexpected(landmarker.error());
-  const std::clock_t cpu0 = std::clock();
-  auto manifest = sources::read_manifest(dir);
-  if (!manifest) return tl::unexpected(manifest.error());
-  head_pose::SelfCalibrationOptions face_options = options.face;
-  if (!face_options.fixation_target_world_m && options.fixation_from_metadata) {
-    if (const auto it = manifest->metadata.find("robot_head_m"); it != manifest->metadata.end()) {
-      face_options.fixation_target_world_m = parse_vec3(it->second);
-      if (!face_options.fixation_target_world_m)
-        return make_error(ErrorCode::kCorruptData,
-                          "{}: metadata robot_head_m must be three numbers \"x y z\" in metres "
-                          "(got \"{}\")",
-                          (dir / "session.yaml").string(), it->second);
+  auto detector = face_detection::FaceDetector::create({});
+  if (!detector) return tl::unexpected(detector.error());
+  auto pupil_locator = eye_centers::EyeCenterLocator::create(options.pupils);
+  if (!pupil_locator) return tl::unexpected(pupil_locator.error());
+  auto state = std::unique_ptr<State>(new State{std::move(cameras), options, std::move(*landmarker),
+                                                std::move(*detector), *pupil_locator});
+  return std::unique_ptr<TickSelfCalibration>(new TickSelfCalibration(std::move(state)));
+}
+
+bool TickSelfCalibration::enough() const {
+  // Ticks seen by two or more cameras (triangulated or not: when they do not, cameras that
+  // disagree, the reason is clear by then).
+  return state_->multi_view >= state_->options.enough_frames;
+}
+
+int TickSelfCalibration::ticks_searched() const { return state_->ticks_searched; }
+
+Status TickSelfCalibration::add(int64_t stamp_ns, const std::vector<FramePtr>& frames) {
+  State& st = *state_;
+  const SessionSelfCalibrationOptions& options = st.options;
+  // Only the gaze level uses the pupils.
+  const bool locate_pupils =
+      options.gaze_level.enabled && options.face.fixation_target_world_m.has_value();
+  ++st.ticks_searched;
+  head_pose::MultiViewLandmarks mv;
+  mv.stamp_ns = stamp_ns;
+  std::vector<const cv::Mat*> images;  // per view
+  for (const FramePtr& f : frames) {
+    const ColorImage* img = f ? f->as<ColorImage>() : nullptr;
+    const auto camera = f ? st.cameras.find(f->sensor) : st.cameras.end();
+    if (img == nullptr || camera == st.cameras.end()) continue;
+    std::vector<DetectedFace> faces;
+    const auto it = st.last_box.find(f->sensor);
+    if (const auto first = first_search(it == st.last_box.end() ? nullptr : &it->second,
+                                        img->image.size(), options))
+      faces = st.detector.detect(img->image, *first, false);
+    if (faces.empty()) faces = st.detector.detect(img->image, std::nullopt, false);
+    if (faces.empty())
+      if (const auto seen = st.last_seen.find(f->sensor); seen != st.last_seen.end())
+        faces = rolled_search(st.detector, img->image, seen->second.box, seen->second.roll_deg,
+                              options.rolled_search_min_deg);
+    if (faces.empty()) {
+      st.last_box.erase(f->sensor);
+      continue;
+    }
+    st.last_box[f->sensor] = faces.front().box_px;
+    auto pts = st.landmarker->fit(img->image, faces.front().box_px);
+    if (!pts) return tl::unexpected(pts.error());
+    if (!*pts) continue;
+    st.last_seen[f->sensor] = {faces.front().box_px, eye_line_roll_deg(**pts)};
+    ++st.views_with_landmarks;
+    mv.views.push_back({&camera->second, std::move(**pts)});
+    images.push_back(&img->image);
+  }
+  std::optional<cv::Vec3d> eyes_world;  // sizes the iris in each view (pixels per mm)
+  if (mv.views.size() >= 2) {
+    ++st.multi_view;
+    if (const auto t = head_pose::triangulate_face(mv, options.face.triangulation)) {
+      ++st.triangulated;
+      eyes_world = eye_openings_centre(*t, options.face.triangulation.landmark_index);
     }
   }
-  auto calibrated = sources::read_color_calibrations(dir, *manifest);
+  std::vector<EyeCenters> found;
+  for (size_t v = 0; v < mv.views.size() && locate_pupils; ++v) {
+    FaceLandmarks l;
+    l.camera = mv.views[v].camera->frame;
+    l.image_size = images[v]->size();
+    l.points_px = mv.views[v].landmarks_px;
+    const auto scale =
+        eyes_world ? eye_centers::pixels_per_mm_at(*mv.views[v].camera, *eyes_world) : std::nullopt;
+    auto p = st.pupil_locator.locate_both(*images[v], l, scale);
+    found.push_back(p ? *p : EyeCenters{});  // a view without pupils only loses its gaze
+  }
+  st.pupils.push_back(std::move(found));
+  st.ticks.push_back(std::move(mv));
+  return ok_status();
+}
+
+SessionSelfCalibration TickSelfCalibration::finish(const std::string& session) const {
+  const State& st = *state_;
+  const SessionSelfCalibrationOptions& options = st.options;
+  SessionSelfCalibration out;
+  out.session = session;
+  out.cameras = static_cast<int>(st.cameras.size());
+  out.ticks_searched = st.ticks_searched;
+  out.views_with_landmarks = st.views_with_landmarks;
+  out.face = head_pose::self_calibrate_face(st.ticks, options.face);
+  if (out.face.converged() && options.face.fixation_target_world_m) {
+    out.gaze_level = level_from_gaze_fixations(out.face.model, st.ticks, st.pupils,
+                                               *options.face.fixation_target_world_m, options.eyes,
+                                               options.gaze_level);
+    if (out.gaze_level.applied) {
+      out.face.model = pitched(out.face.model, out.gaze_level.correction_deg);
+      out.face.level = "gaze_fixations";
+      out.face.level_pitch_correction_deg += out.gaze_level.correction_deg;
+      out.face.reason +=
+          fmt::format("; level refined from {} gaze fixations on the target ({:+.1f} deg)",
+                      out.gaze_level.fixation_ticks, out.gaze_level.correction_deg);
+    }
+  }
+  if (out.face.converged()) {
+    if (const auto e =
+            anatomical_eyeballs(out.face.model, options.eyes, out.gaze_level.eyeball_shift_x_m)) {
+      out.right_eyeball = e->first;
+      out.left_eyeball = e->second;
+    }
+  }
+  return out;
+}
+
+Result<SessionSelfCalibrationOptions> with_fixation_target(
+    const SessionSelfCalibrationOptions& options,
+    const std::map<std::string, std::string>& metadata, const std::string& where) {
+  SessionSelfCalibrationOptions o = options;
+  if (o.face.fixation_target_world_m || !o.fixation_from_metadata) return o;
+  if (const auto it = metadata.find("robot_head_m"); it != metadata.end()) {
+    o.face.fixation_target_world_m = parse_vec3(it->second);
+    if (!o.face.fixation_target_world_m)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: metadata robot_head_m must be three numbers \"x y z\" in metres "
+                        "(got \"{}\")",
+                        where, it->second);
+  }
+  return o;
+}
+
+Result<std::map<SensorId, CameraModel>> self_calibration_cameras(
+    const std::filesystem::path& dir, const sources::SessionManifest& manifest,
+    const SessionSelfCalibrationOptions& options) {
+  auto calibrated = sources::read_color_calibrations(dir, manifest);
   if (!calibrated) return tl::unexpected(calibrated.error());
-  auto roles = sources::stream_roles(*manifest);
+  auto roles = sources::stream_roles(manifest);
   if (!roles) return tl::unexpected(roles.error());
   std::map<SensorId, CameraModel> cameras;
   for (auto& [id, camera] : *calibrated) {
@@ -176,105 +311,40 @@ Result<SessionSelfCalibration> self_calibrate_session(
   if (cameras.empty())
     return make_error(ErrorCode::kNotFound, "{}: no calibrated colour stream to self-calibrate on",
                       dir.string());
-  SessionSelfCalibration out;
-  out.session = manifest->name;
-  out.cameras = static_cast<int>(cameras.size());
+  return cameras;
+}
 
-  auto detector = face_detection::FaceDetector::create({});
-  if (!detector) return tl::unexpected(detector.error());
-  auto pupil_locator = eye_centers::EyeCenterLocator::create(options.pupils);
-  if (!pupil_locator) return tl::unexpected(pupil_locator.error());
-
+Result<SessionSelfCalibration> self_calibrate_session(
+    const std::filesystem::path& dir, const SessionSelfCalibrationOptions& options_in) {
+  if (auto s = options_in.check(); !s) return tl::unexpected(s.error());
+  // dlib's model is the process's shared one (the analysis's face_landmarks uses it too, so it
+  // is loaded once); its load (~1 s) is not a cost of self-calibrating, so the clock starts after.
+  if (auto landmarker = face_landmarks::shared_dlib_landmarker(); !landmarker)
+    return tl::unexpected(landmarker.error());
+  const std::clock_t cpu0 = std::clock();
+  auto manifest = sources::read_manifest(dir);
+  if (!manifest) return tl::unexpected(manifest.error());
+  DS_ASSIGN_OR_RETURN(
+      const SessionSelfCalibrationOptions options,
+      with_fixation_target(options_in, manifest->metadata, (dir / "session.yaml").string()));
+  DS_ASSIGN_OR_RETURN(auto cameras, self_calibration_cameras(dir, *manifest, options));
   sources::SessionReaderOptions ro;
   for (const auto& [id, c] : cameras) ro.only.push_back(id);
+  DS_ASSIGN_OR_RETURN(auto search, TickSelfCalibration::create(std::move(cameras), options));
   auto reader = sources::SessionReader::open(dir, ro);
   if (!reader) return tl::unexpected(reader.error());
 
-  std::vector<head_pose::MultiViewLandmarks> ticks;
-  std::vector<std::vector<EyeCenters>> pupils;  // per tick, per view of ticks[i]
-  std::map<SensorId, cv::Rect2d> last_box;      // per camera: its face at the last searched tick
-  // Per camera: the last face found and its roll (kept through misses), for the rotated search.
-  struct SeenFace {
-    cv::Rect2d box;
-    double roll_deg = 0;
-  };
-  std::map<SensorId, SeenFace> last_seen;
-  // Only the gaze level uses the pupils.
-  const bool locate_pupils =
-      options.gaze_level.enabled && face_options.fixation_target_world_m.has_value();
+  double seconds_searched = 0;
   std::vector<FramePtr> group;
   int64_t first_ns = 0, group_ns = 0;
   bool started = false;
   int tick_index = -1;
-  int triangulated = 0, multi_view = 0;
-  // Enough searching: this many ticks seen by two or more cameras (triangulated or not: when
-  // they do not, cameras that disagree, the reason is clear by then).
-  auto enough = [&] { return multi_view >= options.enough_frames; };
-  // Searches the frames of one chosen tick (`group`, then cleared) for the face.
-  auto search_tick = [&]() -> Status {
-    ++out.ticks_searched;
-    head_pose::MultiViewLandmarks mv;
-    mv.stamp_ns = group_ns;
-    std::vector<const cv::Mat*> images;  // per view
-    for (const FramePtr& f : group) {
-      const ColorImage* img = f->as<ColorImage>();
-      if (img == nullptr) continue;
-      std::vector<DetectedFace> faces;
-      const auto it = last_box.find(f->sensor);
-      if (const auto first = first_search(it == last_box.end() ? nullptr : &it->second,
-                                          img->image.size(), options))
-        faces = detector->detect(img->image, *first, false);
-      if (faces.empty()) faces = detector->detect(img->image, std::nullopt, false);
-      if (faces.empty())
-        if (const auto seen = last_seen.find(f->sensor); seen != last_seen.end())
-          faces = rolled_search(*detector, img->image, seen->second.box, seen->second.roll_deg,
-                                options.rolled_search_min_deg);
-      if (faces.empty()) {
-        last_box.erase(f->sensor);
-        continue;
-      }
-      last_box[f->sensor] = faces.front().box_px;
-      auto pts = (*landmarker)->fit(img->image, faces.front().box_px);
-      if (!pts) return tl::unexpected(pts.error());
-      if (!*pts) continue;
-      last_seen[f->sensor] = {faces.front().box_px, eye_line_roll_deg(**pts)};
-      ++out.views_with_landmarks;
-      mv.views.push_back({&cameras.at(f->sensor), std::move(**pts)});
-      images.push_back(&img->image);
-    }
-    std::optional<cv::Vec3d> eyes_world;  // sizes the iris in each view (pixels per mm)
-    if (mv.views.size() >= 2) {
-      ++multi_view;
-      if (const auto t = head_pose::triangulate_face(mv, options.face.triangulation)) {
-        ++triangulated;
-        eyes_world = eye_openings_centre(*t, options.face.triangulation.landmark_index);
-      }
-    }
-    std::vector<EyeCenters> found;
-    for (size_t v = 0; v < mv.views.size() && locate_pupils; ++v) {
-      FaceLandmarks l;
-      l.camera = mv.views[v].camera->frame;
-      l.image_size = images[v]->size();
-      l.points_px = mv.views[v].landmarks_px;
-      const auto scale = eyes_world
-                             ? eye_centers::pixels_per_mm_at(*mv.views[v].camera, *eyes_world)
-                             : std::nullopt;
-      auto p = pupil_locator->locate_both(*images[v], l, scale);
-      found.push_back(p ? *p : EyeCenters{});  // a view without pupils only loses its gaze
-    }
-    pupils.push_back(std::move(found));
-    ticks.push_back(std::move(mv));
-    group.clear();
-    return ok_status();
-  };
   auto flush = [&]() -> Status {
     if (group.empty()) return ok_status();
     ++tick_index;
-    if (tick_index % options.tick_step != 0) {
-      group.clear();
-      return ok_status();
-    }
-    return search_tick();
+    Status s = tick_index % options.tick_step == 0 ? search->add(group_ns, group) : ok_status();
+    group.clear();
+    return s;
   };
   const int64_t max_ns = static_cast<int64_t>(options.max_seconds * 1e9);
 
@@ -290,7 +360,7 @@ Result<SessionSelfCalibration> self_calibrate_session(
   std::vector<IndexedFrame> indexed;
   bool all_indexed = true;
   for (const auto& stream : manifest->streams) {  // manifest order breaks ties, as in next()
-    if (cameras.count(stream.id) == 0) continue;
+    if (std::find(ro.only.begin(), ro.only.end(), stream.id) == ro.only.end()) continue;
     const auto records = (*reader)->records(stream.id);
     if (records.empty()) all_indexed = false;  // a video stream (or nothing to read)
     for (size_t k = 0; k < records.size(); ++k)
@@ -302,7 +372,7 @@ Result<SessionSelfCalibration> self_calibrate_session(
         indexed.begin(), indexed.end(),
         [](const IndexedFrame& a, const IndexedFrame& b) { return a.stamp_ns < b.stamp_ns; });
     first_ns = indexed.front().stamp_ns;
-    for (size_t i = 0; i < indexed.size() && !enough();) {
+    for (size_t i = 0; i < indexed.size() && !search->enough();) {
       const int64_t tick_ns = indexed[i].stamp_ns;
       if (tick_ns - first_ns > max_ns) break;
       size_t end = i;
@@ -310,7 +380,6 @@ Result<SessionSelfCalibration> self_calibrate_session(
              indexed[end].stamp_ns - first_ns <= max_ns)
         ++end;
       if (++tick_index % options.tick_step == 0) {
-        group_ns = tick_ns;
         for (size_t g = i; g < end; ++g) {
           auto frame = (*reader)->decode_record(indexed[g].id, indexed[g].k);
           if (!frame) {
@@ -319,9 +388,10 @@ Result<SessionSelfCalibration> self_calibrate_session(
           }
           group.push_back(*frame);
         }
-        if (!group.empty()) DS_RETURN_IF_ERROR(search_tick());
+        if (!group.empty()) DS_RETURN_IF_ERROR(search->add(tick_ns, group));
+        group.clear();
       }
-      out.seconds_searched = static_cast<double>(indexed[end - 1].stamp_ns - first_ns) * 1e-9;
+      seconds_searched = static_cast<double>(indexed[end - 1].stamp_ns - first_ns) * 1e-9;
       i = end;
     }
   }
@@ -341,33 +411,14 @@ Result<SessionSelfCalibration> self_calibrate_session(
     if (ns - group_ns > kSameTickNs) {
       DS_RETURN_IF_ERROR(flush());
       group_ns = ns;
-      if (enough()) break;
+      if (search->enough()) break;
     }
-    out.seconds_searched = static_cast<double>(ns - first_ns) * 1e-9;
+    seconds_searched = static_cast<double>(ns - first_ns) * 1e-9;
     group.push_back(f);
   }
-  if (!enough()) DS_RETURN_IF_ERROR(flush());
-  out.face = head_pose::self_calibrate_face(ticks, face_options);
-  if (out.face.converged() && face_options.fixation_target_world_m) {
-    out.gaze_level = level_from_gaze_fixations(out.face.model, ticks, pupils,
-                                               *face_options.fixation_target_world_m, options.eyes,
-                                               options.gaze_level);
-    if (out.gaze_level.applied) {
-      out.face.model = pitched(out.face.model, out.gaze_level.correction_deg);
-      out.face.level = "gaze_fixations";
-      out.face.level_pitch_correction_deg += out.gaze_level.correction_deg;
-      out.face.reason +=
-          fmt::format("; level refined from {} gaze fixations on the target ({:+.1f} deg)",
-                      out.gaze_level.fixation_ticks, out.gaze_level.correction_deg);
-    }
-  }
-  if (out.face.converged()) {
-    if (const auto e =
-            anatomical_eyeballs(out.face.model, options.eyes, out.gaze_level.eyeball_shift_x_m)) {
-      out.right_eyeball = e->first;
-      out.left_eyeball = e->second;
-    }
-  }
+  if (!search->enough()) DS_RETURN_IF_ERROR(flush());
+  SessionSelfCalibration out = search->finish(manifest->name);
+  out.seconds_searched = seconds_searched;
   out.cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
   return out;
 }

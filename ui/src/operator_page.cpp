@@ -68,6 +68,7 @@ tr.no_data td,tr.stale td{color:#8a6d00}tr.disabled td{color:#aaa}tr.sensor_offl
   <span class="item" id="rec">recording: ?</span>
   <span class="item" id="drops"></span>
   <span class="item" id="offline"></span>
+  <span class="item" id="face-model"></span>
   <span class="item" id="error"></span>
   <button id="mark" title="write a marker into the session (key M)">Mark (M)</button>
 </div>
@@ -118,6 +119,9 @@ function showState(s){
   const anyDrop=(s.streams||[]).some(x=>x.dropped>0);
   $('drops').className='item '+(anyDrop?'bad':'good');
   text('drops',d.length?'frames not analysed \u2014 '+d.join(', '):'');
+  const fm=$('face-model');
+  fm.className='item '+(s.face_model&&s.face_model.startsWith('generic')?'bad':'good');
+  text('face-model',s.face_model?'head pose / gaze: '+s.face_model:'');
   const off=s.sensors_offline||[];
   $('offline').className='item '+(off.length?'bad':'good');
   text('offline',off.length?'OFFLINE: '+off.join(', '):'all sensors delivering');
@@ -396,6 +400,8 @@ nlohmann::json OperatorPage::Impl::state_json() const {
   }
   s["streams"] = streams;
   s["sensors_offline"] = offline;
+  // A live self-calibration's state (absent: the session's own calibration or none was asked).
+  s["face_model"] = status.contains("face_model") ? status["face_model"] : json();
 
   json cams = json::array();
   for (const auto& [id, f] : frames) cams.push_back(id);

@@ -317,7 +317,8 @@ TEST(OperatorPage, StateIsRoundedWithUnits) {
                        {"recording", {{"on", true}, {"bytes", 12'345'678}}},
                        {"streams",
                         {{"camera_left", {{"dropped", 3}, {"offline", false}}},
-                         {"mic_array", {{"dropped", 0}, {"offline", true}}}}}});
+                         {"mic_array", {{"dropped", 0}, {"offline", true}}}}},
+                       {"face_model", "generic model, self-calibrating"}});
   httplib::Client client("127.0.0.1", (*page)->port());
   auto r = client.Get("/api/operator");
   ASSERT_TRUE(r);
@@ -327,6 +328,7 @@ TEST(OperatorPage, StateIsRoundedWithUnits) {
   EXPECT_EQ(s["recording"]["size"], "12.3 MB");
   EXPECT_EQ(s["recording"]["on"], true);
   EXPECT_EQ(s["sensors_offline"], nlohmann::json::array({"mic_array"}));
+  EXPECT_EQ(s["face_model"], "generic model, self-calibrating");
   EXPECT_EQ(s["streams"][0]["id"], "camera_left");
   EXPECT_EQ(s["streams"][0]["dropped"], 3);
   EXPECT_EQ(s["mutual_gaze"]["state"], "mutual");
@@ -351,6 +353,9 @@ TEST(OperatorPage, StateIsRoundedWithUnits) {
   EXPECT_EQ((*page)->operator_state_json()["mutual_gaze"]["state"], "not_mutual");
   (*page)->update({record(PrimitiveId::kCheckMutualGaze, {}, PrimitiveStatus::kNoData)});
   EXPECT_EQ((*page)->operator_state_json()["mutual_gaze"]["text"], "no gaze estimate");
+  // Without a live self-calibration the strip has no face-model item.
+  (*page)->set_status({{"stamp_ns", t.ns()}, {"ticks", 2088}});
+  EXPECT_TRUE((*page)->operator_state_json()["face_model"].is_null());
 }
 
 // With the tick's blackboard the picture carries the overlay (tick time, camera name, mutual-gaze

@@ -32,6 +32,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
       "eye gaze (3-D eyeball model of the child's calibration, else D4.2 eq. 4) and mutual gaze "
       "with the robot (3-D or camera-plane test, hold rule)";
   f.roles = {roles::kChildCamera};
+  f.uses_subject_models = true;
   f.plan = [](const PlanContext& ctx, OptionsNode& options) -> Result<PlannedAnalyzers> {
     GazeAnalyzerOptions o;
     OptionsNode& mutual = options.child("mutual");

@@ -13,6 +13,7 @@ void register_analyzers(AnalyzerRegistry& registry) {
       "head pose by PnP of the landmarks against the child's 3-D face model (generic when the "
       "child has none), One-Euro filtered";
   f.roles = {roles::kChildCamera};
+  f.uses_subject_models = true;
   f.plan = [](const PlanContext& ctx, OptionsNode& options) -> Result<PlannedAnalyzers> {
     HeadPoseAnalyzerOptions o;
     DS_RETURN_IF_ERROR(options.get("max_rms_per_interocular", o.estimator.max_rms_per_interocular));

@@ -94,6 +94,13 @@ class Pipeline {
   Status run(Source& source, const TickCallback& on_tick,
              const ProgressCallback& on_progress = nullptr);
 
+  // Swaps running analysers for new ones of the same names and contracts (e.g. head pose with
+  // the child's face model once a live self-calibration converged), from the next tick on: call
+  // it between ticks, e.g. from the TickCallback. Each replacement starts fresh (its own state);
+  // its stats continue the old one's. Errors (nothing replaced): an unknown name, a different
+  // contract, a null analyser.
+  Status replace_analyzers(std::vector<std::unique_ptr<Analyzer>> replacements);
+
   const PipelineStats& stats() const { return stats_; }
   const Blackboard& blackboard() const { return blackboard_; }
   const std::vector<std::unique_ptr<Analyzer>>& analyzers() const { return analyzers_; }

@@ -8,6 +8,7 @@
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/publish/dds_publisher.hpp"
 #include "dreamsense/runner/analysis.hpp"
+#include "dreamsense/self_calibration/analysis.hpp"
 #include "dreamsense/sources/recorder.hpp"
 #include "dreamsense/ui/operator_page.hpp"
 
@@ -28,6 +29,13 @@ struct LiveAnalysisOptions {
   bool stop_on_signals = true;                      // SIGINT / SIGTERM stop the run
   std::optional<publish::DdsPublisherOptions> dds;  // publish the primitives
   std::optional<ui::OperatorPageOptions> ui;        // serve the operator page
+  // A child without a calibration folder (self_calibration::needs_self_calibration of the
+  // capture's configuration with this mode) is self-calibrated while the session runs
+  // (self_calibration/live.hpp, files in OUT/self_calibration/): head pose and gaze use the
+  // generic models until it converges and the child's after. kNever: generic throughout.
+  self_calibration::SelfCalibrationMode self_calibration =
+      self_calibration::SelfCalibrationMode::kWhenNoSubject;
+  std::vector<runner::OptionOverride> self_calibration_overrides;  // --set self_calibration.K=V
   // Called once the operator page serves (its URL), and once the capture runs.
   std::function<void(const std::string& url)> on_ui_started;
   std::function<void()> on_capture_started;
@@ -37,6 +45,10 @@ struct LiveAnalysisSummary {
   runner::AnalysisSummary analysis;
   sources::RecordStats capture;
   std::optional<publish::DdsPublisherStats> dds;  // when publishing
+  // The live self-calibration's status (LiveSelfCalibration::status() and `used_from_ns`, the
+  // stamp of the tick after which the child's models were used), when one ran; also in
+  // summary.json as `live_self_calibration`.
+  std::optional<nlohmann::json> self_calibration;
 };
 
 // Errors: the publisher, the configuration, the operator page or a device that cannot start;

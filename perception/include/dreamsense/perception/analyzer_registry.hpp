@@ -104,6 +104,9 @@ struct AnalyzerFactory {
   std::string summary;             // one line: method and what it produces
   std::vector<std::string> roles;  // stream roles it consumes (documentation, --print-pipeline)
   bool enabled_by_default = true;
+  // Its plan depends on the child's face model or gaze constants (SubjectFiles::face_model,
+  // gaze_model): a live analysis plans it again when its self-calibration finds them.
+  bool uses_subject_models = false;
   // Plans the analyser(s) for a session, reading its options from `options` (unknown keys are
   // reported by the runner after planning). A bad option or file is an error.
   std::function<Result<PlannedAnalyzers>(const PlanContext&, OptionsNode&)> plan;

@@ -69,6 +69,12 @@ struct AnalysisOptions {
   // "markers", asked for once at the end of the run (live: those made on the operator page).
   // Unset for a session: its markers.jsonl.
   std::function<std::vector<sources::SessionMarker>()> markers;
+  // live: the child's face model and gaze constants found while the session runs (a live
+  // self-calibration, self_calibration/live.hpp), asked for after every tick with the tick's
+  // frames. When it returns files, the analysers that use them (AnalyzerFactory::
+  // uses_subject_models: head pose, gaze) are planned again with them and replace the running
+  // ones from the next tick on (AnalysisSummary::subject_models_from_ns).
+  std::function<std::optional<SubjectFiles>(const MultiFrame&)> live_subject_models;
   // live: called once the analysers are built (models loaded), before the first tick; `live
   // --duration` counts from here, so a slow start does not eat the analysed time.
   std::function<void()> on_ready;
@@ -108,6 +114,10 @@ struct AnalysisSummary {
   };
   std::map<SensorId, Sensor> sensors;
   std::vector<sources::SessionMarker> markers;  // operator markers, summary.json "markers"
+  // live: the stamp of the tick after which the child's models found during the session were
+  // used (AnalysisOptions::live_subject_models), and their face model file.
+  std::optional<int64_t> subject_models_from_ns;
+  std::filesystem::path subject_models_face_model;
   nlohmann::json to_json() const;
 };
 

@@ -88,4 +88,14 @@ Result<PipelinePlan> plan_pipeline(const PlanOptions& options,
                                    const sources::SessionManifest& manifest,
                                    const std::filesystem::path& dir);
 
+// The analysers of the factories that use the child's face and gaze models
+// (AnalyzerFactory::uses_subject_models), planned again as plan_pipeline plans them but with
+// `face_model` and `gaze_model` in place of the subject's: a live analysis swaps them in
+// (Pipeline::replace_analyzers) once its self-calibration converged. Only those factories run
+// (no other model is loaded again).
+Result<std::vector<std::unique_ptr<Analyzer>>> replan_subject_analyzers(
+    const PlanOptions& options, const sources::SessionManifest& manifest,
+    const std::filesystem::path& dir, const std::filesystem::path& face_model,
+    const std::filesystem::path& gaze_model);
+
 }  // namespace dreamsense::runner

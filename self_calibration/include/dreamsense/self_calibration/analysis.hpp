@@ -7,6 +7,9 @@
 
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/runner/analysis.hpp"
+#include "dreamsense/self_calibration/live.hpp"
+#include "dreamsense/self_calibration/session.hpp"
+#include "dreamsense/sources/session.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -22,6 +25,9 @@ enum class SelfCalibrationMode { kWhenNoSubject, kAlways, kNever };
 // True when the analysis `o` should self-calibrate first (see above; only sessions with
 // calibrated colour cameras: the self-calibration triangulates).
 bool needs_self_calibration(const runner::AnalysisOptions& o, SelfCalibrationMode mode);
+// The same for a plan and a manifest (a live capture's).
+bool needs_self_calibration(const runner::PlanOptions& plan,
+                            const sources::SessionManifest& manifest, SelfCalibrationMode mode);
 
 struct ForAnalysisOptions {
   SelfCalibrationMode mode = SelfCalibrationMode::kWhenNoSubject;
@@ -31,10 +37,19 @@ struct ForAnalysisOptions {
   std::function<void(const std::string&)> progress;
   // `--set self_calibration.KEY=VALUE` (taken out of the plan's overrides by
   // take_self_calibration_overrides), read like an analyser's options: tick_step,
-  // enough_frames, guided_search, gaze_level, gaze_level_eye_yaw, gaze_level_max_yaw_deg,
-  // gaze_level_max_pitch_deg, gaze_level_min_ticks. An unknown key or a bad value is an error.
+  // enough_frames, max_seconds, guided_search, gaze_level, gaze_level_eye_yaw,
+  // gaze_level_max_yaw_deg, gaze_level_max_pitch_deg, gaze_level_min_ticks. An unknown key or a bad
+  // value is an error.
   std::vector<runner::OptionOverride> overrides;
 };
+
+// The self-calibration's options for an analysis: `--set self_calibration.KEY=VALUE` (see
+// ForAnalysisOptions::overrides, and max_seconds), the fixation target from --robot-head when
+// given. With `live` (a live self-calibration) also its keys live_nice and live_attempts, read
+// into it. An unknown key or a bad value is an error.
+Result<SessionSelfCalibrationOptions> self_calibration_options(
+    const runner::PlanOptions& plan, const std::vector<runner::OptionOverride>& overrides,
+    LiveSelfCalibrationOptions* live = nullptr);
 
 // Removes the overrides of the pseudo-analyser "self_calibration" from `overrides` (the planner
 // knows only analysers) and returns them.
@@ -46,8 +61,9 @@ std::vector<runner::OptionOverride> take_self_calibration_overrides(
 Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
                                                    const ForAnalysisOptions& options);
 
-// Adds `j` as `self_calibration` to OUT/summary.json (atomic rewrite).
+// Adds `j` as `key` to OUT/summary.json (atomic rewrite).
 Status add_self_calibration_to_summary(const std::filesystem::path& out_dir,
-                                       const nlohmann::json& j);
+                                       const nlohmann::json& j,
+                                       const std::string& key = "self_calibration");
 
 }  // namespace dreamsense::self_calibration

@@ -11,6 +11,8 @@
 // face, or an inconsistent result, nothing is written but the status and its reason (the analysis
 // then falls back to the generic face model and the built-in gaze constants, and says so).
 
+#include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/core/sensor_frame.hpp"
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/eye_centers/eye_center_locator.hpp"
 #include "dreamsense/gaze/eyeball_model.hpp"
@@ -20,8 +22,14 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
+
+namespace dreamsense::sources {
+struct SessionManifest;
+}
 
 namespace dreamsense::self_calibration {
 
@@ -80,6 +88,46 @@ struct SessionSelfCalibration {
   std::string session;
   nlohmann::json to_json() const;
 };
+
+// The self-calibration fed one tick at a time: self_calibrate_session feeds it the session's
+// chosen ticks (every tick_step-th of the first max_seconds), a live analysis the ticks as they
+// arrive (live.hpp). Each add() searches that tick's frames for the face (landmarks, pupils);
+// finish() fits the face model, levels it and places the eyeballs. Not thread-safe.
+class TickSelfCalibration {
+ public:
+  // `cameras`: the calibrated colour cameras to search (others' frames are ignored);
+  // options.face.fixation_target_world_m as resolved by the caller (with_fixation_target).
+  static Result<std::unique_ptr<TickSelfCalibration>> create(
+      std::map<SensorId, CameraModel> cameras, const SessionSelfCalibrationOptions& options);
+  ~TickSelfCalibration();
+  TickSelfCalibration(const TickSelfCalibration&) = delete;
+  TickSelfCalibration& operator=(const TickSelfCalibration&) = delete;
+
+  // One tick's frames (stamped within a few ms of `stamp_ns`). Errors: the landmarker's.
+  Status add(int64_t stamp_ns, const std::vector<FramePtr>& frames);
+  // options.enough_frames ticks had the face in two or more cameras.
+  bool enough() const;
+  int ticks_searched() const;
+  // The result from the ticks added so far (cpu_s and seconds_searched are the caller's).
+  SessionSelfCalibration finish(const std::string& session) const;
+
+ private:
+  struct State;
+  explicit TickSelfCalibration(std::unique_ptr<State> state);
+  std::unique_ptr<State> state_;
+};
+
+// `options` with face.fixation_target_world_m set from the session's metadata robot_head_m when
+// unset and options.fixation_from_metadata; an unreadable value is an error naming `where`.
+Result<SessionSelfCalibrationOptions> with_fixation_target(
+    const SessionSelfCalibrationOptions& options,
+    const std::map<std::string, std::string>& metadata, const std::string& where);
+
+// The cameras a self-calibration searches: options.cameras, or every calibrated colour stream
+// with the role child_camera. Camera files are relative to `session_dir` (or absolute).
+Result<std::map<SensorId, CameraModel>> self_calibration_cameras(
+    const std::filesystem::path& session_dir, const sources::SessionManifest& manifest,
+    const SessionSelfCalibrationOptions& options);
 
 // Errors: an unreadable session or one without calibrated colour streams; everything else
 // (one camera, the face never seen twice, disagreeing cameras) is a non-converged status.

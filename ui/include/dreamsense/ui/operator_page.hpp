@@ -77,7 +77,8 @@ class OperatorPage {
   // The cameras' models, for the head axes and gaze rays of the pictures (without: not drawn).
   void set_camera_models(std::map<SensorId, CameraModel> models);
   // The run's figures (live_analysis.cpp): {"stamp_ns", "ticks", "recording": {"on", "bytes"},
-  // "streams": {id: {"dropped", "offline"}}}; shown in the status strip.
+  // "streams": {id: {"dropped", "offline"}}, optional "face_model": what head pose and gaze use
+  // during a live self-calibration}; shown in the status strip.
   void set_status(nlohmann::json status);
   // Makes a marker (label from the page): returns its JSON ({"n", "stamp_ns", "label", ...}) or
   // an error (the page shows it). Without a handler POST /api/marker answers 503.
