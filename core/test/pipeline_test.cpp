@@ -82,14 +82,19 @@ class ThrowingAnalyzer : public Analyzer {
   int resets = 0;
 };
 
-TEST(Pipeline, LaterAnalysersSeeEarlierResultsOfTheSameTick) {
-  FakeSource src(2);
+// The counter, then the doubler that reads its count in the same tick.
+Result<std::unique_ptr<Pipeline>> counter_then_doubler(const FakeSource& src) {
   std::vector<std::unique_ptr<Analyzer>> a;
   a.push_back(std::make_unique<CountingAnalyzer>());
   a.push_back(std::make_unique<DoublingAnalyzer>());
   PipelineOptions o;
   o.sync.start = Timestamp::from_ns(0);
-  auto p = Pipeline::build(o, src.info(), std::move(a));
+  return Pipeline::build(o, src.info(), std::move(a));
+}
+
+TEST(Pipeline, LaterAnalysersSeeEarlierResultsOfTheSameTick) {
+  FakeSource src(2);
+  auto p = counter_then_doubler(src);
   ASSERT_TRUE(p) << p.error().message;
   int ticks = 0;
   auto st = (*p)->run(src, [&](const MultiFrame& mf, const BlackboardView& v) -> Status {
@@ -112,12 +117,7 @@ class CounterNamedDoubler : public DoublingAnalyzer {
 
 TEST(Pipeline, AnalysersReplacedBetweenTicksRunFromTheNextTickOn) {
   FakeSource src(2);
-  std::vector<std::unique_ptr<Analyzer>> a;
-  a.push_back(std::make_unique<CountingAnalyzer>());
-  a.push_back(std::make_unique<DoublingAnalyzer>());
-  PipelineOptions o;
-  o.sync.start = Timestamp::from_ns(0);
-  auto p = Pipeline::build(o, src.info(), std::move(a));
+  auto p = counter_then_doubler(src);
   ASSERT_TRUE(p) << p.error().message;
   std::vector<int> seen;
   auto st = (*p)->run(src, [&](const MultiFrame&, const BlackboardView& v) -> Status {

@@ -3,30 +3,19 @@
 
 #include "dreamsense/self_calibration/live.hpp"
 
-#include "dreamsense/sim/demo_children.hpp"
 #include "dreamsense/sources/session.hpp"
-#include "dreamsense/testing/demo_cache.hpp"
 
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+
+#include "held_out_session.hpp"
 
 namespace dreamsense::self_calibration {
 namespace {
 
 namespace fs = std::filesystem;
 constexpr int64_t kSameTickNs = 10'000'000;
-
-// The held-out demo child's 20 s session (shared with session_test.cpp's cache).
-fs::path demo_session() {
-  sim::DemoOptions o;
-  o.seed = 502;
-  o.duration_s = 20;
-  o.child = sim::kHeldOutDemoChild;
-  auto dir = testing::cached_demo_session("held_out_child_s502", o);
-  EXPECT_TRUE(dir) << dir.error().to_string();
-  return dir ? *dir : fs::path();
-}
 
 // The session's three cameras as the live ticks would bring them: frames within 10 ms form one
 // tick. `each` gets every tick; reading stops when it returns false.
@@ -47,39 +36,44 @@ void for_each_tick(const fs::path& session, const std::function<bool(const Multi
   if (!tick.frames.empty()) each(tick);
 }
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / (name + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d;
+// A live self-calibration of the held-out child's session with `o` (its work folder fresh).
+std::unique_ptr<LiveSelfCalibration> start_on(const fs::path& session,
+                                              LiveSelfCalibrationOptions& o,
+                                              const std::string& name) {
+  o.wait_when_busy = true;  // every tick_step-th tick searched, as on the recording
+  o.work_dir = fs::temp_directory_path() / (name + std::to_string(::getpid()));
+  fs::remove_all(o.work_dir);
+  auto manifest = sources::read_manifest(session);
+  EXPECT_TRUE(manifest);
+  if (!manifest) return nullptr;
+  auto live = LiveSelfCalibration::start(*manifest, session, o);
+  EXPECT_TRUE(live) << live.error().to_string();
+  return live ? std::move(*live) : nullptr;
 }
 
 TEST(LiveSelfCalibration, ConvergesOnTheOfferedTicksAsOnTheRecordingAndHandsTheFilesOverOnce) {
-  const fs::path session = demo_session();
+  const fs::path session = held_out_child_session();
   ASSERT_FALSE(session.empty());
-  auto manifest = sources::read_manifest(session);
-  ASSERT_TRUE(manifest);
   LiveSelfCalibrationOptions o;
   o.search.enough_frames = 20;
-  o.wait_when_busy = true;  // every 6th tick searched, as the recording's self-calibration does
-  o.work_dir = fresh_dir("ds_live_selfcal_");
-  auto live = LiveSelfCalibration::start(*manifest, session, o);
-  ASSERT_TRUE(live) << live.error().to_string();
+  auto live = start_on(session, o, "ds_live_selfcal_");
+  ASSERT_TRUE(live);
   std::optional<SubjectFiles> handed;
   int ticks = 0, handed_at = -1, handed_again = 0;
   for_each_tick(session, [&](const MultiFrame& tick) {
     ++ticks;
-    if (auto files = (*live)->offer(tick)) {
+    if (auto files = live->offer(tick)) {
       if (handed) ++handed_again;
       handed = files;
       handed_at = ticks;
     }
     return ticks < handed_at + 50 || handed_at < 0;
   });
-  ASSERT_TRUE(handed) << (*live)->status().dump();
+  ASSERT_TRUE(handed) << live->status().dump();
   EXPECT_EQ(handed_again, 0);
   EXPECT_TRUE(fs::exists(handed->face_model));
   EXPECT_TRUE(fs::exists(handed->gaze_model));
-  const nlohmann::json status = (*live)->status();
+  const nlohmann::json status = live->status();
   EXPECT_EQ(status.value("state", ""), "converged");
   EXPECT_EQ(status.value("ticks_skipped_busy", -1), 0);
   EXPECT_EQ(status.value("attempts", 0), 1);
@@ -95,25 +89,21 @@ TEST(LiveSelfCalibration, ConvergesOnTheOfferedTicksAsOnTheRecordingAndHandsTheF
 }
 
 TEST(LiveSelfCalibration, OneCameraDoesNotConvergeAndHandsNothingOver) {
-  const fs::path session = demo_session();
+  const fs::path session = held_out_child_session();
   ASSERT_FALSE(session.empty());
-  auto manifest = sources::read_manifest(session);
-  ASSERT_TRUE(manifest);
   LiveSelfCalibrationOptions o;
   o.search.cameras = {"camera_middle"};  // triangulation needs two
   o.search.max_seconds = 2;
   o.attempts = 2;
-  o.wait_when_busy = true;
-  o.work_dir = fresh_dir("ds_live_selfcal_one_");
-  auto live = LiveSelfCalibration::start(*manifest, session, o);
-  ASSERT_TRUE(live) << live.error().to_string();
+  auto live = start_on(session, o, "ds_live_selfcal_one_");
+  ASSERT_TRUE(live);
   bool handed = false;
   for_each_tick(session, [&](const MultiFrame& tick) {
-    handed = handed || (*live)->offer(tick).has_value();
-    return (*live)->status().value("state", "") == "searching";
+    handed = handed || live->offer(tick).has_value();
+    return live->status().value("state", "") == "searching";
   });
-  (*live)->wait();
-  const nlohmann::json status = (*live)->status();
+  live->wait();
+  const nlohmann::json status = live->status();
   EXPECT_FALSE(handed);
   EXPECT_EQ(status.value("state", ""), "not_converged") << status.dump();
   EXPECT_EQ(status.value("attempts", 0), 2);
@@ -126,7 +116,7 @@ TEST(LiveSelfCalibration, OneCameraDoesNotConvergeAndHandsNothingOver) {
   EXPECT_FALSE(bad.check());
   bad = o;
   bad.work_dir.clear();
-  EXPECT_FALSE(LiveSelfCalibration::start(*manifest, session, bad));
+  EXPECT_FALSE(LiveSelfCalibration::start(*sources::read_manifest(session), session, bad));
 }
 
 }  // namespace

@@ -5,26 +5,21 @@
 
 #include "dreamsense/self_calibration/session.hpp"
 
-#include "dreamsense/sim/demo_children.hpp"
-#include "dreamsense/testing/demo_cache.hpp"
-
 #include <gtest/gtest.h>
+
+#include "held_out_session.hpp"
 
 namespace dreamsense::self_calibration {
 namespace {
 
 TEST(SessionSelfCalibration, RolledSearchFindsATiltedChildsFaceInFewerTicks) {
-  sim::DemoOptions o;
-  o.seed = 502;
-  o.duration_s = 20;
-  o.child = sim::kHeldOutDemoChild;
-  auto dir = testing::cached_demo_session("held_out_child_s502", o);
-  ASSERT_TRUE(dir) << dir.error().to_string();
+  const auto dir = held_out_child_session();
+  ASSERT_FALSE(dir.empty());
   SessionSelfCalibrationOptions upright;
   upright.rolled_search_min_deg = 0;
-  const auto a = self_calibrate_session(*dir, upright);
+  const auto a = self_calibrate_session(dir, upright);
   ASSERT_TRUE(a) << a.error().to_string();
-  const auto b = self_calibrate_session(*dir, SessionSelfCalibrationOptions{});
+  const auto b = self_calibrate_session(dir, SessionSelfCalibrationOptions{});
   ASSERT_TRUE(b) << b.error().to_string();
   EXPECT_TRUE(a->face.converged()) << a->face.reason;
   EXPECT_TRUE(b->face.converged()) << b->face.reason;
