@@ -420,9 +420,10 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       ->default_val(flags->ui_host);
   add_analysis_flags(*cmd, *flags);
   cmd->add_flag("--save-subject", flags->save_subject,
-                "After the session (needs --record): self-calibrate the child's face and eyes "
-                "from the recording and save them as the subject folder (<subjects dir>/<metadata "
-                "subject>, must not exist), so that the next session starts calibrated");
+                "Save the child's self-calibrated face and eyes as the subject folder (<subjects "
+                "dir>/<metadata subject>, must not exist), so that the next session starts "
+                "calibrated: with --record, self-calibrated from the recording after the "
+                "session; without, the live self-calibration's result when it converged");
   cmd->callback([flags, &g, &exit_code] {
     live::LiveAnalysisOptions lo;
     lo.analysis.out_dir = flags->out;
@@ -430,12 +431,14 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
       exit_code = fail(s.error());
       return;
     }
-    if (flags->save_subject && flags->record.empty()) {
+    if (flags->save_subject && flags->record.empty() && flags->subject.subject == "none") {
       exit_code = fail(
-          "live: --save-subject needs --record (the self-calibration reads the "
-          "recording after the session)");
+          "live: --save-subject needs --record or the live self-calibration (not with --subject "
+          "none)");
       return;
     }
+    // Without a recording the live self-calibration's own result is what can be saved.
+    lo.save_live_self_calibration = flags->save_subject && flags->record.empty();
     // The planner knows only analysers: `--set self_calibration.K=V` is for the live
     // self-calibration and --save-subject.
     auto self_calibration_overrides =
@@ -503,7 +506,17 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                      static_cast<unsigned long long>(r->dds->published),
                      static_cast<unsigned long long>(r->dds->failed));
     }
-    if (flags->save_subject) {
+    if (lo.save_live_self_calibration && !g.quiet) {
+      const nlohmann::json c = r->self_calibration.value_or(nlohmann::json::object());
+      if (c.contains("saved_to"))
+        std::fprintf(stderr, "subject saved to %s\n", c["saved_to"].get<std::string>().c_str());
+      else
+        std::fprintf(stderr, "--save-subject: nothing saved (%s)\n",
+                     r->self_calibration ? "the live self-calibration did not converge"
+                                         : "no live self-calibration: the subject has a "
+                                           "calibration folder or model files were given");
+    }
+    if (flags->save_subject && !flags->record.empty()) {
       if (auto s = save_subject_from_recording(lo.analysis, flags->record,
                                                self_calibration_mode(flags->subject),
                                                std::move(self_calibration_overrides), g.quiet);

@@ -105,14 +105,17 @@ TEST(Live, NewChildIsSelfCalibratedDuringTheSessionAndSavedForTheNext) {
            << "}\n";
   }
   config.close();
-  const std::string live = "live --config " + (dir / "live.yaml").string() + " --subjects-dir " +
-                           (dir / "subjects").string();
+  const std::string live_config = "live --config " + (dir / "live.yaml").string();
+  const std::string live = live_config + " --subjects-dir " + (dir / "subjects").string();
   const bool verbose = false;  // the info lines are checked
-  // Without --record, --save-subject is refused before anything starts.
+  // Without --record and without the live self-calibration there is nothing to save: refused
+  // before anything starts.
   const RunResult refused =
-      run(live + " --duration 1 --out " + (dir / "no").string() + " --save-subject", verbose);
+      run(live + " --duration 1 --out " + (dir / "no").string() + " --save-subject --subject none",
+          verbose);
   EXPECT_NE(refused.exit_code, 0);
-  EXPECT_NE(refused.err.find("--save-subject needs --record"), std::string::npos);
+  EXPECT_NE(refused.err.find("--save-subject needs --record or the live self-calibration"),
+            std::string::npos);
   EXPECT_FALSE(fs::exists(dir / "no" / "summary.json"));
 
   // 20 ticks with two cameras (default 60) so that the live self-calibration converges within
@@ -152,6 +155,22 @@ TEST(Live, NewChildIsSelfCalibratedDuringTheSessionAndSavedForTheNext) {
   EXPECT_EQ(again.err.find("no calibration for subject"), std::string::npos) << again.err;
   EXPECT_FALSE(json::parse(slurp(dir / "out2" / "summary.json")).contains("live_self_calibration"));
   EXPECT_NE(again.err.find("nothing saved"), std::string::npos) << again.err;
+
+  // No recording: the live self-calibration's own result is saved.
+  fs::create_directories(dir / "subjects_live");
+  const RunResult unrecorded =
+      run(live_config + " --subjects-dir " + (dir / "subjects_live").string() + " --out " +
+              (dir / "out3").string() +
+              " --duration 9 --save-subject --set self_calibration.enough_frames=20 --set "
+              "self_calibration.live_nice=0",
+          verbose);
+  ASSERT_EQ(unrecorded.exit_code, 0) << unrecorded.err;
+  const fs::path saved_live = dir / "subjects_live" / "new_child";
+  EXPECT_TRUE(fs::exists(saved_live / "face_model.yaml")) << unrecorded.err;
+  EXPECT_TRUE(fs::exists(saved_live / "gaze.yaml")) << unrecorded.err;
+  const json live_summary = json::parse(slurp(dir / "out3" / "summary.json"));
+  EXPECT_EQ(live_summary["live_self_calibration"].value("saved_to", ""), saved_live.string());
+  EXPECT_FALSE(live_summary.contains("self_calibration"));  // no recording was self-calibrated
   fs::remove_all(dir);
 }
 

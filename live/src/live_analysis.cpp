@@ -118,6 +118,13 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
                             ? nlohmann::json(*s.analysis.subject_models_from_ns)
                             : nlohmann::json();
     calibration.reset();  // the search stops
+    if (options.save_live_self_calibration && j.value("state", "") == "converged") {
+      DS_ASSIGN_OR_RETURN(const std::filesystem::path saved,
+                          self_calibration::save_subject_folder(
+                              o.out_dir / "self_calibration", o.plan.subjects_dir,
+                              capture->manifest().metadata, "live configuration"));
+      j["saved_to"] = saved.string();
+    }
     if (!o.out_dir.empty())
       DS_RETURN_IF_ERROR(
           self_calibration::add_self_calibration_to_summary(o.out_dir, j, "live_self_calibration"));

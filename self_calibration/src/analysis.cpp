@@ -129,24 +129,10 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
     if (options.save_subject) {
       auto manifest = sources::read_manifest(o.session_dir);
       if (!manifest) return tl::unexpected(manifest.error());
-      const auto it = manifest->metadata.find("subject");
-      if (it == manifest->metadata.end() || it->second.empty() ||
-          it->second.find('/') != std::string::npos)
-        return make_error(ErrorCode::kInvalidArgument,
-                          "{}: --save-subject needs the session's metadata subject id",
-                          o.session_dir.string());
-      const fs::path target = o.plan.subjects_dir / it->second;
-      if (fs::exists(target))
-        return make_error(ErrorCode::kInvalidArgument,
-                          "{}: subject folder exists; not overwritten by --save-subject",
-                          target.string());
-      std::error_code ec;
-      fs::create_directories(target, ec);
-      for (const char* name : {"face_model.yaml", "gaze.yaml", "self_calibration.json"})
-        if (!ec) fs::copy_file(dir / name, target / name, ec);
-      if (ec) return make_error(ErrorCode::kIoError, "{}: {}", target.string(), ec.message());
+      DS_ASSIGN_OR_RETURN(const fs::path target,
+                          save_subject_folder(dir, o.plan.subjects_dir, manifest->metadata,
+                                              o.session_dir.string()));
       j["saved_to"] = target.string();
-      log::info("self-calibration saved to {}", target.string());
     }
   } else {
     j["face_model"] = "generic_51 (self-calibration did not converge)";
@@ -156,6 +142,27 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
         head_pose::to_string(c.face.status), c.face.reason);
   }
   return j;
+}
+
+Result<fs::path> save_subject_folder(const fs::path& files, const fs::path& subjects_dir,
+                                     const std::map<std::string, std::string>& metadata,
+                                     const std::string& where) {
+  const auto it = metadata.find("subject");
+  if (it == metadata.end() || it->second.empty() || it->second.find('/') != std::string::npos)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "{}: --save-subject needs the session's metadata subject id", where);
+  const fs::path target = subjects_dir / it->second;
+  if (fs::exists(target))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "{}: subject folder exists; not overwritten by --save-subject",
+                      target.string());
+  std::error_code ec;
+  fs::create_directories(target, ec);
+  for (const char* name : {"face_model.yaml", "gaze.yaml", "self_calibration.json"})
+    if (!ec) fs::copy_file(files / name, target / name, ec);
+  if (ec) return make_error(ErrorCode::kIoError, "{}: {}", target.string(), ec.message());
+  log::info("self-calibration saved to {}", target.string());
+  return target;
 }
 
 Status add_self_calibration_to_summary(const fs::path& out_dir, const nlohmann::json& j,

@@ -36,6 +36,9 @@ struct LiveAnalysisOptions {
   self_calibration::SelfCalibrationMode self_calibration =
       self_calibration::SelfCalibrationMode::kWhenNoSubject;
   std::vector<runner::OptionOverride> self_calibration_overrides;  // --set self_calibration.K=V
+  // When the live self-calibration converged: also save it as the subject's folder
+  // (self_calibration::save_subject_folder under plan.subjects_dir; `saved_to` in its status).
+  bool save_live_self_calibration = false;
   // Called once the operator page serves (its URL), and once the capture runs.
   std::function<void(const std::string& url)> on_ui_started;
   std::function<void()> on_capture_started;

@@ -61,6 +61,14 @@ std::vector<runner::OptionOverride> take_self_calibration_overrides(
 Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
                                                    const ForAnalysisOptions& options);
 
+// Copies a converged self-calibration's files (face_model.yaml, gaze.yaml,
+// self_calibration.json in `files`) to subjects_dir/<metadata subject> and returns that folder.
+// Errors (nothing copied): no usable subject id in `metadata` (`where` names the session), the
+// folder exists (never overwritten), a copy that fails.
+Result<std::filesystem::path> save_subject_folder(
+    const std::filesystem::path& files, const std::filesystem::path& subjects_dir,
+    const std::map<std::string, std::string>& metadata, const std::string& where);
+
 // Adds `j` as `key` to OUT/summary.json (atomic rewrite).
 Status add_self_calibration_to_summary(const std::filesystem::path& out_dir,
                                        const nlohmann::json& j,
