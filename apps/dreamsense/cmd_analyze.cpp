@@ -237,6 +237,10 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
         "folder or model files are given), the option is not used",
         self_calibration_overrides.front().key);
   }
+  if (calibration_status)
+    o.report_calibration = [status = *calibration_status] {
+      return self_calibration::report_lines(status);
+    };
   auto r = with_progress(
       "analyse", quiet, [&](const auto& progress) { return runner::analyze_session(o, progress); });
   if (r && calibration_status)

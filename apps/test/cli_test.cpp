@@ -598,6 +598,11 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   EXPECT_EQ(sc["gaze_level"]["applied"].get<bool>(), level == "gaze_fixations") << sc.dump();
   EXPECT_TRUE(fs::exists(root() / "y" / "self_calibration" / "face_model.yaml"));
   EXPECT_NE(r.err.find("self_calibration/face_model.yaml"), std::string::npos) << r.err;
+  // ... and in the report, with its quality.
+  const std::string report = slurp(root() / "y" / "report.html");
+  EXPECT_NE(report.find("<b>Child calibration.</b> self-calibrated from the session"),
+            std::string::npos);
+  EXPECT_NE(report.find("residual"), std::string::npos);
   // The head-fixation level and the full size range at every tick (the baselines) on request;
   // an unknown self-calibration option is an error naming it.
   r = run("analyze " + unknown.string() +
@@ -622,6 +627,9 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   r = run("analyze " + unknown.string() + " --subject none --out " + (root() / "z").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(json::parse(slurp(root() / "z" / "summary.json")).contains("self_calibration"));
+  EXPECT_NE(slurp(root() / "z" / "report.html")
+                .find("<b>Child calibration.</b> generic face model and built-in gaze constants"),
+            std::string::npos);
 }
 
 // `train speech --dataset list` adapts the en-us model to a talker (the five cards utterances of

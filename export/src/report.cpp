@@ -319,6 +319,11 @@ std::string HtmlReport::build(const sources::SessionManifest& m, const ReportCon
                      m.task.empty() ? "" : ", task " + escape(m.task), num(m.frame_rate));
   for (const auto& l : c.summary_lines) h += " " + escape(l) + ".";
   h += "</p>\n";
+  if (!c.calibration_lines.empty()) {
+    h += "<p><b>Child calibration.</b>";
+    for (const auto& l : c.calibration_lines) h += " " + escape(l) + ".";
+    h += "</p>\n";
+  }
   if (approximate)
     h += fmt::format(
         "<p class=\"warn\"><b>Approximate camera intrinsics.</b> This recording has no camera "

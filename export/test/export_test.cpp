@@ -126,6 +126,12 @@ TEST(HtmlReport, HasSummaryAvailabilityAndChartsOfEnabledPrimitivesOnly) {
   EXPECT_NE(html.find("no stream with role child_camera"), std::string::npos);
   EXPECT_EQ(html.find("http"), std::string::npos) << "self-contained";
   EXPECT_EQ(html.find("Approximate camera intrinsics"), std::string::npos);
+  EXPECT_EQ(html.find("Child calibration"), std::string::npos) << "none given, none shown";
+  c.calibration_lines = {"self-calibrated <here>", "residual 1.7 mm RMS"};
+  EXPECT_NE(report.build(m, c).find("<p><b>Child calibration.</b> self-calibrated &lt;here&gt;. "
+                                    "residual 1.7 mm RMS.</p>"),
+            std::string::npos);
+  c.calibration_lines.clear();
   c.input = {{"kind", "video"}, {"approximate_calibration", true}, {"fx_px", 500.0}};
   EXPECT_NE(report.build(m, c).find("Approximate camera intrinsics"), std::string::npos);
 }

@@ -72,6 +72,9 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
       return c->offer(tick);
     };
     if (feed) feed->set_face_model_status([c = calibration.get()] { return c->model_in_use(); });
+    o.report_calibration = [c = calibration.get()] {
+      return self_calibration::report_lines(c->status());
+    };
   }
   g_stop_live = false;
   if (options.stop_on_signals) {
@@ -114,9 +117,6 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
   if (publisher) s.dds = publisher->stats();
   if (calibration) {
     nlohmann::json j = calibration->status();
-    j["used_from_ns"] = s.analysis.subject_models_from_ns
-                            ? nlohmann::json(*s.analysis.subject_models_from_ns)
-                            : nlohmann::json();
     calibration.reset();  // the search stops
     if (options.save_live_self_calibration && j.value("state", "") == "converged") {
       DS_ASSIGN_OR_RETURN(const std::filesystem::path saved,

@@ -137,6 +137,25 @@ std::map<SensorId, CameraModel> child_cameras(const PipelinePlan& plan) {
   return out;
 }
 
+// The report's "Child calibration" paragraph when no self-calibration describes it: the files
+// the plan used, or the generic models. A subject folder is named after the child's subject id,
+// which may be a name: its path is shown only with --include-names.
+std::vector<std::string> calibration_lines(const SubjectFiles& subject, bool include_names) {
+  if (subject.face_model.empty() && subject.gaze_model.empty())
+    return {"generic face model and built-in gaze constants (no calibration of this child)"};
+  if (!include_names)
+    return {
+        "the child's own face model and gaze constants (files in summary.json's pipeline "
+        "notes)"};
+  std::vector<std::string> lines;
+  if (!subject.folder.empty()) lines.push_back("subject folder " + subject.folder.string());
+  lines.push_back("face model " + (subject.face_model.empty() ? std::string("generic")
+                                                              : subject.face_model.string()));
+  lines.push_back("gaze constants " + (subject.gaze_model.empty() ? std::string("built-in")
+                                                                  : subject.gaze_model.string()));
+  return lines;
+}
+
 // A key frame for the report: the selected camera (getFaces' source, else the first child camera
 // in the tick) with the analysis overlay, 480 pixels wide.
 void add_key_frame(exporters::HtmlReport& report, const MultiFrame& tick,
@@ -193,6 +212,7 @@ Result<AnalysisSummary> run_plan(
     shown.metadata.clear();
   }
 
+  const SubjectFiles plan_subject = plan.subject;
   AnalysisSummary summary;
   summary.input = std::move(input);
   for (const auto& a : plan.analyzers) summary.analyzers.emplace_back(a->name());
@@ -326,6 +346,9 @@ Result<AnalysisSummary> run_plan(
     rc.ticks = ps.ticks;
     rc.dropped_frames = ps.sync.dropped_frames();
     rc.wall_seconds = ps.wall_seconds;
+    rc.calibration_lines = options.report_calibration
+                               ? options.report_calibration()
+                               : calibration_lines(plan_subject, options.plan.include_names);
     for (const auto& d : summary.damage)
       if (d.any())
         rc.summary_lines.push_back(fmt::format(

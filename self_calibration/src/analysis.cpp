@@ -165,6 +165,45 @@ Result<fs::path> save_subject_folder(const fs::path& files, const fs::path& subj
   return target;
 }
 
+std::vector<std::string> report_lines(const nlohmann::json& status) {
+  std::vector<std::string> lines;
+  const bool converged = status.value("converged", false);
+  const std::string reason = status.value("reason", std::string());
+  const bool live = status.value("live", false);
+  const std::string state = status.value("state", std::string());
+  if (live && state == "searching") {
+    lines.push_back(
+        "self-calibration during the session: still searching when the session ended, so the "
+        "generic face model and built-in gaze constants throughout");
+  } else if (converged && live) {
+    const auto used = status.find("used_from_ns");
+    lines.push_back(
+        used != status.end() && used->is_number()
+            ? fmt::format("self-calibrated during the session (no calibration recording): the "
+                          "generic face model and gaze constants until {:.1f} s, the child's "
+                          "from then on",
+                          static_cast<double>(used->get<int64_t>()) * 1e-9)
+            : std::string("self-calibrated during the session, after its last tick: the generic "
+                          "face model and gaze constants throughout"));
+  } else if (converged) {
+    lines.push_back(
+        fmt::format("self-calibrated from the session's first {:.0f} s (no calibration "
+                    "recording)",
+                    status.value("seconds_searched", 0.0)));
+  } else {
+    lines.push_back(fmt::format(
+        "self-calibration {} ({}): generic face model and built-in gaze constants",
+        state == "failed" ? "failed" : "did not converge", status.value("status", std::string())));
+  }
+  if (!reason.empty()) lines.push_back(reason);
+  if (converged) lines.push_back(fmt::format("{:.1f} s of CPU", status.value("cpu_s", 0.0)));
+  if (status.contains("error")) lines.push_back("error: " + status.value("error", std::string()));
+  // The folder is named after the child's subject id: summary.json has it, the report not.
+  if (status.contains("saved_to"))
+    lines.push_back("saved as the child's subject folder (summary.json: saved_to)");
+  return lines;
+}
+
 Status add_self_calibration_to_summary(const fs::path& out_dir, const nlohmann::json& j,
                                        const std::string& key) {
   const fs::path path = out_dir / "summary.json";

@@ -56,6 +56,7 @@ struct LiveSelfCalibration::State {
   // Ticks with camera frames offered, handed to the search thread, not searched (it was busy).
   uint64_t ticks_offered = 0, ticks_queued = 0, ticks_skipped = 0;
   bool handed_over = false;
+  std::optional<int64_t> used_from_ns;  // the tick at which the files were handed over
 
   void search_loop();
 };
@@ -170,6 +171,7 @@ std::optional<SubjectFiles> LiveSelfCalibration::offer(const MultiFrame& tick) {
   if (s.handed_over) return std::nullopt;
   if (s.state == "converged") {
     s.handed_over = true;
+    s.used_from_ns = tick.stamp.ns();
     SubjectFiles files;
     files.face_model = s.options.work_dir / "face_model.yaml";
     files.gaze_model = s.options.work_dir / "gaze.yaml";
@@ -222,6 +224,7 @@ nlohmann::json LiveSelfCalibration::status() const {
   if (s.state != "searching") j["cpu_s"] = s.cpu_s;
   if (!s.error.empty()) j["error"] = s.error;
   if (s.state == "converged") j["files"] = s.options.work_dir.string();
+  j["used_from_ns"] = s.used_from_ns ? nlohmann::json(*s.used_from_ns) : nlohmann::json();
   return j;
 }
 

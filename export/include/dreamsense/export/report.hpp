@@ -36,6 +36,9 @@ class EpisodeCollector;
 // What the report says about the run besides the primitives.
 struct ReportContext {
   std::vector<std::string> summary_lines;  // free text (timing)
+  // The child's calibration that head pose and gaze used (subject folder, self-calibration and
+  // its quality, or the generic models): a paragraph of its own.
+  std::vector<std::string> calibration_lines;
   nlohmann::json input;                    // AnalysisSummary::input
   nlohmann::json plan;                     // PipelinePlan::to_json() (not_running, ...)
   std::vector<std::string> analyzers;

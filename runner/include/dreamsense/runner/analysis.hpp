@@ -75,6 +75,11 @@ struct AnalysisOptions {
   // uses_subject_models: head pose, gaze) are planned again with them and replace the running
   // ones from the next tick on (AnalysisSummary::subject_models_from_ns).
   std::function<std::optional<SubjectFiles>(const MultiFrame&)> live_subject_models;
+  // The report's "Child calibration" paragraph, asked for when the report is written: the
+  // self-calibration's status and quality (self_calibration::report_lines; live: as the session
+  // ended). Without it the report names the calibration files the plan used, or the generic
+  // models.
+  std::function<std::vector<std::string>()> report_calibration;
   // live: called once the analysers are built (models loaded), before the first tick; `live
   // --duration` counts from here, so a slow start does not eat the analysed time.
   std::function<void()> on_ready;

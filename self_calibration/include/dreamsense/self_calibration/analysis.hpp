@@ -69,6 +69,11 @@ Result<std::filesystem::path> save_subject_folder(
     const std::filesystem::path& files, const std::filesystem::path& subjects_dir,
     const std::map<std::string, std::string>& metadata, const std::string& where);
 
+// The report's "Child calibration" paragraph (runner::AnalysisOptions::report_calibration) from
+// a self-calibration's status (self_calibrate_for_analysis's, or LiveSelfCalibration::status()):
+// what head pose and gaze used, the quality figures, or why it did not converge.
+std::vector<std::string> report_lines(const nlohmann::json& status);
+
 // Adds `j` as `key` to OUT/summary.json (atomic rewrite).
 Status add_self_calibration_to_summary(const std::filesystem::path& out_dir,
                                        const nlohmann::json& j,

@@ -62,8 +62,9 @@ class LiveSelfCalibration {
   // Blocks until the search is over (converged, given up or failed); for tests and measurements.
   void wait() const;
   // For summary.json: `live` true, `state` (searching, converged, not_converged, failed),
-  // attempts, ticks offered / queued / skipped, the search thread's CPU seconds, and the last
-  // attempt's SessionSelfCalibration::to_json() fields.
+  // `used_from_ns` (the tick offer() handed the files over at, or null), attempts, ticks
+  // offered / queued / skipped, the search thread's CPU seconds, and the last attempt's
+  // SessionSelfCalibration::to_json() fields.
   nlohmann::json status() const;
 
  private:
