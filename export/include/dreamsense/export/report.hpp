@@ -39,8 +39,8 @@ struct ReportContext {
   // The child's calibration that head pose and gaze used (subject folder, self-calibration and
   // its quality, or the generic models): a paragraph of its own.
   std::vector<std::string> calibration_lines;
-  nlohmann::json input;                    // AnalysisSummary::input
-  nlohmann::json plan;                     // PipelinePlan::to_json() (not_running, ...)
+  nlohmann::json input;  // AnalysisSummary::input
+  nlohmann::json plan;   // PipelinePlan::to_json() (not_running, ...)
   std::vector<std::string> analyzers;
   uint64_t ticks = 0;
   uint64_t dropped_frames = 0;
