@@ -14,15 +14,16 @@ function(ds_add_library name)
 endfunction()
 
 # ds_add_test(<name> SOURCES ... DEPS ... [LABELS unit|analyzer|pipeline|dataset] [FIXTURES f]
-#             [COST seconds])
+#             [COST seconds] [RUN_SERIAL])
 # One gtest executable per call; each TEST() becomes a ctest entry carrying the labels. COST (the
 # seconds one of its tests takes, roughly) makes `ctest -j` start those tests first: a clean
 # clone has no timings of an earlier run, and a long test started last leaves a core idle.
+# RUN_SERIAL: its tests run with no other test beside them (real-time tests).
 function(ds_add_test name)
   if(NOT DREAMSENSE_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "COST" "SOURCES;DEPS;LABELS;FIXTURES" ${ARGN})
+  cmake_parse_arguments(ARG "RUN_SERIAL" "COST" "SOURCES;DEPS;LABELS;FIXTURES" ${ARGN})
   if(NOT ARG_LABELS)
     set(ARG_LABELS unit)
   endif()
@@ -51,6 +52,11 @@ function(ds_add_test name)
   endif()
   if(ARG_COST)
     string(APPEND props " COST ${ARG_COST}")
+  endif()
+  # Real-time tests (a live analysis keeps up with its devices or drops ticks): alone on the
+  # machine, so that what they check does not depend on the test that runs beside them.
+  if(ARG_RUN_SERIAL)
+    string(APPEND props " RUN_SERIAL TRUE")
   endif()
   set(script ${CMAKE_CURRENT_BINARY_DIR}/${name}_properties.cmake)
   file(WRITE ${script}

@@ -493,7 +493,7 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
         const nlohmann::json& c = *r->self_calibration;
         std::fprintf(stderr, "  self-calibration during the session: %s%s\n",
                      c.value("state", "").c_str(),
-                     c["used_from_ns"].is_number()
+                     c.value("used_from_ns", nlohmann::json()).is_number()
                          ? fmt::format(" ({:.1f} s of the session searched); the child's "
                                        "models used from then on",
                                        c.value("seconds_searched", 0.0))

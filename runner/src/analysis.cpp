@@ -272,6 +272,7 @@ Result<AnalysisSummary> run_plan(
   };
   // Minute boundaries of the input: the peak memory so far is sampled as each minute ends.
   uint64_t ticks_seen = 0;
+  bool subject_models_replaced = false;  // AnalysisOptions::live_subject_models, once
   auto close_minute = [&summary] {
     if (!summary.per_minute.empty()) summary.per_minute.back().peak_rss_mb = peak_rss_mb();
   };
@@ -303,12 +304,11 @@ Result<AnalysisSummary> run_plan(
       summary.status_counts[primitives::info(r.id).name][primitives::to_string(r.status)]++;
     }
     if (options.on_records) DS_RETURN_IF_ERROR(options.on_records(records));
-    if (options.live_subject_models && replan_subject && !summary.subject_models_from_ns) {
+    if (options.live_subject_models && replan_subject && !subject_models_replaced) {
       if (const auto files = options.live_subject_models(tick)) {
         DS_ASSIGN_OR_RETURN(auto analyzers, replan_subject(*files));
         DS_RETURN_IF_ERROR((*pipeline)->replace_analyzers(std::move(analyzers)));
-        summary.subject_models_from_ns = tick.stamp.ns();
-        summary.subject_models_face_model = files->face_model;
+        subject_models_replaced = true;
         log::info("live: the child's face model and gaze constants are used from {} on ({})",
                   tick.stamp.to_string(), files->face_model.string());
       }

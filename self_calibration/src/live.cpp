@@ -34,6 +34,20 @@ Status LiveSelfCalibrationOptions::check() const {
 }
 
 struct LiveSelfCalibration::State {
+  enum class SearchState { kSearching, kConverged, kNotConverged, kFailed };
+  static const char* name(SearchState s) {
+    switch (s) {
+      case SearchState::kSearching:
+        return "searching";
+      case SearchState::kConverged:
+        return "converged";
+      case SearchState::kNotConverged:
+        return "not_converged";
+      case SearchState::kFailed:
+        return "failed";
+    }
+    return "?";
+  }
   LiveSelfCalibrationOptions options;
   std::map<SensorId, CameraModel> cameras;
   std::thread thread;
@@ -47,7 +61,7 @@ struct LiveSelfCalibration::State {
   mutable std::condition_variable changed;
   std::optional<Tick> pending;
   bool stopping = false;
-  std::string state = "searching";  // searching, converged, not_converged, failed
+  SearchState state = SearchState::kSearching;
   int attempts = 0;
   double cpu_s = 0;
   nlohmann::json last;  // the last finished attempt's to_json()
@@ -55,8 +69,7 @@ struct LiveSelfCalibration::State {
 
   // Ticks with camera frames offered, handed to the search thread, not searched (it was busy).
   uint64_t ticks_offered = 0, ticks_queued = 0, ticks_skipped = 0;
-  bool handed_over = false;
-  std::optional<int64_t> used_from_ns;  // the tick at which the files were handed over
+  std::optional<int64_t> used_from_ns;  // the tick at which the files were handed over, if yet
 
   void search_loop();
 };
@@ -69,7 +82,7 @@ void LiveSelfCalibration::State::search_loop() {
   std::unique_ptr<TickSelfCalibration> search;
   std::optional<int64_t> attempt_first_ns;
   // The search is over: its state, error, last attempt's status.
-  auto end_with = [this](const std::string& s, const std::string& why, nlohmann::json j) {
+  auto end_with = [this](SearchState s, const std::string& why, nlohmann::json j) {
     std::lock_guard lock(mutex);
     if (!j.is_null()) last = std::move(j);
     error = why;
@@ -89,13 +102,13 @@ void LiveSelfCalibration::State::search_loop() {
     }
     if (!search) {
       auto created = TickSelfCalibration::create(cameras, options.search);
-      if (!created) return end_with("failed", created.error().message, {});
+      if (!created) return end_with(SearchState::kFailed, created.error().message, {});
       search = std::move(*created);
       attempt_first_ns = tick.stamp_ns;
     }
     if (auto s = search->add(tick.stamp_ns, tick.frames); !s) {
       log::warn("live self-calibration stopped: {}", s.error().message);
-      return end_with("failed", s.error().message, {});
+      return end_with(SearchState::kFailed, s.error().message, {});
     }
     tick.frames.clear();  // the frames are not held while the face model is fitted
     const double seconds = static_cast<double>(tick.stamp_ns - *attempt_first_ns) * 1e-9;
@@ -112,17 +125,17 @@ void LiveSelfCalibration::State::search_loop() {
     if (c.face.converged()) {
       if (auto s = write_self_calibration(c, options.work_dir); !s) {
         log::warn("live self-calibration: {}", s.error().message);
-        return end_with("failed", s.error().message, std::move(j));
+        return end_with(SearchState::kFailed, s.error().message, std::move(j));
       }
       log::info(
           "live self-calibration converged after {:.1f} s of the session ({} ticks searched, "
           "{:.1f} s CPU): {}",
           seconds, c.ticks_searched, c.cpu_s, c.face.reason);
-      return end_with("converged", "", std::move(j));
+      return end_with(SearchState::kConverged, "", std::move(j));
     }
     log::warn("live self-calibration attempt {} of {} did not converge ({}): {}", attempt,
               options.attempts, head_pose::to_string(c.face.status), c.face.reason);
-    if (attempt >= options.attempts) return end_with("not_converged", "", std::move(j));
+    if (attempt >= options.attempts) return end_with(SearchState::kNotConverged, "", std::move(j));
     {
       std::lock_guard lock(mutex);
       last = std::move(j);
@@ -168,16 +181,15 @@ Result<std::unique_ptr<LiveSelfCalibration>> LiveSelfCalibration::start(
 std::optional<SubjectFiles> LiveSelfCalibration::offer(const MultiFrame& tick) {
   State& s = *state_;
   std::unique_lock lock(s.mutex);
-  if (s.handed_over) return std::nullopt;
-  if (s.state == "converged") {
-    s.handed_over = true;
+  if (s.used_from_ns) return std::nullopt;  // handed over already
+  if (s.state == State::SearchState::kConverged) {
     s.used_from_ns = tick.stamp.ns();
     SubjectFiles files;
     files.face_model = s.options.work_dir / "face_model.yaml";
     files.gaze_model = s.options.work_dir / "gaze.yaml";
     return files;
   }
-  if (s.state != "searching") return std::nullopt;
+  if (s.state != State::SearchState::kSearching) return std::nullopt;
   State::Tick t;
   t.stamp_ns = tick.stamp.ns();
   for (const auto& [id, frame] : tick.frames)
@@ -186,8 +198,8 @@ std::optional<SubjectFiles> LiveSelfCalibration::offer(const MultiFrame& tick) {
   if (s.ticks_offered++ % static_cast<uint64_t>(s.options.search.tick_step) != 0)
     return std::nullopt;
   if (s.options.wait_when_busy)
-    s.changed.wait(lock, [&s] { return !s.pending || s.state != "searching"; });
-  if (s.state != "searching") return std::nullopt;
+    s.changed.wait(lock, [&s] { return !s.pending || s.state != State::SearchState::kSearching; });
+  if (s.state != State::SearchState::kSearching) return std::nullopt;
   if (s.pending) {
     ++s.ticks_skipped;  // the search thread is behind: the waiting tick is kept
     return std::nullopt;
@@ -200,15 +212,18 @@ std::optional<SubjectFiles> LiveSelfCalibration::offer(const MultiFrame& tick) {
 
 std::string LiveSelfCalibration::model_in_use() const {
   std::lock_guard lock(state_->mutex);
-  if (state_->handed_over) return "the child's self-calibrated model";
-  if (state_->state == "not_converged") return "generic model (self-calibration did not converge)";
-  if (state_->state == "failed") return "generic model (self-calibration failed)";
+  if (state_->used_from_ns) return "the child's self-calibrated model";
+  if (state_->state == State::SearchState::kNotConverged)
+    return "generic model (self-calibration did not converge)";
+  if (state_->state == State::SearchState::kFailed)
+    return "generic model (self-calibration failed)";
   return "generic model, self-calibrating";
 }
 
 void LiveSelfCalibration::wait() const {
   std::unique_lock lock(state_->mutex);
-  state_->changed.wait(lock, [this] { return state_->stopping || state_->state != "searching"; });
+  state_->changed.wait(
+      lock, [this] { return state_->stopping || state_->state != State::SearchState::kSearching; });
 }
 
 nlohmann::json LiveSelfCalibration::status() const {
@@ -216,14 +231,14 @@ nlohmann::json LiveSelfCalibration::status() const {
   std::lock_guard lock(s.mutex);
   nlohmann::json j = s.last.is_object() ? s.last : nlohmann::json::object();
   j["live"] = true;
-  j["state"] = s.state;
+  j["state"] = State::name(s.state);
   j["attempts"] = s.attempts;
   j["ticks_offered"] = s.ticks_offered;
   j["ticks_queued"] = s.ticks_queued;
   j["ticks_skipped_busy"] = s.ticks_skipped;
-  if (s.state != "searching") j["cpu_s"] = s.cpu_s;
+  if (s.state != State::SearchState::kSearching) j["cpu_s"] = s.cpu_s;
   if (!s.error.empty()) j["error"] = s.error;
-  if (s.state == "converged") j["files"] = s.options.work_dir.string();
+  if (s.state == State::SearchState::kConverged) j["files"] = s.options.work_dir.string();
   j["used_from_ns"] = s.used_from_ns ? nlohmann::json(*s.used_from_ns) : nlohmann::json();
   return j;
 }

@@ -73,7 +73,7 @@ struct AnalysisOptions {
   // self-calibration, self_calibration/live.hpp), asked for after every tick with the tick's
   // frames. When it returns files, the analysers that use them (AnalyzerFactory::
   // uses_subject_models: head pose, gaze) are planned again with them and replace the running
-  // ones from the next tick on (AnalysisSummary::subject_models_from_ns).
+  // ones from the next tick on (once; logged with the tick's stamp).
   std::function<std::optional<SubjectFiles>(const MultiFrame&)> live_subject_models;
   // The report's "Child calibration" paragraph, asked for when the report is written: the
   // self-calibration's status and quality (self_calibration::report_lines; live: as the session
@@ -119,10 +119,6 @@ struct AnalysisSummary {
   };
   std::map<SensorId, Sensor> sensors;
   std::vector<sources::SessionMarker> markers;  // operator markers, summary.json "markers"
-  // live: the stamp of the tick after which the child's models found during the session were
-  // used (AnalysisOptions::live_subject_models), and their face model file.
-  std::optional<int64_t> subject_models_from_ns;
-  std::filesystem::path subject_models_face_model;
   nlohmann::json to_json() const;
 };
 
