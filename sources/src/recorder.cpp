@@ -153,6 +153,15 @@ Status RecordConfig::check() const {
     if (!audio->calibration.empty() && !regular_file_exists(audio->calibration))
       add(fmt::format("audio: calibration {} not found", audio->calibration.string()));
   }
+  if (robot_audio) {
+    if (!audio)
+      add("robot_audio without audio: the robot's voice is a reference for the microphone "
+          "array's analysers");
+    if (robot_audio->id.empty()) add("robot_audio has no id");
+    if (robot_audio->device.empty()) add("robot_audio has no device");
+    if (!ids.insert(robot_audio->id).second)
+      add(fmt::format("stream id '{}' is used twice", robot_audio->id));
+  }
   if (!speech_grammar.empty() && !regular_file_exists(speech_grammar))
     add(fmt::format("speech_grammar {} not found", speech_grammar.string()));
   if (!voice_enroll.empty() && !folder_exists(voice_enroll))
@@ -173,7 +182,8 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
   }
   const ConfigReader r(file);
   RecordConfig c;
-  DS_TRY(r.only_keys(root, "", {"session", "cameras", "depth_sensors", "skeletons", "audio"}));
+  DS_TRY(r.only_keys(root, "",
+                     {"session", "cameras", "depth_sensors", "skeletons", "audio", "robot_audio"}));
   if (const YAML::Node s = root["session"]; s && !s.IsNull()) {
     DS_TRY(r.only_keys(s, "session",
                        {"name", "participant", "condition", "task", "metadata", "speech_grammar",
@@ -275,6 +285,15 @@ Result<RecordConfig> read_record_config(const fs::path& file) {
     DS_TRY(r.get_path(a, "audio", "calibration", au.calibration));
     c.audio = au;
   }
+  if (const YAML::Node a = root["robot_audio"]; a && !a.IsNull()) {
+    RecordRobotAudioConfig ra;
+    DS_TRY(r.only_keys(a, "robot_audio", {"id", "device", "sample_rate", "channels"}));
+    DS_TRY(r.get(a, "robot_audio", "id", ra.id));
+    DS_TRY(r.get(a, "robot_audio", "device", ra.device));
+    DS_TRY(r.get(a, "robot_audio", "sample_rate", ra.sample_rate));
+    DS_TRY(r.get(a, "robot_audio", "channels", ra.channels));
+    c.robot_audio = ra;
+  }
   if (auto st = c.check(); !st)
     return make_error(st.error().code, "{}: {}", file.string(), st.error().message);
   return c;
@@ -286,7 +305,8 @@ struct LiveCapture::Impl {
   std::vector<std::unique_ptr<CameraSource>> cameras;
   std::vector<std::unique_ptr<UdpSkeletonSource>> skeletons;
   std::vector<std::unique_ptr<DepthSensorSource>> depth_sensors;
-  std::unique_ptr<AlsaAudioSource> audio;
+  // The microphone array, then the robot's voice when configured.
+  std::vector<std::unique_ptr<AlsaAudioSource>> audio;
   std::unique_ptr<SessionWriter> writer;  // when recording
   std::vector<std::thread> pumps;
   // Frames of all devices waiting for next(); the oldest are dropped when the consumer falls
@@ -317,7 +337,7 @@ struct LiveCapture::Impl {
     for (auto& c : cameras) c->stop();
     for (auto& k : skeletons) k->stop();
     for (auto& d : depth_sensors) d->stop();
-    if (audio) audio->stop();
+    for (auto& a : audio) a->stop();
     if (end_now) queue.finish(std::nullopt);
   }
 
@@ -419,17 +439,25 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
     if (!src) return tl::unexpected(src.error());
     m->skeletons.push_back(std::move(*src));
   }
-  if (config.audio) {
+  auto open_audio = [&](const SensorId& id, const std::string& device, int sample_rate,
+                        int channels) -> Status {
     AlsaAudioSourceOptions ao;
-    ao.sensor = config.audio->id;
-    ao.device = config.audio->device;
-    ao.sample_rate = config.audio->sample_rate;
-    ao.channels = config.audio->channels;
+    ao.sensor = id;
+    ao.device = device;
+    ao.sample_rate = sample_rate;
+    ao.channels = channels;
     ao.clock_origin = m->origin;
     auto a = AlsaAudioSource::open(ao);
     if (!a) return tl::unexpected(a.error());
-    m->audio = std::move(*a);
-  }
+    m->audio.push_back(std::move(*a));
+    return ok_status();
+  };
+  if (config.audio)
+    DS_RETURN_IF_ERROR(open_audio(config.audio->id, config.audio->device, config.audio->sample_rate,
+                                  config.audio->channels));
+  if (config.robot_audio)
+    DS_RETURN_IF_ERROR(open_audio(config.robot_audio->id, config.robot_audio->device,
+                                  config.robot_audio->sample_rate, config.robot_audio->channels));
 
   SessionManifest& man = m->manifest;
   man.name = !config.name.empty() ? config.name
@@ -478,15 +506,21 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
       s.calibration = absolute(config.skeletons[i].calibration);
     man.streams.push_back(s);
   }
-  if (m->audio) {
+  for (const auto& a : m->audio) {
+    const SensorDescription d = a->info().sensors.front();  // info() returns a copy
     StreamEntry s;
-    s.id = config.audio->id;
+    s.id = d.id;
     s.kind = SensorKind::kAudio;
     s.encoding = "wav";
-    s.sample_rate = config.audio->sample_rate;
-    s.channels = config.audio->channels;
-    s.rate_hz = m->audio->info().sensors.front().rate_hz;
-    if (!config.audio->calibration.empty()) s.calibration = absolute(config.audio->calibration);
+    s.sample_rate = d.sample_rate;
+    s.channels = d.channels;
+    s.rate_hz = d.rate_hz;
+    const bool robot = config.robot_audio && d.id == config.robot_audio->id;
+    if (!robot && !config.audio->calibration.empty())
+      s.calibration = absolute(config.audio->calibration);
+    // With two audio streams each says what it is (stream_roles would otherwise give the first
+    // the microphone array's role by default and the second none).
+    if (config.robot_audio) s.roles = {robot ? "robot_audio" : "mic_array"};
     man.streams.push_back(s);
   }
   if (!config.speech_grammar.empty())
@@ -525,15 +559,16 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
 
   for (const auto& s : man.streams) m->stats.streams[s.id] = {};
   Impl* raw = m.get();
-  m->running = static_cast<int>(m->cameras.size() + m->skeletons.size() + m->depth_sensors.size()) +
-               (m->audio ? 1 : 0);
+  m->running = static_cast<int>(m->cameras.size() + m->skeletons.size() + m->depth_sensors.size() +
+                                m->audio.size());
   for (size_t i = 0; i < m->cameras.size(); ++i)
     m->pumps.emplace_back([raw, i] { raw->pump(*raw->cameras[i]); });
   for (size_t i = 0; i < m->skeletons.size(); ++i)
     m->pumps.emplace_back([raw, i] { raw->pump(*raw->skeletons[i]); });
   for (size_t i = 0; i < m->depth_sensors.size(); ++i)
     m->pumps.emplace_back([raw, i] { raw->pump(*raw->depth_sensors[i]); });
-  if (m->audio) m->pumps.emplace_back([raw] { raw->pump(*raw->audio); });
+  for (size_t i = 0; i < m->audio.size(); ++i)
+    m->pumps.emplace_back([raw, i] { raw->pump(*raw->audio[i]); });
   return std::unique_ptr<LiveCapture>(new LiveCapture(std::move(m)));
 }
 
@@ -584,10 +619,10 @@ Result<RecordStats> LiveCapture::finish() {
   for (size_t i = 0; i < m.cameras.size(); ++i)
     m.stats.streams[m.manifest.streams[i].id].frames_dropped +=
         m.cameras[i]->stats().dropped_frames;
-  if (m.audio) {
-    auto& s = m.stats.streams[m.manifest.streams.back().id];
-    s.frames_dropped += m.audio->stats().dropped_chunks;
-    s.overruns = m.audio->stats().overruns;
+  for (const auto& a : m.audio) {
+    auto& s = m.stats.streams[a->info().sensors.front().id];
+    s.frames_dropped += a->stats().dropped_chunks;
+    s.overruns = a->stats().overruns;
   }
   for (const auto& [id, s] : m.stats.streams)
     if (s.frames_dropped > 0 || s.overruns > 0)

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <fstream>
 #include <netinet/in.h>
+#include <set>
 #include <sys/socket.h>
 #include <thread>
 #include <unistd.h>
@@ -425,6 +426,70 @@ TEST(LiveCapture, DepthSensorDeliversDepthAndColourAndIsRecorded) {
   auto st = bad.check();
   ASSERT_FALSE(st);
   EXPECT_NE(st.error().message.find("driver must be freenect, openni2 or fake"), std::string::npos);
+}
+
+// The robot's voice as a second ALSA input (docs/recording.md, "The robot's voice"): read with
+// its defaults, and refused where it could not serve as the microphone array's reference.
+TEST(RecordConfig, RobotAudioIsReadAndNeedsTheMicrophoneArray) {
+  TempDir tmp;
+  write_text(tmp.path() / "a.yaml",
+             "audio: {id: mic_array, device: \"hw:1,0\", channels: 4}\n"
+             "robot_audio: {device: \"hw:Loopback,1,0\"}\n");
+  auto c = read_record_config(tmp.path() / "a.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->robot_audio);
+  EXPECT_EQ(c->robot_audio->id, "robot_audio");
+  EXPECT_EQ(c->robot_audio->device, "hw:Loopback,1,0");
+  EXPECT_EQ(c->robot_audio->channels, 1);
+  EXPECT_EQ(c->robot_audio->sample_rate, 16000);
+  const auto expect_error = [&](const std::string& yaml, const std::string& needle) {
+    write_text(tmp.path() / "rec.yaml", yaml);
+    auto bad = read_record_config(tmp.path() / "rec.yaml");
+    ASSERT_FALSE(bad) << yaml;
+    EXPECT_NE(bad.error().message.find(needle), std::string::npos) << bad.error().message;
+  };
+  expect_error("cameras:\n  - {id: a, device: 0}\nrobot_audio: {device: x}\n",
+               "robot_audio without audio");
+  expect_error("audio: {device: a}\nrobot_audio: {id: mic_array, device: x}\n", "used twice");
+  expect_error("audio: {device: a}\nrobot_audio: {channels: 2}\n", "robot_audio has no device");
+  expect_error("audio: {device: a}\nrobot_audio: {device: x, calibration: m.yaml}\n",
+               "robot_audio.calibration: unknown key");
+}
+
+// Both audio inputs are captured, each stream declaring its role in the manifest (which a
+// recording writes as its session.yaml), so the analysers of a live session or of its recording
+// gate the robot's voice. ALSA's "null" device for both: it is not paced (seconds of audio in a
+// millisecond), so nothing is recorded here; a recording's writer would refuse its stamps.
+TEST(LiveCapture, RobotVoiceIsASecondAudioStreamWithItsRole) {
+  RecordConfig c;
+  c.audio = RecordAudioConfig{};
+  c.audio->device = "null";
+  c.robot_audio = RecordRobotAudioConfig{};
+  c.robot_audio->device = "null";
+  auto capture = LiveCapture::open(c);
+  if (!capture && capture.error().message.find("null") != std::string::npos)
+    GTEST_SKIP() << "ALSA 'null' device unavailable: " << capture.error().message;
+  ASSERT_TRUE(capture) << capture.error().message;
+  std::set<SensorId> seen;
+  for (int i = 0; i < 10000 && seen.size() < 2; ++i) {
+    auto f = (*capture)->next();
+    ASSERT_TRUE(f) << f.error().message;
+    ASSERT_NE((*f)->as<AudioChunk>(), nullptr);
+    EXPECT_EQ((*f)->as<AudioChunk>()->channels, (*f)->sensor == "robot_audio" ? 1 : 4);
+    seen.insert((*f)->sensor);
+  }
+  EXPECT_EQ(seen, (std::set<SensorId>{"mic_array", "robot_audio"}));
+  const SessionManifest& m = (*capture)->manifest();
+  ASSERT_NE(m.find("robot_audio"), nullptr);
+  EXPECT_EQ(m.find("robot_audio")->channels, 1);
+  EXPECT_EQ(m.find("mic_array")->channels, 4);
+  auto roles = stream_roles(m);
+  ASSERT_TRUE(roles) << roles.error().message;
+  EXPECT_EQ(roles->at("robot_audio"), std::vector<std::string>{"robot_audio"});
+  EXPECT_EQ(roles->at("mic_array"), std::vector<std::string>{"mic_array"});
+  auto stats = (*capture)->finish();
+  ASSERT_TRUE(stats) << stats.error().message;
+  EXPECT_EQ(stats->streams.count("robot_audio"), 1u);
 }
 
 TEST(RecordConfig, SkeletonInputsAreRead) {

@@ -42,6 +42,18 @@ struct RecordAudioConfig {
   std::filesystem::path calibration;  // microphone geometry YAML, copied to calib/<id>.yaml
 };
 
+// The robot's own voice, captured as the analysers' reference (docs/session_format.md, "The
+// robot's voice"): an ALSA capture of what the robot plays, e.g. a loopback (snd-aloop) or the
+// sound server's monitor of the robot's output. Recorded as a stream with the role robot_audio;
+// the microphone array's stream then declares the role mic_array. The analysers measure the
+// offset between the two devices themselves (within +-1 s), so their start latencies may differ.
+struct RecordRobotAudioConfig {
+  SensorId id = "robot_audio";
+  std::string device;  // ALSA PCM name; required
+  int sample_rate = 16000;
+  int channels = 1;
+};
+
 // Skeletons from an external body tracker over UDP (udp_skeleton_source.hpp).
 struct RecordSkeletonConfig {
   SensorId id = "front.skeleton";  // the body analyser takes the first skeleton stream
@@ -73,7 +85,8 @@ struct RecordConfig {
   std::vector<RecordSkeletonConfig> skeletons;
   std::vector<RecordDepthSensorConfig> depth_sensors;
   std::optional<RecordAudioConfig> audio;
-  Status check() const;  // every problem in one message
+  std::optional<RecordRobotAudioConfig> robot_audio;  // needs `audio`
+  Status check() const;                               // every problem in one message
 };
 
 // Reads the YAML configuration; relative paths are taken from the file's folder. Unknown keys
