@@ -510,6 +510,9 @@ void add_live(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                      static_cast<unsigned long long>(r->dds->published),
                      static_cast<unsigned long long>(r->dds->failed));
     }
+    // A device lost mid-session: the analysis went on without it (stream offline); the exit
+    // status says so.
+    if (auto lost = sources::lost_devices(r->capture); !lost) exit_code = fail(lost.error());
     if (lo.save_live_self_calibration && !g.quiet) {
       const nlohmann::json c = r->self_calibration.value_or(nlohmann::json::object());
       if (c.contains("saved_to"))

@@ -67,6 +67,9 @@ void add_record(CLI::App& app, const GlobalFlags& g, int& exit_code) {
                      static_cast<unsigned long long>(s.overruns));
       std::fprintf(stderr, "recorded %.1f s into %s\n", stats->duration_s, flags->out.c_str());
     }
+    // A device lost mid-session: the recording is complete with what was captured, but a
+    // script must not take it for a full one.
+    if (auto lost = sources::lost_devices(*stats); !lost) exit_code = fail(lost.error());
   });
 }
 

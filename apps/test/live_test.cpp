@@ -64,6 +64,10 @@ TEST(Live, CameraThatRunsOutIsMarkedOfflineAndTheOtherIsStillAnalysed) {
   EXPECT_GT(left["offline_ticks"].get<int>(), 0);
   EXPECT_EQ(middle["status"], "ok") << summary["sensors"].dump();
   EXPECT_NE(err.find("camera_left: no data since"), std::string::npos) << err;
+  // The capture's counts (a video that ends is not a lost device).
+  const json& capture = summary.at("live_capture").at("streams");
+  EXPECT_GT(capture.at("camera_middle").at("frames_captured").get<int>(), 250) << capture.dump();
+  EXPECT_TRUE(capture.at("camera_left").at("lost").is_null()) << capture.dump();
   // The analysis went on after the left camera ended: faces from the middle camera more than a
   // second (offline_after) after the left camera's last frame.
   const int64_t left_end =

@@ -13,6 +13,7 @@
 #include "dreamsense/sources/video_file.hpp"
 
 #include <algorithm>
+#include <fstream>
 #include <sys/resource.h>
 
 namespace dreamsense::runner {
@@ -583,6 +584,32 @@ Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,
   return run_plan(options, std::move(*plan), manifest, capture, po, nullptr, Timestamp::unset(),
                   Timestamp::unset(), fs::path("live"), session_name, {{"kind", "live"}}, nullptr,
                   replan);
+}
+
+Status add_to_summary(const fs::path& out_dir, const std::string& key,
+                      const nlohmann::json& value) {
+  const fs::path path = out_dir / "summary.json";
+  nlohmann::json summary;
+  {
+    std::ifstream in(path);
+    if (!in) return make_error(ErrorCode::kNotFound, "{}: not written", path.string());
+    try {
+      in >> summary;
+    } catch (const nlohmann::json::exception& e) {
+      return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.what());
+    }
+  }
+  summary[key] = value;
+  const fs::path partial = path.string() + ".partial";
+  {
+    std::ofstream f(partial);
+    f << summary.dump(2) << "\n";
+    if (!f) return make_error(ErrorCode::kIoError, "{}: cannot write", partial.string());
+  }
+  std::error_code ec;
+  fs::rename(partial, path, ec);
+  if (ec) return make_error(ErrorCode::kIoError, "{}: {}", path.string(), ec.message());
+  return ok_status();
 }
 
 }  // namespace dreamsense::runner

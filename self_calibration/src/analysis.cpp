@@ -3,6 +3,7 @@
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/perception/options_node.hpp"
+#include "dreamsense/runner/analysis.hpp"
 #include "dreamsense/self_calibration/session.hpp"
 #include "dreamsense/sources/session.hpp"
 
@@ -206,28 +207,7 @@ std::vector<std::string> report_lines(const nlohmann::json& status) {
 
 Status add_self_calibration_to_summary(const fs::path& out_dir, const nlohmann::json& j,
                                        const std::string& key) {
-  const fs::path path = out_dir / "summary.json";
-  nlohmann::json summary;
-  {
-    std::ifstream in(path);
-    if (!in) return make_error(ErrorCode::kNotFound, "{}: not written", path.string());
-    try {
-      in >> summary;
-    } catch (const nlohmann::json::exception& e) {
-      return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), e.what());
-    }
-  }
-  summary[key] = j;
-  const fs::path partial = path.string() + ".partial";
-  {
-    std::ofstream f(partial);
-    f << summary.dump(2) << "\n";
-    if (!f) return make_error(ErrorCode::kIoError, "{}: cannot write", partial.string());
-  }
-  std::error_code ec;
-  fs::rename(partial, path, ec);
-  if (ec) return make_error(ErrorCode::kIoError, "{}: {}", path.string(), ec.message());
-  return ok_status();
+  return runner::add_to_summary(out_dir, key, j);
 }
 
 }  // namespace dreamsense::self_calibration

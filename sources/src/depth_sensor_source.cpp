@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <thread>
 
 #ifdef DREAMSENSE_HAVE_FREENECT
@@ -31,8 +32,13 @@ class DepthDevice {
 // shaded view of the same scene. Paced at `fps` on the steady clock.
 class FakeDevice : public DepthDevice {
  public:
-  FakeDevice(double fps, bool color) : fps_(fps), color_(color) {}
+  // unplug_after > 0: the grab after that many frames fails as an unplugged sensor would.
+  FakeDevice(double fps, bool color, uint64_t unplug_after)
+      : fps_(fps), color_(color), unplug_after_(unplug_after) {}
   Result<Grab> grab() override {
+    if (unplug_after_ > 0 && k_ >= unplug_after_)
+      return make_error(ErrorCode::kIoError, "fake sensor unplugged after {} frames",
+                        unplug_after_);
     const auto period = std::chrono::duration<double>(1.0 / fps_);
     next_ = next_.time_since_epoch().count() == 0 ? std::chrono::steady_clock::now() : next_;
     std::this_thread::sleep_until(next_);
@@ -70,6 +76,7 @@ class FakeDevice : public DepthDevice {
  private:
   double fps_;
   bool color_;
+  uint64_t unplug_after_;
   uint64_t k_ = 0;
   std::chrono::steady_clock::time_point next_{};
 };
@@ -177,6 +184,23 @@ bool depth_driver_available(const std::string& driver) {
   return false;
 }
 
+namespace {
+
+// The fake driver's device: "" (delivers until stopped) or "unplug_after=N" (N >= 1 frames, then
+// fails as an unplugged sensor: what a session does when a device is lost). nullopt: malformed.
+std::optional<uint64_t> fake_unplug_after(const std::string& device) {
+  if (device.empty()) return 0;
+  const std::string key = "unplug_after=";
+  if (device.rfind(key, 0) != 0) return std::nullopt;
+  const std::string n = device.substr(key.size());
+  if (n.empty() || n.size() > 9 || n.find_first_not_of("0123456789") != std::string::npos)
+    return std::nullopt;
+  const uint64_t v = std::stoull(n);
+  return v >= 1 ? std::optional<uint64_t>(v) : std::nullopt;
+}
+
+}  // namespace
+
 Status DepthSensorOptions::check() const {
   std::string bad;
   if (id.empty()) bad += " id must not be empty;";
@@ -186,6 +210,8 @@ Status DepthSensorOptions::check() const {
   if (driver == "freenect" && !device.empty() &&
       device.find_first_not_of("0123456789") != std::string::npos)
     bad += " freenect device must be a sensor index (0, 1, ...);";
+  if (driver == "fake" && !fake_unplug_after(device))
+    bad += " fake device must be empty or unplug_after=N (N >= 1);";
   if (!bad.empty()) return make_error(ErrorCode::kInvalidArgument, "depth sensor '{}':{}", id, bad);
   return ok_status();
 }
@@ -213,7 +239,8 @@ Result<std::unique_ptr<DepthSensorSource>> DepthSensorSource::open(
   auto m = std::make_unique<Impl>();
   m->options = options;
   if (options.driver == "fake")
-    m->device = std::make_unique<FakeDevice>(options.fps, options.color);
+    m->device = std::make_unique<FakeDevice>(options.fps, options.color,
+                                             fake_unplug_after(options.device).value_or(0));
 #ifdef DREAMSENSE_HAVE_FREENECT
   if (options.driver == "freenect")
     m->device = std::make_unique<FreenectDevice>(

@@ -6,6 +6,8 @@
 #include "dreamsense/sources/depth_sensor_source.hpp"
 #include "dreamsense/sources/udp_skeleton_source.hpp"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <yaml-cpp/yaml.h>
 
 #include <chrono>
@@ -349,12 +351,28 @@ struct LiveCapture::Impl {
     stop_all();
   }
 
+  // A device failed mid-session: its streams go offline; the other devices and the recording go
+  // on (a session must not end because one camera was unplugged).
+  void lose(const Source& device, const Error& e) {
+    const double at_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - origin).count();
+    std::vector<std::string> ids;
+    for (const SensorDescription& d : device.info().sensors) ids.push_back(d.id);
+    log::error(
+        "live capture: {} ({:.1f} s into the session): {} offline from here on; the other "
+        "devices go on",
+        e.message, at_s, fmt::join(ids, ", "));
+    std::lock_guard lock(mutex);
+    for (const auto& id : ids)
+      stats.streams[id].lost = fmt::format("{} ({:.1f} s)", e.message, at_s);
+  }
+
   // Moves one device's frames into the recording and the merged queue.
   void pump(Source& source) {
     while (true) {
       auto f = source.next();
       if (!f) {
-        if (!is_end_of_stream(f.error())) fail(f.error());
+        if (!is_end_of_stream(f.error())) lose(source, f.error());
         break;
       }
       Status written = ok_status();
@@ -634,6 +652,17 @@ Result<RecordStats> LiveCapture::finish() {
     return make_error(m.failure->code, "{} (the recording was closed with what was captured)",
                       m.failure->message);
   return m.stats;
+}
+
+Status lost_devices(const RecordStats& stats) {
+  std::vector<std::string> lost;
+  for (const auto& [id, s] : stats.streams)
+    if (!s.lost.empty()) lost.push_back(fmt::format("{}: {}", id, s.lost));
+  if (lost.empty()) return ok_status();
+  return make_error(ErrorCode::kIoError,
+                    "a device failed during the session ({}); the other devices went on and "
+                    "everything captured was kept",
+                    fmt::join(lost, "; "));
 }
 
 Result<RecordStats> record_session(const RecordConfig& config, const fs::path& out_dir,

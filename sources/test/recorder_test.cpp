@@ -5,6 +5,7 @@
 #include "dreamsense/sources/recorder.hpp"
 
 #include "dreamsense/sources/camera_source.hpp"
+#include "dreamsense/sources/depth_sensor_source.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -14,6 +15,7 @@
 #include <atomic>
 #include <chrono>
 #include <fstream>
+#include <map>
 #include <netinet/in.h>
 #include <set>
 #include <sys/socket.h>
@@ -426,6 +428,64 @@ TEST(LiveCapture, DepthSensorDeliversDepthAndColourAndIsRecorded) {
   auto st = bad.check();
   ASSERT_FALSE(st);
   EXPECT_NE(st.error().message.find("driver must be freenect, openni2 or fake"), std::string::npos);
+}
+
+// A device that fails mid-session (the fake sensor unplugged at its 6th grab; the first, at
+// open, gives the sizes) ends only its own streams: the camera goes on to its end, the
+// recording is complete and readable, finish() succeeds and names the lost streams, and
+// lost_devices() is the error the command exits with.
+TEST(LiveCapture, UnpluggedDeviceGoesOfflineAndTheOthersGoOn) {
+  TempDir tmp;
+  RecordConfig c;
+  RecordCameraConfig cam;
+  cam.id = "camera_middle";
+  cam.device = write_video(tmp.path(), 15).string();  // 0.6 s at 25 fps
+  c.cameras.push_back(cam);
+  RecordDepthSensorConfig d;
+  d.id = "front";
+  d.driver = "fake";
+  d.device = "unplug_after=6";
+  c.depth_sensors.push_back(d);
+  const fs::path rec = tmp.path() / "session";
+  auto capture = LiveCapture::open(c, rec);
+  ASSERT_TRUE(capture) << capture.error().message;
+  std::map<SensorId, int> frames;
+  while (true) {
+    auto f = (*capture)->next();
+    if (!f) {
+      EXPECT_TRUE(is_end_of_stream(f.error())) << f.error().message;
+      break;
+    }
+    ++frames[(*f)->sensor];
+  }
+  EXPECT_EQ(frames["camera_middle"], 15) << "the camera goes on after the sensor is lost";
+  EXPECT_EQ(frames["front.depth"], 5);
+  EXPECT_EQ(frames["front.color"], 5);
+  auto stats = (*capture)->finish();
+  ASSERT_TRUE(stats) << stats.error().message;
+  EXPECT_NE(stats->streams.at("front.depth").lost.find("unplugged"), std::string::npos);
+  EXPECT_NE(stats->streams.at("front.color").lost.find("unplugged"), std::string::npos);
+  EXPECT_TRUE(stats->streams.at("camera_middle").lost.empty());
+  const Status lost = lost_devices(*stats);
+  ASSERT_FALSE(lost);
+  EXPECT_NE(lost.error().message.find("front.depth"), std::string::npos) << lost.error().message;
+  EXPECT_EQ(lost.error().message.find("camera_middle"), std::string::npos);
+
+  auto reader = SessionReader::open(rec);
+  ASSERT_TRUE(reader) << reader.error().message;
+  EXPECT_TRUE((*reader)->manifest().complete);
+  std::map<SensorId, int> read;
+  for (auto f = (*reader)->next(); f; f = (*reader)->next()) ++read[(*f)->sensor];
+  EXPECT_EQ(read["camera_middle"], 15);
+  EXPECT_EQ(read["front.depth"], 5);
+
+  DepthSensorOptions o;  // the fake device's setting
+  for (const char* device : {"unplug_after=0", "unplug_after=", "unplug", "3"}) {
+    o.device = device;
+    EXPECT_FALSE(o.check()) << device;
+  }
+  o.device = "unplug_after=12";
+  EXPECT_TRUE(o.check());
 }
 
 // The robot's voice as a second ALSA input (docs/recording.md, "The robot's voice"): read with

@@ -144,4 +144,9 @@ Result<PipelinePlan> plan_session(const AnalysisOptions& options);
 // the capture has ended (LiveCapture::stop()); the caller then calls capture.finish().
 Result<AnalysisSummary> analyze_live(const AnalysisOptions& options, sources::LiveCapture& capture);
 
+// Adds `value` as `key` to OUT/summary.json, written by an analysis (atomic rewrite): for what
+// is known only after it, e.g. the live capture's per-stream counts or a self-calibration.
+Status add_to_summary(const std::filesystem::path& out_dir, const std::string& key,
+                      const nlohmann::json& value);
+
 }  // namespace dreamsense::runner

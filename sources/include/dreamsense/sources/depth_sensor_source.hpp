@@ -6,7 +6,8 @@
 //   openni2   OpenNI2 (Kinect via its driver, Asus Xtion, Orbbec; device = a URI, an .oni
 //             recording, or "" for the first sensor);
 //   fake      a synthetic sensor (a table plane with a ball moving over it), for dry runs and
-//             tests without hardware.
+//             tests without hardware; device "unplug_after=N": after N frames it fails as an
+//             unplugged sensor would (what a session does when a device is lost).
 // Frames are stamped on arrival with the capture clock (steady clock since clock_origin), like
 // the cameras'. A device that does not open is an error naming the driver and the device.
 

@@ -97,12 +97,19 @@ struct RecordStreamStats {
   uint64_t frames_written = 0;  // recorded (when recording) or delivered
   uint64_t frames_dropped = 0;  // by the source because its consumer fell behind
   uint64_t overruns = 0;        // audio samples lost in the device (ALSA overruns)
+  // The device failed during the session (unplugged, driver error): why and when; empty if not.
+  // Its stream is offline from then on; the other devices went on.
+  std::string lost;
 };
 
 struct RecordStats {
   double duration_s = 0;
   std::map<SensorId, RecordStreamStats> streams;
 };
+
+// An error naming the streams whose device failed during the session (RecordStreamStats::lost),
+// for the command's exit status; ok when none did.
+Status lost_devices(const RecordStats& stats);
 
 // The configured devices as one live Source (frames of all devices in arrival order; each
 // stream's stamps increase), optionally recorded on the way through.
@@ -129,8 +136,10 @@ class LiveCapture : public Source {
   LiveCapture(const LiveCapture&) = delete;
   LiveCapture& operator=(const LiveCapture&) = delete;
 
-  // Blocks until a frame arrives. After stop(): the queued frames, then kEndOfStream. A device
-  // or disk failure is returned once, after the frames before it.
+  // Blocks until a frame arrives. After stop(): the queued frames, then kEndOfStream. A disk
+  // failure is returned once, after the frames before it, and ends the capture. A device that
+  // fails (unplugged, driver error) only ends its own streams: logged, counted in finish()'s
+  // RecordStreamStats::lost, while the other devices go on (the analysis sees the stream offline).
   Result<FramePtr> next() override;
   SourceInfo info() const override;
   const SessionManifest& manifest() const;
