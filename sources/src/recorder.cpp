@@ -625,6 +625,11 @@ bool LiveCapture::failed() const {
   return impl_->failure.has_value();
 }
 
+int LiveCapture::devices_running() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->running;
+}
+
 Result<RecordStats> LiveCapture::finish() {
   Impl& m = *impl_;
   if (m.finished) return make_error(ErrorCode::kInvalidArgument, "live capture already finished");
@@ -681,7 +686,8 @@ Result<RecordStats> record_session(const RecordConfig& config, const fs::path& o
     const double elapsed = std::chrono::duration<double>(now - origin).count();
     if (options.duration_s && elapsed >= *options.duration_s) break;
     if (options.stop && options.stop->load()) break;
-    if ((*capture)->failed()) break;
+    // A failed recording, or nothing left to record (every device ended or was lost).
+    if ((*capture)->failed() || (*capture)->devices_running() == 0) break;
     if (options.progress && now - last_progress >= std::chrono::seconds(1)) {
       options.progress(elapsed);
       last_progress = now;

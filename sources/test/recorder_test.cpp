@@ -479,6 +479,17 @@ TEST(LiveCapture, UnpluggedDeviceGoesOfflineAndTheOthersGoOn) {
   EXPECT_EQ(read["camera_middle"], 15);
   EXPECT_EQ(read["front.depth"], 5);
 
+  // record: with its only device lost it ends by itself, not at --duration (or Ctrl-C).
+  RecordConfig only_depth;
+  only_depth.depth_sensors.push_back(d);
+  RecordOptions ro;
+  ro.duration_s = 30;
+  const auto started = std::chrono::steady_clock::now();
+  auto recorded = record_session(only_depth, tmp.path() / "depth_only", ro);
+  ASSERT_TRUE(recorded) << recorded.error().message;
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), 10);
+  EXPECT_FALSE(recorded->streams.at("front.depth").lost.empty());
+
   DepthSensorOptions o;  // the fake device's setting
   for (const char* device : {"unplug_after=0", "unplug_after=", "unplug", "3"}) {
     o.device = device;

@@ -148,7 +148,9 @@ class LiveCapture : public Source {
   // The steady-clock time of stamp 0.
   std::chrono::steady_clock::time_point clock_origin() const;
   void stop();          // thread-safe; ends every device
-  bool failed() const;  // a device or the recording failed (next() reports why)
+  bool failed() const;  // the recording failed (next() reports why)
+  // Devices still delivering (not ended, not lost, not stopped).
+  int devices_running() const;
   // After the end of stream: closes the recording (complete: true) and returns the counts.
   Result<RecordStats> finish();
 
