@@ -168,7 +168,7 @@ TEST(Live, NewChildIsSelfCalibratedDuringTheSessionAndSavedForTheNext) {
   // No recording: the live self-calibration's own result is saved. 12 s (was 9): the three
   // 1280x960 video "cameras" are decoded by OpenCV at 25 fps each beside the analysis and the
   // search, more than 2 cores deliver, so frames arrive in bursts (seconds without a frame of
-  // a camera) and 9 s converged in about 3 of 5 runs on an idle 2-core machine (2026-12-01).
+  // a camera) and 9 s converged in 3 of 6 runs on an idle 2-core machine (2026-12-01).
   fs::create_directories(dir / "subjects_live");
   const RunResult unrecorded =
       run(live_config + " --subjects-dir " + (dir / "subjects_live").string() + " --out " +
