@@ -244,8 +244,7 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
   auto r = with_progress(
       "analyse", quiet, [&](const auto& progress) { return runner::analyze_session(o, progress); });
   if (r && calibration_status)
-    DS_RETURN_IF_ERROR(
-        self_calibration::add_self_calibration_to_summary(o.out_dir, *calibration_status));
+    DS_RETURN_IF_ERROR(runner::add_to_summary(o.out_dir, "self_calibration", *calibration_status));
   return r;
 }
 
@@ -373,7 +372,7 @@ Status save_subject_from_recording(const runner::AnalysisOptions& live,
                       self_calibrate_with_progress(o, mode, std::move(overrides), true, quiet));
   if (!quiet && status.contains("saved_to"))
     std::fprintf(stderr, "subject saved to %s\n", status["saved_to"].get<std::string>().c_str());
-  return self_calibration::add_self_calibration_to_summary(live.out_dir, status);
+  return runner::add_to_summary(live.out_dir, "self_calibration", status);
 }
 
 }  // namespace

@@ -137,8 +137,7 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
                               capture->manifest().metadata, "live configuration"));
       j["saved_to"] = saved.string();
     }
-    DS_RETURN_IF_ERROR(
-        self_calibration::add_self_calibration_to_summary(o.out_dir, j, "live_self_calibration"));
+    DS_RETURN_IF_ERROR(runner::add_to_summary(o.out_dir, "live_self_calibration", j));
     s.self_calibration = std::move(j);
   }
   return s;

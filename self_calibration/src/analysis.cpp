@@ -3,13 +3,10 @@
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/perception/options_node.hpp"
-#include "dreamsense/runner/analysis.hpp"
 #include "dreamsense/self_calibration/session.hpp"
 #include "dreamsense/sources/session.hpp"
 
 #include <fmt/format.h>
-
-#include <fstream>
 
 namespace dreamsense::self_calibration {
 namespace fs = std::filesystem;
@@ -203,11 +200,6 @@ std::vector<std::string> report_lines(const nlohmann::json& status) {
   if (status.contains("saved_to"))
     lines.push_back("saved as the child's subject folder (summary.json: saved_to)");
   return lines;
-}
-
-Status add_self_calibration_to_summary(const fs::path& out_dir, const nlohmann::json& j,
-                                       const std::string& key) {
-  return runner::add_to_summary(out_dir, key, j);
 }
 
 }  // namespace dreamsense::self_calibration

@@ -83,14 +83,19 @@ audio: {id: mic_array, device: "hw:1,0", sample_rate: 16000, channels: 4}
   EXPECT_EQ(c->audio->channels, 4);
 }
 
+// `yaml`, written to DIR/rec.yaml, is refused with a message holding `needle` and the file name.
+void expect_config_error(const fs::path& dir, const std::string& yaml, const std::string& needle) {
+  write_text(dir / "rec.yaml", yaml);
+  auto c = read_record_config(dir / "rec.yaml");
+  ASSERT_FALSE(c) << yaml;
+  EXPECT_NE(c.error().message.find(needle), std::string::npos) << c.error().message;
+  EXPECT_NE(c.error().message.find("rec.yaml"), std::string::npos) << c.error().message;
+}
+
 TEST(RecordConfig, BadConfigurationsNameTheProblem) {
   TempDir tmp;
   const auto expect_error = [&](const std::string& yaml, const std::string& needle) {
-    write_text(tmp.path() / "rec.yaml", yaml);
-    auto c = read_record_config(tmp.path() / "rec.yaml");
-    ASSERT_FALSE(c) << yaml;
-    EXPECT_NE(c.error().message.find(needle), std::string::npos) << c.error().message;
-    EXPECT_NE(c.error().message.find("rec.yaml"), std::string::npos) << c.error().message;
+    expect_config_error(tmp.path(), yaml, needle);
   };
   expect_error("cameras:\n  - {id: a, device: 0, widht: 640}\n", "cameras[0].widht: unknown key");
   expect_error("camera:\n  - {id: a, device: 0}\n", "camera: unknown key");
@@ -514,10 +519,7 @@ TEST(RecordConfig, RobotAudioIsReadAndNeedsTheMicrophoneArray) {
   EXPECT_EQ(c->robot_audio->channels, 1);
   EXPECT_EQ(c->robot_audio->sample_rate, 16000);
   const auto expect_error = [&](const std::string& yaml, const std::string& needle) {
-    write_text(tmp.path() / "rec.yaml", yaml);
-    auto bad = read_record_config(tmp.path() / "rec.yaml");
-    ASSERT_FALSE(bad) << yaml;
-    EXPECT_NE(bad.error().message.find(needle), std::string::npos) << bad.error().message;
+    expect_config_error(tmp.path(), yaml, needle);
   };
   expect_error("cameras:\n  - {id: a, device: 0}\nrobot_audio: {device: x}\n",
                "robot_audio without audio");

@@ -74,9 +74,4 @@ Result<std::filesystem::path> save_subject_folder(
 // what head pose and gaze used, the quality figures, or why it did not converge.
 std::vector<std::string> report_lines(const nlohmann::json& status);
 
-// Adds `j` as `key` to OUT/summary.json (atomic rewrite).
-Status add_self_calibration_to_summary(const std::filesystem::path& out_dir,
-                                       const nlohmann::json& j,
-                                       const std::string& key = "self_calibration");
-
 }  // namespace dreamsense::self_calibration
