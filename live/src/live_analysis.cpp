@@ -117,16 +117,9 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
   if (publisher) s.dds = publisher->stats();
   // The capture's per-stream counts, and what a lost device cost, for whoever reads the analysis
   // later (the terminal only sees them once).
-  if (!o.out_dir.empty()) {
-    nlohmann::json streams = nlohmann::json::object();
-    for (const auto& [id, st] : s.capture.streams)
-      streams[id] = {{"frames_captured", st.frames_written},
-                     {"frames_dropped", st.frames_dropped},
-                     {"overruns", st.overruns},
-                     {"lost", st.lost.empty() ? nlohmann::json() : nlohmann::json(st.lost)}};
-    DS_RETURN_IF_ERROR(runner::add_to_summary(
-        o.out_dir, "live_capture", {{"duration_s", s.capture.duration_s}, {"streams", streams}}));
-  }
+  if (!o.out_dir.empty())
+    DS_RETURN_IF_ERROR(
+        runner::add_to_summary(o.out_dir, "live_capture", sources::capture_report(s.capture)));
   if (calibration) {
     nlohmann::json j = calibration->status();
     calibration.reset();  // the search stops

@@ -11,6 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <chrono>
+#include <fstream>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -310,6 +311,7 @@ struct LiveCapture::Impl {
   // The microphone array, then the robot's voice when configured.
   std::vector<std::unique_ptr<AlsaAudioSource>> audio;
   std::unique_ptr<SessionWriter> writer;  // when recording
+  fs::path record_dir;                    // when recording
   std::vector<std::thread> pumps;
   // Frames of all devices waiting for next(); the oldest are dropped when the consumer falls
   // behind. Finished with the first failure when the last pump ends.
@@ -419,6 +421,7 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
 
   auto m = std::make_unique<Impl>();
   m->until_stopped = capture_options.until_stopped;
+  if (record_dir) m->record_dir = *record_dir;
   // Open every device first: a missing camera is an error before anything is written.
   m->origin = std::chrono::steady_clock::now();
   const auto wall_origin = std::chrono::system_clock::now();
@@ -651,12 +654,29 @@ Result<RecordStats> LiveCapture::finish() {
     if (s.frames_dropped > 0 || s.overruns > 0)
       log::warn("live capture: stream '{}' dropped {} frames/chunks, {} audio overruns", id,
                 s.frames_dropped, s.overruns);
-  if (m.writer)
+  if (m.writer) {
+    // Before close(): a session marked complete has its report. Not writing it costs the report,
+    // not the recording.
+    const fs::path report = m.record_dir / kCaptureReportFile;
+    std::ofstream out(report);
+    out << capture_report(m.stats).dump(2) << '\n';
+    if (!out.flush()) log::warn("{}: cannot write the capture report", report.string());
     if (auto st = m.writer->close(); !st) return tl::unexpected(st.error());
+  }
   if (m.failure)
     return make_error(m.failure->code, "{} (the recording was closed with what was captured)",
                       m.failure->message);
   return m.stats;
+}
+
+nlohmann::json capture_report(const RecordStats& stats) {
+  nlohmann::json streams = nlohmann::json::object();
+  for (const auto& [id, st] : stats.streams)
+    streams[id] = {{"frames_captured", st.frames_written},
+                   {"frames_dropped", st.frames_dropped},
+                   {"overruns", st.overruns},
+                   {"lost", st.lost.empty() ? nlohmann::json() : nlohmann::json(st.lost)}};
+  return {{"duration_s", stats.duration_s}, {"streams", streams}};
 }
 
 Status lost_devices(const RecordStats& stats) {

@@ -9,6 +9,7 @@
 #include "dreamsense/core/log.hpp"
 #include "dreamsense/core/output_file.hpp"
 #include "dreamsense/sources/markers.hpp"
+#include "dreamsense/sources/recorder.hpp"
 
 #include <fmt/format.h>
 #include <sndfile.h>
@@ -118,6 +119,42 @@ void read_stream(const fs::path& dir, const StreamEntry& s, const SessionCheckOp
   c.damage = reader->damage().at(0);
 }
 
+// What the recorder's capture.json says of each stream (recorder.hpp, capture_report): a device
+// lost during the recording, frames dropped on the way to the disk, audio overruns. Notes, not
+// damage: the records on disk are intact. An unreadable report is a session problem, as a bad
+// markers.jsonl is.
+void add_capture_notes(const fs::path& dir, SessionCheck& out) {
+  const fs::path file = dir / kCaptureReportFile;
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return;
+  std::ifstream in(file);
+  const nlohmann::json report = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (report.is_discarded() || !report.is_object() || !report.contains("streams") ||
+      !report["streams"].is_object()) {
+    out.session_problems.push_back(fmt::format(
+        "{}: not a capture report (a JSON object with \"streams\")", kCaptureReportFile));
+    return;
+  }
+  for (StreamCheck& c : out.streams) {
+    const auto it = report["streams"].find(c.stream);
+    if (it == report["streams"].end() || !it->is_object()) continue;
+    const auto count = [&](const char* key) -> uint64_t {
+      const auto v = it->find(key);
+      return v != it->end() && v->is_number_unsigned() ? v->get<uint64_t>() : 0;
+    };
+    if (const auto lost = it->find("lost"); lost != it->end() && lost->is_string())
+      c.notes.push_back(fmt::format("{}: the device was lost during the recording: {}",
+                                    kCaptureReportFile, lost->get<std::string>()));
+    if (const uint64_t n = count("frames_dropped"); n > 0)
+      c.notes.push_back(
+          fmt::format("{}: {} frames/chunks dropped while recording (the disk or "
+                      "the analysis fell behind)",
+                      kCaptureReportFile, n));
+    if (const uint64_t n = count("overruns"); n > 0)
+      c.notes.push_back(fmt::format("{}: {} audio overruns in the device", kCaptureReportFile, n));
+  }
+}
+
 }  // namespace
 
 Status SessionCheckOptions::check() const {
@@ -213,11 +250,14 @@ Result<SessionCheck> check_session_impl(const fs::path& dir, const SessionCheckO
       if (d.torn_tail > 0)
         c.problems.push_back(
             fmt::format("{}: {} record(s) torn at the end (partly written)", s.file, d.torn_tail));
-      if (d.records == 0) c.problems.push_back(fmt::format("{}: no records", s.file));
+      if (d.records == 0 && d.damaged == 0 && d.torn_tail == 0)
+        c.notes.push_back(fmt::format("{}: no records (nothing was recorded; not damage)", s.file));
     }
     if (c.calibration_error) c.problems.push_back(*c.calibration_error);
     out.streams.push_back(std::move(c));
   }
+
+  add_capture_notes(dir, out);
 
   // Across streams: one clock (SessionReader::open checks it when it opens them together).
   if (readable.size() >= 2) {
@@ -304,6 +344,7 @@ nlohmann::json SessionCheck::to_json() const {
                     {"missing_start_ns", c.audio_missing_start_ns},
                     {"missing_end_ns", c.audio_missing_end_ns}};
     s["problems"] = c.problems;
+    s["notes"] = c.notes;
     streams_json.push_back(std::move(s));
   }
   return {{"session", dir.string()},      {"sound", sound()},   {"complete", complete},
@@ -321,7 +362,10 @@ std::string SessionCheck::table(size_t listed) const {
     const std::string span =
         c.first_ns ? fmt::format("{}-{}", seconds(*c.first_ns), seconds(*c.last_ns)) : "-";
     const std::string calib = c.calibration.empty() ? "-" : c.calibration_error ? "BAD" : "ok";
-    const std::string status = c.error ? "UNREADABLE" : c.sound() ? "ok" : "DAMAGED";
+    const std::string status = c.error                 ? "UNREADABLE"
+                               : !c.sound()            ? "DAMAGED"
+                               : c.damage.records == 0 ? "empty"
+                                                       : "ok";
     out += fmt::format("{:<{}}  {:<8} {:<8} {:>8} {:>8} {:>5} {:>5} {:>17}  {:<11} {}\n", c.stream,
                        w, c.kind, c.encoding, c.damage.records, c.damage.damaged,
                        c.damage.torn_tail, c.gap_count, span, calib, status);
@@ -330,6 +374,7 @@ std::string SessionCheck::table(size_t listed) const {
   for (const std::string& p : session_problems) out += fmt::format("session: {}\n", p);
   for (const StreamCheck& c : streams) {
     for (const std::string& p : c.problems) out += fmt::format("{}: {}\n", c.stream, p);
+    for (const std::string& n : c.notes) out += fmt::format("{}: note: {}\n", c.stream, n);
     for (size_t i = 0; i < c.damage.first.size() && i < listed; ++i) {
       const DamagedRecord& d = c.damage.first[i];
       out += fmt::format("{}:   record {}{}: {}\n", c.stream, d.record,

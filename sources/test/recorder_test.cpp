@@ -6,6 +6,7 @@
 
 #include "dreamsense/sources/camera_source.hpp"
 #include "dreamsense/sources/depth_sensor_source.hpp"
+#include "dreamsense/sources/session_check.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -483,6 +484,32 @@ TEST(LiveCapture, UnpluggedDeviceGoesOfflineAndTheOthersGoOn) {
   for (auto f = (*reader)->next(); f; f = (*reader)->next()) ++read[(*f)->sensor];
   EXPECT_EQ(read["camera_middle"], 15);
   EXPECT_EQ(read["front.depth"], 5);
+  // The session keeps what the capture counted, and `check` says it: the loss is a note (the
+  // records on disk are intact), on the lost device's streams only.
+  std::ifstream report_file(rec / kCaptureReportFile);
+  const nlohmann::json report = nlohmann::json::parse(report_file, nullptr, false);
+  ASSERT_TRUE(report.is_object()) << "capture.json";
+  EXPECT_NE(report["streams"]["front.depth"]["lost"].get<std::string>().find("unplugged"),
+            std::string::npos);
+  EXPECT_TRUE(report["streams"]["camera_middle"]["lost"].is_null());
+  EXPECT_EQ(report["streams"]["camera_middle"]["frames_captured"], 15);
+  auto checked = check_session(rec);
+  ASSERT_TRUE(checked) << checked.error().message;
+  EXPECT_TRUE(checked->sound()) << checked->table();
+  for (const StreamCheck& sc : checked->streams) {
+    const bool lost_device = sc.stream.rfind("front.", 0) == 0;
+    ASSERT_EQ(sc.notes.size(), lost_device ? 1u : 0u) << sc.stream << "\n" << checked->table();
+    if (lost_device) {
+      EXPECT_NE(sc.notes[0].find("lost during the recording"), std::string::npos) << sc.notes[0];
+    }
+  }
+  // A damaged report is a session problem, as a damaged markers.jsonl is.
+  std::ofstream(rec / kCaptureReportFile) << "{\"streams\": [";
+  checked = check_session(rec);
+  ASSERT_TRUE(checked);
+  EXPECT_FALSE(checked->sound());
+  ASSERT_EQ(checked->session_problems.size(), 1u);
+  EXPECT_NE(checked->session_problems[0].find("capture.json"), std::string::npos);
 
   // record: with its only device lost it ends by itself, not at --duration (or Ctrl-C).
   RecordConfig only_depth;

@@ -127,6 +127,29 @@ TEST_F(SessionCheckTest, BadSkeletonLineInTheMiddle) {
   EXPECT_EQ(stream(r.after, "skel").delivered, static_cast<uint64_t>(kTicks - 1));
 }
 
+// A stream with no records (a body tracker that never saw anyone) is empty, not damaged.
+TEST_F(SessionCheckTest, EmptyStreamIsANoteNotDamage) {
+  write_file(dir_ / "skel.jsonl", "");
+  const SessionCheck c = check(dir_);
+  EXPECT_TRUE(c.sound()) << c.table();
+  const StreamCheck& s = stream(c, "skel");
+  EXPECT_EQ(s.damage.records, 0u);
+  EXPECT_TRUE(s.problems.empty());
+  ASSERT_EQ(s.notes.size(), 1u);
+  EXPECT_NE(s.notes[0].find("no records"), std::string::npos) << s.notes[0];
+  const std::string table = c.table();
+  EXPECT_NE(table.find("empty"), std::string::npos) << table;
+  EXPECT_NE(table.find("skel: note: skel.jsonl: no records"), std::string::npos) << table;
+  EXPECT_NE(table.find("session is sound"), std::string::npos) << table;
+  EXPECT_EQ(c.to_json()["streams"][2]["notes"].size(), 1u);
+  EXPECT_TRUE(stream(c, "cam").notes.empty());
+  // One line of garbage is a damaged record, not an empty stream.
+  write_file(dir_ / "skel.jsonl", "garbage\n");
+  const SessionCheck d = check(dir_);
+  EXPECT_FALSE(d.sound());
+  EXPECT_TRUE(stream(d, "skel").notes.empty());
+}
+
 TEST_F(SessionCheckTest, TornAudioTail) {
   fs::resize_file(dir_ / "mic.wav", fs::file_size(dir_ / "mic.wav") - 1000);
   const SessionCheck c = check(dir_);

@@ -13,6 +13,8 @@
 #include "dreamsense/core/status.hpp"
 #include "dreamsense/sources/session.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -110,6 +112,14 @@ struct RecordStats {
 // An error naming the streams whose device failed during the session (RecordStreamStats::lost),
 // for the command's exit status; ok when none did.
 Status lost_devices(const RecordStats& stats);
+
+// What the capture counted, kept beside session.yaml by a recording (`record`, `live --record`),
+// so that whoever analyses the session later knows what the terminal said once: a device lost
+// at 12 s, frames dropped because the disk fell behind. `check` reports it.
+inline constexpr const char* kCaptureReportFile = "capture.json";
+// {"duration_s", "streams": {id: {"frames_captured", "frames_dropped", "overruns", "lost"}}}
+// ("lost": the reason and time, or null).
+nlohmann::json capture_report(const RecordStats& stats);
 
 // The configured devices as one live Source (frames of all devices in arrival order; each
 // stream's stamps increase), optionally recorded on the way through.

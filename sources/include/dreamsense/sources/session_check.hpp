@@ -52,7 +52,10 @@ struct StreamCheck {
   // Audio: length (samples / rate) and how much of the other streams' span it misses.
   std::optional<double> audio_seconds;
   int64_t audio_missing_start_ns = 0, audio_missing_end_ns = 0;
-  std::vector<std::string> problems;      // one line each; empty when the stream is sound
+  std::vector<std::string> problems;  // one line each; empty when the stream is sound
+  // Worth saying but not damage, one line each: a stream with no records (a body tracker that
+  // never saw anyone, a device that delivered nothing) is intact, only empty.
+  std::vector<std::string> notes;
   std::vector<int64_t> delivered_stamps;  // for repair (not in the JSON)
   bool sound() const { return problems.empty(); }
 };
