@@ -207,9 +207,19 @@ TEST_F(Cli, DamagedRecordsCostOnlyThemselves) {
     f.write(noise.data(), static_cast<std::streamsize>(noise.size()));
   }
   for (const char* f : {"primitives.jsonl", "summary.json", "report.html"}) fs::remove(s / f);
+  // What the recorder's capture counted (capture.json) travels with the analysis.
+  std::ofstream(s / "capture.json")
+      << R"j({"duration_s": 4.0, "streams": {"camera_left": {"frames_captured": 60,)j"
+      << R"j( "frames_dropped": 2, "overruns": 0, "lost": "unplugged (2.4 s)"}}})j";
   const fs::path out = root() / "damaged_out";
   RunResult r = run("analyze " + s.string() + " --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(slurp(out / "summary.json"))
+                .at("recording_capture")
+                .at("streams")
+                .at("camera_left")
+                .at("lost"),
+            "unplugged (2.4 s)");
   EXPECT_EQ(r.err.find("Corrupt JPEG"), std::string::npos) << "libjpeg's messages are counted";
   const json summary = json::parse(slurp(out / "summary.json"));
   std::map<std::string, json> by_stream;

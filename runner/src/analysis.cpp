@@ -553,9 +553,18 @@ Result<AnalysisSummary> analyze_session(const AnalysisOptions& options,
     if (!markers) return tl::unexpected(markers.error());
     with_markers.markers = [m = std::move(*markers)] { return m; };
   }
-  return run_plan(with_markers, std::move(*plan), manifest, **reader, po, progress, full_info.start,
-                  full_info.end, options.session_dir, session_name,
-                  {{"kind", "session"}, {"name", session_name}}, damage_of);
+  auto summary = run_plan(with_markers, std::move(*plan), manifest, **reader, po, progress,
+                          full_info.start, full_info.end, options.session_dir, session_name,
+                          {{"kind", "session"}, {"name", session_name}}, damage_of);
+  // A recording's capture report (capture.json: a device lost, frames dropped while recording)
+  // travels with its analysis. A bad report costs the report, not the analysis.
+  if (summary && !options.out_dir.empty()) {
+    if (auto report = sources::read_capture_report(options.session_dir); !report)
+      log::warn("{}", report.error().message);
+    else if (*report)
+      DS_RETURN_IF_ERROR(add_to_summary(options.out_dir, "recording_capture", **report));
+  }
+  return summary;
 }
 
 Result<AnalysisSummary> analyze_live(const AnalysisOptions& options,

@@ -679,6 +679,19 @@ nlohmann::json capture_report(const RecordStats& stats) {
   return {{"duration_s", stats.duration_s}, {"streams", streams}};
 }
 
+Result<std::optional<nlohmann::json>> read_capture_report(const fs::path& session_dir) {
+  const fs::path file = session_dir / kCaptureReportFile;
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return std::optional<nlohmann::json>();
+  std::ifstream in(file);
+  nlohmann::json report = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (report.is_discarded() || !report.is_object() || !report.contains("streams") ||
+      !report["streams"].is_object())
+    return make_error(ErrorCode::kCorruptData,
+                      "{}: not a capture report (a JSON object with \"streams\")", file.string());
+  return std::optional<nlohmann::json>(std::move(report));
+}
+
 Status lost_devices(const RecordStats& stats) {
   std::vector<std::string> lost;
   for (const auto& [id, s] : stats.streams)

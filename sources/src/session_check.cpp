@@ -124,20 +124,16 @@ void read_stream(const fs::path& dir, const StreamEntry& s, const SessionCheckOp
 // damage: the records on disk are intact. An unreadable report is a session problem, as a bad
 // markers.jsonl is.
 void add_capture_notes(const fs::path& dir, SessionCheck& out) {
-  const fs::path file = dir / kCaptureReportFile;
-  std::error_code ec;
-  if (!fs::exists(file, ec)) return;
-  std::ifstream in(file);
-  const nlohmann::json report = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (report.is_discarded() || !report.is_object() || !report.contains("streams") ||
-      !report["streams"].is_object()) {
-    out.session_problems.push_back(fmt::format(
-        "{}: not a capture report (a JSON object with \"streams\")", kCaptureReportFile));
+  auto read = read_capture_report(dir);
+  if (!read) {
+    out.session_problems.push_back(read.error().message);
     return;
   }
+  if (!*read) return;
+  const nlohmann::json& report = **read;
   for (StreamCheck& c : out.streams) {
-    const auto it = report["streams"].find(c.stream);
-    if (it == report["streams"].end() || !it->is_object()) continue;
+    const auto it = report.at("streams").find(c.stream);
+    if (it == report.at("streams").end() || !it->is_object()) continue;
     const auto count = [&](const char* key) -> uint64_t {
       const auto v = it->find(key);
       return v != it->end() && v->is_number_unsigned() ? v->get<uint64_t>() : 0;

@@ -120,6 +120,9 @@ inline constexpr const char* kCaptureReportFile = "capture.json";
 // {"duration_s", "streams": {id: {"frames_captured", "frames_dropped", "overruns", "lost"}}}
 // ("lost": the reason and time, or null).
 nlohmann::json capture_report(const RecordStats& stats);
+// The capture report of `session_dir`: nullopt when it has none (not a recording, or recorded
+// before 2026-12-01); an error naming the file when it is not such an object.
+Result<std::optional<nlohmann::json>> read_capture_report(const std::filesystem::path& session_dir);
 
 // The configured devices as one live Source (frames of all devices in arrival order; each
 // stream's stamps increase), optionally recorded on the way through.
