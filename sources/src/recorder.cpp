@@ -1,6 +1,7 @@
 #include "dreamsense/sources/recorder.hpp"
 
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/core/output_file.hpp"
 #include "dreamsense/sources/alsa_audio_source.hpp"
 #include "dreamsense/sources/camera_source.hpp"
 #include "dreamsense/sources/depth_sensor_source.hpp"
@@ -311,7 +312,6 @@ struct LiveCapture::Impl {
   // The microphone array, then the robot's voice when configured.
   std::vector<std::unique_ptr<AlsaAudioSource>> audio;
   std::unique_ptr<SessionWriter> writer;  // when recording
-  fs::path record_dir;                    // when recording
   std::vector<std::thread> pumps;
   // Frames of all devices waiting for next(); the oldest are dropped when the consumer falls
   // behind. Finished with the first failure when the last pump ends.
@@ -421,7 +421,6 @@ Result<std::unique_ptr<LiveCapture>> LiveCapture::open(const RecordConfig& confi
 
   auto m = std::make_unique<Impl>();
   m->until_stopped = capture_options.until_stopped;
-  if (record_dir) m->record_dir = *record_dir;
   // Open every device first: a missing camera is an error before anything is written.
   m->origin = std::chrono::steady_clock::now();
   const auto wall_origin = std::chrono::system_clock::now();
@@ -655,12 +654,14 @@ Result<RecordStats> LiveCapture::finish() {
       log::warn("live capture: stream '{}' dropped {} frames/chunks, {} audio overruns", id,
                 s.frames_dropped, s.overruns);
   if (m.writer) {
-    // Before close(): a session marked complete has its report. Not writing it costs the report,
-    // not the recording.
-    const fs::path report = m.record_dir / kCaptureReportFile;
-    std::ofstream out(report);
-    out << capture_report(m.stats).dump(2) << '\n';
-    if (!out.flush()) log::warn("{}: cannot write the capture report", report.string());
+    // Before close(): a session marked complete has its report. Written as a partial file and
+    // renamed, so a kill mid-write leaves no torn report. Not writing it costs the report, not
+    // the recording.
+    OutputFile report;
+    Status written = report.open(m.writer->dir() / kCaptureReportFile);
+    if (written) written = report.write(capture_report(m.stats).dump(2) + "\n");
+    if (written) written = report.commit();
+    if (!written) log::warn("capture report not written: {}", written.error().message);
     if (auto st = m.writer->close(); !st) return tl::unexpected(st.error());
   }
   if (m.failure)

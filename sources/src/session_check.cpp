@@ -130,10 +130,10 @@ void add_capture_notes(const fs::path& dir, SessionCheck& out) {
     return;
   }
   if (!*read) return;
-  const nlohmann::json& report = **read;
+  const nlohmann::json& streams = (**read).at("streams");
   for (StreamCheck& c : out.streams) {
-    const auto it = report.at("streams").find(c.stream);
-    if (it == report.at("streams").end() || !it->is_object()) continue;
+    const auto it = streams.find(c.stream);
+    if (it == streams.end() || !it->is_object()) continue;
     const auto count = [&](const char* key) -> uint64_t {
       const auto v = it->find(key);
       return v != it->end() && v->is_number_unsigned() ? v->get<uint64_t>() : 0;
@@ -246,7 +246,7 @@ Result<SessionCheck> check_session_impl(const fs::path& dir, const SessionCheckO
       if (d.torn_tail > 0)
         c.problems.push_back(
             fmt::format("{}: {} record(s) torn at the end (partly written)", s.file, d.torn_tail));
-      if (d.records == 0 && d.damaged == 0 && d.torn_tail == 0)
+      if (d.records == 0 && d.torn_tail == 0)  // records counts the damaged ones too
         c.notes.push_back(fmt::format("{}: no records (nothing was recorded; not damage)", s.file));
     }
     if (c.calibration_error) c.problems.push_back(*c.calibration_error);
