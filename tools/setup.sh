@@ -45,6 +45,11 @@ packages=(
 # npm installs the face-api.js weights (below). Debian's npm package only where no npm is on the
 # machine: next to a vendor Node.js (nodesource ships its own npm) apt refuses it as broken.
 command -v npm >/dev/null 2>&1 || packages+=(npm)
+# Re-training the shipped expression network (tools/train_fer_net.py, issue 20) needs PyTorch;
+# building, running and testing do not, so it is opt-in: DREAMSENSE_SETUP_TRAINING=1.
+if [[ ${DREAMSENSE_SETUP_TRAINING:-0} == 1 ]]; then
+  packages+=(python3-torch python3-numpy)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

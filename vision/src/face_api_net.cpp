@@ -238,8 +238,21 @@ struct NetBuilder {
 
 struct FaceApiExpressionNet::Impl : NetBuilder {};
 
-// A blob of the face, padded to a square (zeros, centred, as the package's padToSquare),
-// resized to side x side, RGB, minus the package's mean, / 255.
+cv::Mat face_api_square_input(const cv::Mat& face, int side) {
+  cv::Mat padded = face;
+  const int square = std::max(face.rows, face.cols);
+  if (face.rows != face.cols) {
+    const int top = (square - face.rows) / 2, left = (square - face.cols) / 2;
+    cv::copyMakeBorder(face, padded, top, square - face.rows - top, left, square - face.cols - left,
+                       cv::BORDER_CONSTANT, cv::Scalar::all(0));
+  }
+  if (padded.cols == side) return padded.clone();
+  cv::Mat resized;
+  cv::resize(padded, resized, cv::Size(side, side), 0, 0, cv::INTER_LINEAR);
+  return resized;
+}
+
+// A blob of the face (face_api_square_input), RGB, minus the package's mean, / 255.
 cv::Mat input_blob(const cv::Mat& face, int side) {
   DS_CHECK(!face.empty() && (face.type() == CV_8UC1 || face.type() == CV_8UC3));
   cv::Mat rgb;
@@ -247,17 +260,7 @@ cv::Mat input_blob(const cv::Mat& face, int side) {
     cv::cvtColor(face, rgb, cv::COLOR_GRAY2RGB);
   else
     cv::cvtColor(face, rgb, cv::COLOR_BGR2RGB);
-  const int square = std::max(rgb.rows, rgb.cols);
-  if (rgb.rows != rgb.cols) {
-    const int top = (square - rgb.rows) / 2, left = (square - rgb.cols) / 2;
-    cv::copyMakeBorder(rgb, rgb, top, square - rgb.rows - top, left, square - rgb.cols - left,
-                       cv::BORDER_CONSTANT, cv::Scalar::all(0));
-  }
-  cv::Mat resized;
-  if (rgb.cols != side)
-    cv::resize(rgb, resized, cv::Size(side, side), 0, 0, cv::INTER_LINEAR);
-  else
-    resized = rgb;
+  const cv::Mat resized = face_api_square_input(rgb, side);
   cv::Mat blob({1, 3, side, side}, CV_32F);
   const float mean[3] = {122.782f, 117.001f, 104.298f};
   for (int c = 0; c < 3; ++c) {

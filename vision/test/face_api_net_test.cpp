@@ -150,5 +150,27 @@ TEST(FaceApiNet, CropIsTheLandmarkBoxGrownByTenPercent) {
   EXPECT_TRUE(face_api_crop({}, cv::Size(10, 10)).empty());
 }
 
+// The networks' input pixels, shared with the training tool (fer_crops): a wide face is padded
+// above and below with black, centred; a square face of the input size is only copied.
+TEST(FaceApiNet, SquareInputPadsCentredWithBlackThenResizes) {
+  const cv::Mat wide(2, 4, CV_8UC1, cv::Scalar(200));
+  const cv::Mat out = face_api_square_input(wide, 4);
+  ASSERT_EQ(out.size(), cv::Size(4, 4));
+  for (int x = 0; x < 4; ++x) {
+    EXPECT_EQ(out.at<uint8_t>(0, x), 0);
+    EXPECT_EQ(out.at<uint8_t>(1, x), 200);
+    EXPECT_EQ(out.at<uint8_t>(2, x), 200);
+    EXPECT_EQ(out.at<uint8_t>(3, x), 0);
+  }
+  const cv::Mat big = face_api_square_input(cv::Mat(10, 20, CV_8UC3, cv::Scalar(9, 9, 9)), 5);
+  EXPECT_EQ(big.size(), cv::Size(5, 5));
+  EXPECT_EQ(big.type(), CV_8UC3);
+  EXPECT_EQ(big.at<cv::Vec3b>(2, 2)[0], 9);
+  const cv::Mat same(4, 4, CV_8UC1, cv::Scalar(7));
+  const cv::Mat copy = face_api_square_input(same, 4);
+  EXPECT_NE(copy.data, same.data);
+  EXPECT_EQ(cv::countNonZero(copy != same), 0);
+}
+
 }  // namespace
 }  // namespace dreamsense::vision

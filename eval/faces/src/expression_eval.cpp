@@ -183,11 +183,14 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
     for (const auto& f : *faces) align_ms.push_back(f.align_ms);
     std::string missing_note;
     for (const auto& l : missing) missing_note += (missing_note.empty() ? "" : ", ") + l;
+    // A model with its own (fine-tuned) network names it: the method string alone is the same.
+    const auto& network = model->method().features.face_api_dir;
     report.protocol = fmt::format(
-        "model {} (method {}, trained on {} {} images) tested on every image of {}; faces "
+        "model {} (method {}{}, trained on {} {} images) tested on every image of {}; faces "
         "aligned by cascade + dlib landmarks with crop fallbacks{}",
-        o.model.string(), model->method().name, model->training().items, model->training().dataset,
-        o.dir.string(),
+        o.model.string(), model->method().name,
+        network.empty() ? std::string() : ", own network " + network.lexically_normal().string(),
+        model->training().items, model->training().dataset, o.dir.string(),
         missing.empty()
             ? std::string()
             : fmt::format("; classes the model lacks (counted wrong): {}", missing_note));

@@ -95,7 +95,9 @@ TEST(FacesDataset, CkPlusTrainOnSomeSubjectsTestOnOthers) {
 // FER2013 faces in the wild (issue 20): the shipped model is trained on all of fer2013_public,
 // so testing it there would be in-sample; instead the shipped model's method is
 // cross-validated on a fixed subset (the first kPerClass images of each class in natural order,
-// 5 folds), which checks the method and the crop path on unseen faces.
+// 5 folds), which checks the method and the crop path on unseen faces. The heads are trained on
+// the package's frozen network: the shipped fine-tuned network is cross-validated by
+// tools/train_fer_net.py (PyTorch, too slow for a test).
 TEST(FacesDataset, Fer2013CrossValidationOfTheShippedMethod) {
   constexpr size_t kPerClass = 100;
   const fs::path dir = data_dir("fer2013_public");

@@ -220,6 +220,9 @@ Status ExpressionModel::save(const std::filesystem::path& path) const {
     fs << "train_augment" << method_.train_augment << "test_augment" << method_.test_augment;
     fs << "svm_c" << method_.svm.c << "softmax_l2" << method_.softmax.l2 << "balance_classes"
        << static_cast<int>(method_.softmax.balance_classes);
+    if (!f.face_api_dir.empty())  // relative to the model file, so the pair can move together
+      fs << "face_api_network"
+         << std::filesystem::proximate(f.face_api_dir, path.parent_path()).generic_string();
     fs << "}";
     fs << "labels" << labels_;
     fs << "training"
@@ -278,6 +281,11 @@ Result<ExpressionModel> ExpressionModel::load(const std::filesystem::path& path)
     me.svm.c = static_cast<double>(mn["svm_c"]);
     me.softmax.l2 = static_cast<double>(mn["softmax_l2"]);
     me.softmax.balance_classes = static_cast<int>(mn["balance_classes"]) != 0;
+    // A model with its own (fine-tuned) network names the network's folder beside it; without
+    // it the package's weights (vision::default_face_api_model_dir()).
+    if (const std::string network = static_cast<std::string>(mn["face_api_network"]);
+        !network.empty())
+      f.face_api_dir = path.parent_path() / network;
     if (auto s = me.check(); !s)
       return make_error(ErrorCode::kCorruptData, "{}: {}", where, s.error().message);
     fs["labels"] >> m.labels_;

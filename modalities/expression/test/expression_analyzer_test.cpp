@@ -3,6 +3,7 @@
 // face, per-track smoothing against flicker, and the shipped model loading.
 #include "dreamsense/expression/expression_analyzer.hpp"
 
+#include "dreamsense/expression/expression_model.hpp"
 #include "dreamsense/perception/expression.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/perception/face_tracks.hpp"
@@ -215,6 +216,19 @@ TEST(ExpressionAnalyzer, ShippedModelLoads) {
   EXPECT_TRUE(m->method().features.uses("face_api"));
   EXPECT_TRUE(m->method().features.uses("face_api_box"));
   EXPECT_EQ(m->method().test_jitters().size(), 2u);
+  // Issue 20, third round: the network is fine-tuned (tools/train_fer_net.py) and ships beside
+  // the model; its recognizer needs nothing from the npm package.
+  const auto network = m->method().features.face_api_dir;
+  ASSERT_FALSE(network.empty());
+  EXPECT_TRUE(fs::exists(network / "face_expression_model-weights_manifest.json")) << network;
+  auto recognizer = ExpressionRecognizer::create(*m);
+  ASSERT_TRUE(recognizer) << recognizer.error().message;
+  // Its baseline, the package's network frozen with a head trained on the same faces, stays.
+  auto frozen = ExpressionModel::load(default_expression_model().parent_path() /
+                                      "expression_fer2013_frozen.yaml");
+  ASSERT_TRUE(frozen) << frozen.error().message;
+  EXPECT_TRUE(frozen->method().features.face_api_dir.empty());
+  EXPECT_EQ(frozen->method().name, m->method().name);
   // The CK+ model stays beside it (posed expressions, contempt, no neutral).
   auto ck =
       ExpressionModel::load(default_expression_model().parent_path() / "expression_ckplus48.yaml");

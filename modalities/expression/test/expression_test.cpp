@@ -253,6 +253,46 @@ TEST(ExpressionModel, RecognizerRefusesAModelOfOtherNetworkWeights) {
   EXPECT_EQ(r.error().code, ErrorCode::kUnsupported);
 }
 
+TEST(ExpressionModel, OwnNetworkFolderTravelsWithTheModelFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "ds_expression_network";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "models");
+  auto m = expression_method("face_api");
+  ASSERT_TRUE(m.has_value());
+  m->features.face_api_dir = dir / "nets" / "tuned";
+  cv::Mat x;
+  std::vector<int> y;
+  synthetic_set(*expression_method("lbp_svm"), x, y, 3);
+  x = x.colRange(0, 263).clone();  // the network block's length
+  auto model = ExpressionModel::train(*m, x, y, {"a", "b", "c"}, {}, "0123456789abcdef");
+  ASSERT_TRUE(model.has_value()) << model.error().message;
+  ASSERT_TRUE(model->save(dir / "models" / "m.yaml").has_value());
+  std::ifstream in(dir / "models" / "m.yaml");
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(text.find("face_api_network: \"../nets/tuned\""), std::string::npos) << text;
+  auto back = ExpressionModel::load(dir / "models" / "m.yaml");
+  ASSERT_TRUE(back.has_value()) << back.error().message;
+  EXPECT_EQ(back->method().features.face_api_dir.lexically_normal(),
+            (dir / "nets" / "tuned").lexically_normal());
+  // The named folder is missing: the recognizer's error names the network's manifest there.
+  auto r = ExpressionRecognizer::create(*back);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(r.error().message.find("tuned"), std::string::npos) << r.error().message;
+  // A model without its own network keeps the package's (no key written).
+  auto plain = expression_method("lbp_svm");
+  cv::Mat xs;
+  std::vector<int> ys;
+  synthetic_set(*plain, xs, ys, 3);
+  auto pm = ExpressionModel::train(*plain, xs, ys, {"a", "b", "c"});
+  ASSERT_TRUE(pm.has_value()) << pm.error().message;
+  ASSERT_TRUE(pm->save(dir / "plain.yaml").has_value());
+  auto pback = ExpressionModel::load(dir / "plain.yaml");
+  ASSERT_TRUE(pback.has_value());
+  EXPECT_TRUE(pback->method().features.face_api_dir.empty());
+  std::filesystem::remove_all(dir);
+}
+
 ExpressionPrediction pred(std::vector<float> p) {
   ExpressionPrediction e;
   e.probabilities = p;

@@ -170,6 +170,11 @@ class FaceApiSsdDetector {
   std::unique_ptr<Impl> impl_;
 };
 
+// The networks' input pixels: the face padded to a centred square with black (the package's
+// padToSquare), resized to side x side (bilinear); any channel count. Exposed so training tools
+// (tools/train_fer_net.py via eval/faces/experiments/fer_crops.cpp) see exactly these pixels.
+cv::Mat face_api_square_input(const cv::Mat& face, int side);
+
 // The package's face crop from 68 landmarks (FaceLandmarks.align(): the landmarks' bounding box
 // grown by 10 % of its size on each side), clipped to the image. Empty rect for < 68 points.
 cv::Rect face_api_crop(const std::vector<cv::Point2d>& landmarks, cv::Size image_size);

@@ -40,7 +40,10 @@ struct ExpressionFeatureOptions {
   bool lbp_sqrt = false;  // square root of the normalised histograms (Hellinger)
   vision::HogOptions hog;
   bool face_api_flip = true;
-  std::filesystem::path face_api_dir;  // empty: vision::default_face_api_model_dir()
+  // The network's folder (TF.js manifest + binary); empty: vision::default_face_api_model_dir().
+  // A model file names it (`face_api_network`, relative to the model) when it ships its own
+  // fine-tuned network (tools/train_fer_net.py).
+  std::filesystem::path face_api_dir;
   Status check() const;
   bool uses(const std::string& block) const;
   bool uses_network() const { return uses("face_api") || uses("face_api_box"); }
