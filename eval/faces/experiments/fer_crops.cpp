@@ -6,9 +6,11 @@
 // Layout: "DSFC", int32 version 1, int32 n, int32 side (112); per item int32 label index
 // (kExpressionLabels order), int32 alignment source (vision::AlignedFace::source, -1: no face),
 // then two side x side grey images (uint8, row-major): the eye-aligned crop (face_api block)
-// and the package's landmark box crop (face_api_box block), each padded to a square and
-// resized as the network's input_blob does. The mirror images are not stored (a flip).
+// and the package's landmark box crop (face_api_box block, expression::face_api_box_crop), each
+// padded to a square and resized as the network's input_blob does. The mirror images are not stored
+// (a flip).
 #include "dreamsense/eval/faces/datasets.hpp"
+#include "dreamsense/expression/features.hpp"
 #include "dreamsense/expression/labels.hpp"
 #include "dreamsense/vision/face_api_net.hpp"
 #include "dreamsense/vision/face_crops.hpp"
@@ -18,28 +20,12 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 using namespace dreamsense;
-
-namespace {
-
-// The package's crop of the face (features.cpp's face_api_box_crop, unmirrored).
-cv::Mat box_crop(const cv::Mat& grey, const vision::AlignedFace& f) {
-  if (f.landmarks.size() == static_cast<size_t>(vision::kLandmarkCount68)) {
-    cv::Matx23d inv;
-    cv::invertAffineTransform(f.crop_from_image, inv);
-    const cv::Rect box =
-        vision::face_api_crop(vision::transform_points(inv, f.landmarks), grey.size());
-    if (box.width >= 4 && box.height >= 4) return grey(box).clone();
-  }
-  return vision::resample_face(grey, f, vision::kFaceApiInputPx);
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   if (argc != 4) {
@@ -90,7 +76,8 @@ int main(int argc, char** argv) {
     const cv::Mat aligned = *face ? vision::resample_face(*grey, **face, side)
                                   : vision::face_api_square_input(*grey, side);
     const cv::Mat box =
-        *face ? vision::face_api_square_input(box_crop(*grey, **face), side) : aligned;
+        *face ? vision::face_api_square_input(expression::face_api_box_crop(*grey, **face), side)
+              : aligned;
     for (const cv::Mat& view : {aligned, box}) {
       const cv::Mat c = view.isContinuous() ? view : view.clone();
       out.write(reinterpret_cast<const char*>(c.data), static_cast<std::streamsize>(side * side));

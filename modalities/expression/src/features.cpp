@@ -55,11 +55,6 @@ vision::AlignedFace jitter_face(const cv::Mat& image_grey, const vision::Aligned
   return out;
 }
 
-namespace {
-
-// The package's crop (face_api_crop) of the face's landmarks, mapped back to `image_grey`; a
-// mirrored face (crop_from_image with a reflection) gives the mirrored crop. Without landmarks
-// (or a degenerate box) the eye-aligned crop at the network's size.
 cv::Mat face_api_box_crop(const cv::Mat& image_grey, const vision::AlignedFace& face) {
   if (face.landmarks.size() == static_cast<size_t>(vision::kLandmarkCount68)) {
     cv::Matx23d image_from_crop;
@@ -75,8 +70,6 @@ cv::Mat face_api_box_crop(const cv::Mat& image_grey, const vision::AlignedFace& 
   }
   return vision::resample_face(image_grey, face, vision::kFaceApiInputPx);
 }
-
-}  // namespace
 
 Result<std::vector<FaceJitter>> face_jitters(const std::string& sets) {
   bool flip = false;

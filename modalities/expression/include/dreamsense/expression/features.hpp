@@ -70,6 +70,12 @@ vision::AlignedFace jitter_face(const cv::Mat& image_grey, const vision::Aligned
 // (e.g. flip+rot: 6 jitters). Unknown names are an error.
 Result<std::vector<FaceJitter>> face_jitters(const std::string& sets);
 
+// The `face_api_box` view's pixels: the package's crop (vision::face_api_crop) of the face's
+// landmarks, cut from `image_grey` (the image `face` was aligned from); mirrored when `face`'s
+// crop_from_image is. Without landmarks or with a degenerate box: the eye-aligned crop at the
+// network's input size. Public so training tools see exactly the analyser's crop.
+cv::Mat face_api_box_crop(const cv::Mat& image_grey, const vision::AlignedFace& face);
+
 // Not thread-safe (the network): one per thread.
 class ExpressionFeatureExtractor {
  public:
