@@ -18,6 +18,10 @@ model) small rotations, zooms, shifts and contrast/brightness changes of the inp
 with frozen blocks, shifts of their output maps.
 
   train_fer_net.py CROPS.bin --cv 5 [--seed 12]       cross-validation: baseline vs fine-tuned
+      [--save-probs P.npz] [--fold-seed S]            every tested face's class probabilities
+                                                      (baseline and fine-tuned, face and
+                                                      mirror) for comparing combinations;
+                                                      folds of another seed than --seed
   train_fer_net.py CROPS.bin --out-dir D --model Y    train on every face, write the network
                                                       (TF.js manifest + float32 binary in D) and
                                                       the expression model Y that uses it
@@ -259,19 +263,23 @@ def fit_softmax(x, y, l2, iters=300):
 
 
 @torch.no_grad()
-def predict(model, maps, batch=256):
-    """Class probabilities averaged over the face and its mirror image."""
+def predict_each(model, maps, batch=32):
+    """Class probabilities of the face and of its mirror image: N x 2 (mirror) x 7."""
     model.eval()
     probs = []
     for i in range(0, maps.shape[0], batch):
         m = maps[i:i + batch]
-        p = sum(F.softmax(model(m[:, k]), dim=1) for k in range(2)) / 2
-        probs.append(p)
+        probs.append(torch.stack([F.softmax(model(m[:, k]), dim=1) for k in range(2)], 1))
     return torch.cat(probs)
 
 
+def predict(model, maps):
+    """Class probabilities averaged over the face and its mirror image."""
+    return predict_each(model, maps).mean(1)
+
+
 @torch.no_grad()
-def all_features(model, maps, batch=256):
+def all_features(model, maps, batch=32):
     """Standardisation-free features (B x 2 mirror x 526)."""
     model.eval()
     out = []
@@ -443,6 +451,9 @@ def main():
     ap.add_argument("--first-folds", type=int, default=0,
                     help="run only the first N folds of the cross-validation (quick comparisons)")
     ap.add_argument("--seed", type=int, default=12)
+    ap.add_argument("--fold-seed", type=int,
+                    help="seed of the cross-validation folds (default: --seed), so that models "
+                         "trained with other seeds can be compared and averaged on the same folds")
     ap.add_argument("--frozen", type=int, default=0, help="dense blocks kept as the package's")
     ap.add_argument("--epochs", type=int, default=12)
     ap.add_argument("--batch", type=int, default=64)
@@ -461,6 +472,7 @@ def main():
     ap.add_argument("--out-dir")
     ap.add_argument("--model")
     ap.add_argument("--json")
+    ap.add_argument("--save-probs", help="with --cv: .npz of every tested face's probabilities")
     args = ap.parse_args()
     if not args.cv and not (args.out_dir and args.model):
         ap.error("give --cv K, or --out-dir and --model")
@@ -480,25 +492,30 @@ def main():
         f"{time.time() - t0:.0f} s")
 
     if args.cv:
-        rng = np.random.RandomState(args.seed)
+        rng = np.random.RandomState(args.seed if args.fold_seed is None else args.fold_seed)
         fold = np.empty(len(labels), dtype=np.int64)
         fold[rng.permutation(len(labels))] = np.arange(len(labels)) % args.cv
-        p_base = torch.zeros(len(labels), 7)
-        p_tuned = torch.zeros(len(labels), 7)
+        p_base = torch.zeros(len(labels), 2, 7)
+        p_tuned = torch.zeros(len(labels), 2, 7)
         run = range(args.cv if not args.first_folds else min(args.cv, args.first_folds))
         for k in run:
             tr, te = np.where(fold != k)[0], np.where(fold == k)[0]
             t0 = time.time()
             b, m = train(base_state, maps[tr], y[tr], args, log)
-            p_base[te] = predict(b, maps[te])
-            p_tuned[te] = predict(m, maps[te])
-            log(f"fold {k + 1}/{args.cv}: baseline {accuracy(p_base[te], y[te]):.3f} "
-                f"fine-tuned {accuracy(p_tuned[te], y[te]):.3f} ({time.time() - t0:.0f} s)")
+            p_base[te] = predict_each(b, maps[te])
+            p_tuned[te] = predict_each(m, maps[te])
+            log(f"fold {k + 1}/{args.cv}: baseline {accuracy(p_base[te].mean(1), y[te]):.3f} "
+                f"fine-tuned {accuracy(p_tuned[te].mean(1), y[te]):.3f} "
+                f"({time.time() - t0:.0f} s)")
         result = {"folds": args.cv, "seed": args.seed, "faces": len(labels),
                   "settings": {k: v for k, v in vars(args).items()
-                               if k not in ("crops", "json", "out_dir", "model")}}
+                               if k not in ("crops", "json", "out_dir", "model", "save_probs")}}
         tested = torch.from_numpy(np.isin(fold, list(run)))
         result["faces_tested"] = int(tested.sum())
+        if args.save_probs:  # per face and mirror, for comparing test-time combinations
+            np.savez_compressed(args.save_probs, fold=fold, label=labels, source=sources,
+                                baseline=p_base.numpy(), fine_tuned=p_tuned.numpy())
+        p_base, p_tuned = p_base.mean(1), p_tuned.mean(1)
         for name, p in (("baseline", p_base), ("fine_tuned", p_tuned)):
             p, yt = p[tested], y[tested]
             pred = p.argmax(1)
