@@ -54,7 +54,6 @@ int main(int argc, char** argv) {
   const int header[4] = {0x43465344 /* "DSFC" */, 1, static_cast<int>(items->size()), side};
   out.write(reinterpret_cast<const char*>(header), sizeof header);
   cv::setNumThreads(1);
-  const cv::Mat blank(side, side, CV_8UC1, cv::Scalar::all(0));
   for (size_t i = 0; i < items->size(); ++i) {
     const auto& it = (*items)[i];
     auto grey = vision::read_grey_image(it.path);
