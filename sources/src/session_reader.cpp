@@ -53,7 +53,10 @@ constexpr int64_t kMaxFirstStampSpreadNs = 10'000'000'000LL;
 // the same libjpeg and then swaps the channels in a scalar loop; that swap cost more than the
 // decoding itself (1280x960: 12.7 ms -> 7.6 ms per frame). Returns false (`out` unspecified) for
 // anything else (not YCbCr or grey, a libjpeg error): the caller then uses cv::imdecode, so
-// unusual or broken frames behave exactly as before.
+// unusual or broken frames behave exactly as before. Either way the size the frame's header
+// declares is compared with the stream's first (kWrongSize, `declared` set): decoders allocate the
+// declared size before they read the data, so a damaged header declaring 30000x30000 pixels
+// would otherwise cost gigabytes (libFuzzer's out-of-memory in fuzz.session_stream, 2026-12-01).
 struct JpegErrorManager {
   jpeg_error_mgr pub;
   std::jmp_buf jump;
@@ -68,12 +71,15 @@ struct JpegErrorManager {
 // here they are only counted (num_warnings) and the frame is reported as damaged.
 void jpeg_silent_output(j_common_ptr /*cinfo*/) {}
 
-enum class JpegDecode { kDecoded, kDamaged, kNotHandled };
+enum class JpegDecode { kDecoded, kDamaged, kNotHandled, kWrongSize };
 
-JpegDecode decode_jpeg_direct(const std::vector<uchar>& data, cv::Mat* out) {
+JpegDecode decode_jpeg_direct(const std::vector<uchar>& data, cv::Size expected, cv::Mat* out,
+                              cv::Size* declared) {
 #ifndef JCS_EXTENSIONS  // plain libjpeg (not libjpeg-turbo) has no BGR output: cv::imdecode
   (void)data;
+  (void)expected;
   (void)out;
+  (void)declared;
   return JpegDecode::kNotHandled;
 #else
   if (data.size() < 4 || data[0] != 0xFF || data[1] != 0xD8) return JpegDecode::kDamaged;
@@ -88,8 +94,17 @@ JpegDecode decode_jpeg_direct(const std::vector<uchar>& data, cv::Mat* out) {
   }
   jpeg_create_decompress(&cinfo);
   jpeg_mem_src(&cinfo, data.data(), static_cast<unsigned long>(data.size()));
-  if (jpeg_read_header(&cinfo, TRUE) != JPEG_HEADER_OK ||
-      !((cinfo.num_components == 3 && cinfo.jpeg_color_space == JCS_YCbCr) ||
+  if (jpeg_read_header(&cinfo, TRUE) != JPEG_HEADER_OK) {
+    jpeg_destroy_decompress(&cinfo);
+    return JpegDecode::kNotHandled;
+  }
+  if (cv::Size(static_cast<int>(cinfo.image_width), static_cast<int>(cinfo.image_height)) !=
+      expected) {
+    *declared = {static_cast<int>(cinfo.image_width), static_cast<int>(cinfo.image_height)};
+    jpeg_destroy_decompress(&cinfo);
+    return JpegDecode::kWrongSize;
+  }
+  if (!((cinfo.num_components == 3 && cinfo.jpeg_color_space == JCS_YCbCr) ||
         (cinfo.num_components == 1 && cinfo.jpeg_color_space == JCS_GRAYSCALE))) {
     jpeg_destroy_decompress(&cinfo);
     return JpegDecode::kNotHandled;
@@ -508,7 +523,10 @@ class IndexedReader : public StreamReader {
     }
     if (entry_.encoding == "png16") return decode_png16(e, stamp, buffer);
     cv::Mat image;
-    const JpegDecode direct = decode_jpeg_direct(buffer, &image);
+    cv::Size declared;
+    const JpegDecode direct =
+        decode_jpeg_direct(buffer, {entry_.width, entry_.height}, &image, &declared);
+    if (direct == JpegDecode::kWrongSize) return wrong_size(e, declared.width, declared.height);
     if (direct == JpegDecode::kDamaged)
       return make_error(ErrorCode::kCorruptData,
                         "{}: corrupt: frame {} (offset {}) holds corrupt JPEG data", entry_.file,
@@ -524,10 +542,8 @@ class IndexedReader : public StreamReader {
       return make_error(ErrorCode::kCorruptData,
                         "{}: corrupt: frame {} (offset {}) does not decode", entry_.file, e.frame,
                         e.offset);
-    if (image.cols != entry_.width || image.rows != entry_.height)
-      return make_error(ErrorCode::kCorruptData,
-                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, e.frame,
-                        image.cols, image.rows, entry_.width, entry_.height);
+    if (image.size() != cv::Size(entry_.width, entry_.height))
+      return wrong_size(e, image.cols, image.rows);
     if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3))
       return make_error(ErrorCode::kUnsupported, "{}: frame {}: unsupported image type {}",
                         entry_.file, e.frame, image.type());
@@ -543,8 +559,38 @@ class IndexedReader : public StreamReader {
     int64_t stamp_ns = 0;
     uint64_t offset = 0, size = 0;
   };
+  // Sizes as a header declares them (PNG: 32-bit unsigned).
+  tl::unexpected<Error> wrong_size(const Entry& e, int64_t width, int64_t height) const {
+    return make_error(ErrorCode::kCorruptData, "{}: frame {} is {}x{}, session.yaml declares {}x{}",
+                      entry_.file, e.frame, width, height, entry_.width, entry_.height);
+  }
+  // PNG's first chunk is IHDR (13 bytes: width, height big-endian, bit depth, colour type, ...),
+  // right after the signature that open() checked. Read before decoding, see decode_jpeg_direct.
+  Status check_png16_header(const Entry& e, const std::vector<uchar>& png) const {
+    const auto big_endian = [&](size_t at) {
+      return (uint32_t{png[at]} << 24) | (uint32_t{png[at + 1]} << 16) |
+             (uint32_t{png[at + 2]} << 8) | uint32_t{png[at + 3]};
+    };
+    constexpr size_t kIhdrEnd = 8 + 8 + 13;
+    if (png.size() < kIhdrEnd || big_endian(8) != 13 || std::memcmp(&png[12], "IHDR", 4) != 0)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: corrupt: frame {} (offset {}) does not decode (no PNG header, IHDR)",
+                        entry_.file, e.frame, e.offset);
+    const uint32_t width = big_endian(16), height = big_endian(20);
+    const int bit_depth = png[24], colour_type = png[25];
+    if (bit_depth != 16 || colour_type != 0)
+      return make_error(ErrorCode::kCorruptData,
+                        "{}: corrupt: frame {} (offset {}) is not a 16-bit grey PNG (bit depth {}, "
+                        "colour type {})",
+                        entry_.file, e.frame, e.offset, bit_depth, colour_type);
+    if (width != static_cast<uint32_t>(entry_.width) ||
+        height != static_cast<uint32_t>(entry_.height))
+      return wrong_size(e, width, height);
+    return ok_status();
+  }
   Result<FramePtr> decode_png16(const Entry& e, Timestamp stamp,
                                 const std::vector<uchar>& buffer) const {
+    if (auto header = check_png16_header(e, buffer); !header) return tl::unexpected(header.error());
     cv::Mat depth;
     try {
       depth = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
@@ -560,10 +606,8 @@ class IndexedReader : public StreamReader {
                         "{}: corrupt: frame {} (offset {}) is not a 16-bit grey PNG (decodes to "
                         "OpenCV type {})",
                         entry_.file, e.frame, e.offset, depth.type());
-    if (depth.cols != entry_.width || depth.rows != entry_.height)
-      return make_error(ErrorCode::kCorruptData,
-                        "{}: frame {} is {}x{}, session.yaml declares {}x{}", entry_.file, e.frame,
-                        depth.cols, depth.rows, entry_.width, entry_.height);
+    if (depth.size() != cv::Size(entry_.width, entry_.height))
+      return wrong_size(e, depth.cols, depth.rows);
     DepthImage d;
     d.depth_mm = depth;
     return make_frame(entry_.id, stamp, e.sequence, std::move(d));

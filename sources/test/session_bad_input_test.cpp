@@ -220,6 +220,23 @@ TEST_F(SessionBadInput, CorruptJpegBytesCostThatFrame) {
   EXPECT_TEXT_HAS(r.damage.first[0].what, "cam.mjpg: corrupt: frame 3");
 }
 
+TEST_F(SessionBadInput, HugeSizeInAJpegHeaderCostsThatFrameBeforeDecoding) {
+  // Frame 0's start-of-frame marker (FF C0..C2: length, precision, height, width) declares
+  // 30000x30000: refused from the header; decoding would first allocate 2.7 GB.
+  std::string data = read_file(dir_ / "cam.mjpg");
+  size_t sof = std::string::npos;
+  for (char kind : {'\xC0', '\xC1', '\xC2'})
+    sof = std::min(sof, data.find(std::string{'\xFF', kind}));
+  ASSERT_NE(sof, std::string::npos);
+  data.replace(sof + 5, 4, std::string("\x75\x30\x75\x30", 4));
+  write_file(dir_ / "cam.mjpg", data);
+  const StreamReadBack r = read_stream(dir_, "cam");
+  EXPECT_EQ(r.stamps.size(), 9u);
+  ASSERT_EQ(r.damage.damaged, 1u);
+  EXPECT_TEXT_HAS(r.damage.first[0].what,
+                  "cam.mjpg: frame 0 is 30000x30000, session.yaml declares 64x48");
+}
+
 TEST_F(SessionBadInput, CorruptJpegMarkerCostsThatFrame) {
   // Overwrite the first bytes of frame 0: no SOI marker, found at open.
   {

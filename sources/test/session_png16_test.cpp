@@ -342,6 +342,18 @@ TEST_F(Png16BadInput, MissingSignatureCostsThatFrame) {
                       std::to_string(index_[2].size) + " bytes) is not a PNG");
 }
 
+TEST_F(Png16BadInput, HugeSizeInTheHeaderCostsThatFrameBeforeDecoding) {
+  // Frame 4's IHDR declares 30000x30000 (big-endian at bytes 16-23): refused from the header, as
+  // the stream's 64x48 is not what it declares; decoding would first allocate 1.8 GB (the
+  // out-of-memory of fuzz.session_stream, 2026-12-01).
+  overwrite(index_[4].offset + 16, std::string("\x00\x00\x75\x30\x00\x00\x75\x30", 8));
+  const DepthReadBack r = read_depth(dir_, {.allow_damaged = true});
+  EXPECT_EQ(r.frames, (std::vector<int>{0, 1, 2, 3, 5, 6, 7, 8, 9}));
+  ASSERT_EQ(r.damage.damaged, 1u);
+  EXPECT_TEXT_HAS(r.damage.first[0].what,
+                  "depth.depth: frame 4 is 30000x30000, session.yaml declares 64x48");
+}
+
 TEST_F(Png16BadInput, IndexOffsetNotAtAFrameCostsThatFrame) {
   // An index line that points into the middle of a frame: no signature there.
   replace_in_file(dir_ / "depth.idx", "," + std::to_string(index_[7].offset) + ",",
