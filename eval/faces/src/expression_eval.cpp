@@ -185,11 +185,15 @@ Result<EvalReport> run_expression_eval(const ExpressionEvalOptions& o, const Pro
     for (const auto& l : missing) missing_note += (missing_note.empty() ? "" : ", ") + l;
     // A model with its own (fine-tuned) network names it: the method string alone is the same.
     const auto& network = model->method().features.face_api_dir;
+    // So does a second network mixed in (xception_weight).
+    const double second = model->method().xception_weight;
     report.protocol = fmt::format(
-        "model {} (method {}{}, trained on {} {} images) tested on every image of {}; faces "
+        "model {} (method {}{}{}, trained on {} {} images) tested on every image of {}; faces "
         "aligned by cascade + dlib landmarks with crop fallbacks{}",
         o.model.string(), model->method().name,
         network.empty() ? std::string() : ", own network " + network.lexically_normal().string(),
+        second > 0 ? fmt::format(", mixed with O. Arriaga's FER2013 network, weight {}", second)
+                   : std::string(),
         model->training().items, model->training().dataset, o.dir.string(),
         missing.empty()
             ? std::string()

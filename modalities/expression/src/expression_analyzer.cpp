@@ -112,7 +112,8 @@ class ExpressionAnalyzer : public Analyzer {
 }  // namespace
 
 std::filesystem::path default_expression_model() {
-  return std::filesystem::path(DREAMSENSE_EXPRESSION_MODEL_DIR) / "expression_fer2013.yaml";
+  return std::filesystem::path(DREAMSENSE_EXPRESSION_MODEL_DIR) /
+         "expression_fer2013_xception.yaml";
 }
 
 double auto_recognize_interval_s(const ExpressionModel& model) {

