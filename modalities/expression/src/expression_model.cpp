@@ -1,6 +1,7 @@
 #include "dreamsense/expression/expression_model.hpp"
 
 #include "dreamsense/core/file_storage_check.hpp"
+#include "dreamsense/expression/labels.hpp"
 #include "dreamsense/vision/face_api_net.hpp"
 
 #include <opencv2/core.hpp>
@@ -17,6 +18,16 @@ constexpr const char* kFormat = "dreamsense-expression-model";
 
 const char* to_string(ClassifierKind k) {
   return k == ClassifierKind::kOneVsRestSvm ? "one_vs_rest_svm" : "softmax";
+}
+
+// `p` with its label, index and confidence set from its probabilities (the most probable).
+ExpressionPrediction with_top_label(ExpressionPrediction p,
+                                    const std::vector<std::string>& labels) {
+  p.index = static_cast<int>(std::max_element(p.probabilities.begin(), p.probabilities.end()) -
+                             p.probabilities.begin());
+  p.label = labels[static_cast<size_t>(p.index)];
+  p.confidence = p.probabilities[static_cast<size_t>(p.index)];
+  return p;
 }
 
 }  // namespace
@@ -167,11 +178,7 @@ ExpressionPrediction ExpressionModel::predict(std::vector<float> features) const
   if (!standardizer_.empty()) standardizer_.apply(features);
   ExpressionPrediction p;
   p.probabilities = vision::softmax(classifier_.scores(features));
-  p.index = static_cast<int>(std::max_element(p.probabilities.begin(), p.probabilities.end()) -
-                             p.probabilities.begin());
-  p.label = labels_[static_cast<size_t>(p.index)];
-  p.confidence = p.probabilities[static_cast<size_t>(p.index)];
-  return p;
+  return with_top_label(std::move(p), labels_);
 }
 
 ExpressionPrediction ExpressionModel::predict(std::vector<float> features,
@@ -180,11 +187,7 @@ ExpressionPrediction ExpressionModel::predict(std::vector<float> features,
   const ExpressionPrediction q = predict(std::move(mirrored));
   for (size_t k = 0; k < p.probabilities.size(); ++k)
     p.probabilities[k] = 0.5f * (p.probabilities[k] + q.probabilities[k]);
-  p.index = static_cast<int>(std::max_element(p.probabilities.begin(), p.probabilities.end()) -
-                             p.probabilities.begin());
-  p.label = labels_[static_cast<size_t>(p.index)];
-  p.confidence = p.probabilities[static_cast<size_t>(p.index)];
-  return p;
+  return with_top_label(std::move(p), labels_);
 }
 
 ExpressionPrediction ExpressionModel::predict(std::vector<std::vector<float>> variants) const {
@@ -197,11 +200,7 @@ ExpressionPrediction ExpressionModel::predict(std::vector<std::vector<float>> va
     for (size_t k = 0; k < q.probabilities.size(); ++k) p.probabilities[k] += q.probabilities[k];
   }
   for (float& x : p.probabilities) x /= static_cast<float>(variants.size());
-  p.index = static_cast<int>(std::max_element(p.probabilities.begin(), p.probabilities.end()) -
-                             p.probabilities.begin());
-  p.label = labels_[static_cast<size_t>(p.index)];
-  p.confidence = p.probabilities[static_cast<size_t>(p.index)];
-  return p;
+  return with_top_label(std::move(p), labels_);
 }
 
 Status ExpressionModel::save(const std::filesystem::path& path) const {
@@ -352,15 +351,11 @@ Result<ExpressionRecognizer> ExpressionRecognizer::create(ExpressionModel model)
 ExpressionRecognizer::ExpressionRecognizer(ExpressionModel m, ExpressionFeatureExtractor e,
                                            std::shared_ptr<vision::FerXceptionNet> xception)
     : model_(std::move(m)), extractor_(std::move(e)), xception_(std::move(xception)) {
-  // The network's FER2013 folder names against the project's labels (labels.hpp).
-  const auto same = [](const std::string& project, const std::string& fer) {
-    return project == fer || (project == "anger" && fer == "angry") ||
-           (project == "sadness" && fer == "sad");
-  };
+  // The network's FER2013 class names in the project's spelling (labels.hpp).
   for (const std::string& label : model_.labels()) {
     int index = -1;
     for (size_t k = 0; k < vision::kFerXceptionLabels.size(); ++k)
-      if (same(label, vision::kFerXceptionLabels[k])) index = static_cast<int>(k);
+      if (canonical_label(vision::kFerXceptionLabels[k]) == label) index = static_cast<int>(k);
     xception_index_.push_back(index);
   }
 }
@@ -387,11 +382,7 @@ ExpressionPrediction ExpressionRecognizer::recognize(const cv::Mat& image_grey,
     p.probabilities[k] =
         (1 - w) * p.probabilities[k] + (x >= 0 ? w * second[static_cast<size_t>(x)] : 0.f);
   }
-  p.index = static_cast<int>(std::max_element(p.probabilities.begin(), p.probabilities.end()) -
-                             p.probabilities.begin());
-  p.label = model_.labels()[static_cast<size_t>(p.index)];
-  p.confidence = p.probabilities[static_cast<size_t>(p.index)];
-  return p;
+  return with_top_label(std::move(p), model_.labels());
 }
 
 }  // namespace dreamsense::expression
