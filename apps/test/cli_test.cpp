@@ -613,6 +613,12 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   EXPECT_NE(report.find("<b>Child calibration.</b> self-calibrated from the session"),
             std::string::npos);
   EXPECT_NE(report.find("residual"), std::string::npos);
+  // The anatomical eyeballs learn their sideways bias from fixations on the robot (gaze.yaml
+  // turns it on); summary.json reports the value applied at the last gaze.
+  EXPECT_NE(slurp(root() / "y" / "self_calibration" / "gaze.yaml").find("fixation_yaw: 1"),
+            std::string::npos);
+  ASSERT_TRUE(summary.contains("gaze_fixation_yaw_deg")) << summary.dump();
+  EXPECT_TRUE(summary["gaze_fixation_yaw_deg"].is_number()) << summary.dump();
   // The head-fixation level and the full size range at every tick (the baselines) on request;
   // an unknown self-calibration option is an error naming it.
   r = run("analyze " + unknown.string() +
@@ -636,7 +642,12 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   // `--subject none` keeps the generic model and does not self-calibrate.
   r = run("analyze " + unknown.string() + " --subject none --out " + (root() / "z").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_FALSE(json::parse(slurp(root() / "z" / "summary.json")).contains("self_calibration"));
+  const json generic = json::parse(slurp(root() / "z" / "summary.json"));
+  EXPECT_FALSE(generic.contains("self_calibration"));
+  // Built-in gaze constants: nothing is learnt.
+  EXPECT_TRUE(generic["gaze_fixation_yaw_deg"].is_null() ||
+              generic["gaze_fixation_yaw_deg"].get<double>() == 0)
+      << generic.dump();
   EXPECT_NE(slurp(root() / "z" / "report.html")
                 .find("<b>Child calibration.</b> generic face model and built-in gaze constants"),
             std::string::npos);

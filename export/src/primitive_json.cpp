@@ -52,6 +52,7 @@ struct ValueJson {
             {"phi_deg", v.both.phi_deg},
             {"camera", v.camera},
             {"method", v.method},
+            {"fixation_yaw_deg", v.fixation_yaw_deg},
             {"right", v.right ? ray(*v.right) : json(nullptr)},
             {"left", v.left ? ray(*v.left) : json(nullptr)}};
   }
@@ -236,6 +237,7 @@ PrimitiveValue parse_value(PrimitiveId id, const json& v) {
       if (!v.at("left").is_null()) e.left = eye_ray(v["left"]);
       e.camera = v.at("camera").get<std::string>();
       e.method = v.at("method").get<std::string>();
+      e.fixation_yaw_deg = v.value("fixation_yaw_deg", 0.0);  // written since 2026-12-02
       return e;
     }
     case P::kGetEyes: {

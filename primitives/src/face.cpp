@@ -128,6 +128,7 @@ Answer<EyeGazeValue> get_eye_gaze(const PrimitiveContext& ctx, const EyeQuery& q
   if (e.left.valid) v.left = eye_ray(e.left);
   v.camera = e.camera;
   v.method = e.method;
+  v.fixation_yaw_deg = e.fixation_yaw_deg;
   a.value = std::move(v);
   return a;
 }

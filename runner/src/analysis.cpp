@@ -8,6 +8,7 @@
 #include "dreamsense/export/primitive_json.hpp"
 #include "dreamsense/export/report.hpp"
 #include "dreamsense/export/writers.hpp"
+#include "dreamsense/primitives/values.hpp"
 #include "dreamsense/sources/recorder.hpp"
 #include "dreamsense/sources/session.hpp"
 #include "dreamsense/sources/video_file.hpp"
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <fstream>
 #include <sys/resource.h>
+#include <variant>
 
 namespace dreamsense::runner {
 namespace fs = std::filesystem;
@@ -103,6 +105,8 @@ nlohmann::json AnalysisSummary::to_json() const {
           {"per_minute", minutes},
           {"sensors", sensor_json},
           {"markers", markers_json},
+          {"gaze_fixation_yaw_deg", gaze_fixation_yaw_deg ? nlohmann::json(*gaze_fixation_yaw_deg)
+                                                          : nlohmann::json(nullptr)},
           {"outputs", outs},
           {"input", input}};
 }
@@ -303,6 +307,8 @@ Result<AnalysisSummary> run_plan(
         r.confidence.reset();
       }
       summary.status_counts[primitives::info(r.id).name][primitives::to_string(r.status)]++;
+      if (const auto* gaze = std::get_if<primitives::EyeGazeValue>(&r.value); gaze && r.ok())
+        summary.gaze_fixation_yaw_deg = gaze->fixation_yaw_deg;
     }
     if (options.on_records) DS_RETURN_IF_ERROR(options.on_records(records));
     if (options.live_subject_models && replan_subject && !subject_models_replaced) {

@@ -55,6 +55,7 @@ Status apply_overrides(const std::vector<runner::OptionOverride>& overrides,
   DS_RETURN_IF_ERROR(node.get("rolled_search_min_deg", so.rolled_search_min_deg));
   DS_RETURN_IF_ERROR(node.get("gaze_level", so.gaze_level.enabled));
   DS_RETURN_IF_ERROR(node.get("gaze_level_eye_yaw", so.gaze_level.eye_yaw));
+  DS_RETURN_IF_ERROR(node.get("gaze_level_follow_yaw", so.gaze_level.follow_yaw_bias));
   DS_RETURN_IF_ERROR(node.get("gaze_level_max_yaw_deg", so.gaze_level.max_yaw_deg));
   DS_RETURN_IF_ERROR(node.get("gaze_level_max_pitch_deg", so.gaze_level.max_pitch_deg));
   DS_RETURN_IF_ERROR(node.get("gaze_level_min_ticks", so.gaze_level.min_ticks));

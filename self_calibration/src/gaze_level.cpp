@@ -2,6 +2,7 @@
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/statistics.hpp"
+#include "dreamsense/gaze/fixation_yaw.hpp"
 #include "dreamsense/gaze/gaze_estimator.hpp"
 #include "dreamsense/head_pose/head_pose_estimator.hpp"
 
@@ -22,11 +23,6 @@ std::optional<cv::Vec3d> model_centroid(const head_pose::FaceModel3d& m, int fro
     s += cv::Vec3d(p.x, p.y, p.z);
   }
   return s * (1.0 / (to - from + 1));
-}
-
-// Yaw and pitch (deg) of a head-frame direction: forward is -z, y points down.
-cv::Vec2d yaw_pitch_deg(const cv::Vec3d& d) {
-  return {std::atan2(d[0], -d[2]) * kDegreesPerRadian, std::atan2(d[1], -d[2]) * kDegreesPerRadian};
 }
 
 // How squarely a fit's face looks into its camera (1 = facing it).
@@ -76,8 +72,8 @@ std::optional<cv::Vec2d> fixation_offset(const head_pose::MultiViewLandmarks& ti
     }
   origin *= 1.0 / eyes;
   const cv::Matx33d head_from_world = head.world_from_head.t();
-  return yaw_pitch_deg(head_from_world * (target_world_m - origin)) -
-         yaw_pitch_deg(head_from_world * g->both.direction_world);
+  return gaze::head_yaw_pitch_deg(head_from_world * (target_world_m - origin)) -
+         gaze::head_yaw_pitch_deg(head_from_world * g->both.direction_world);
 }
 
 }  // namespace
@@ -123,7 +119,7 @@ GazeLevel level_from_gaze_fixations(const head_pose::FaceModel3d& model,
                                     const GazeLevelOptions& options) {
   GazeLevel out;
   if (!options.enabled || ticks.size() != pupils.size()) return out;
-  double c = 0, shift_x = 0;
+  double c = 0, shift_x = 0, yaw_centre = 0;
   for (int round = 0; round < options.rounds; ++round) {
     head_pose::HeadPoseEstimatorOptions pose_options;
     pose_options.model = pitched(model, c);
@@ -133,24 +129,37 @@ GazeLevel level_from_gaze_fixations(const head_pose::FaceModel3d& model,
     gaze_options.method = gaze::GazeMethod::kEyeball;
     gaze_options.right_eyeball = eyeballs->first;
     gaze_options.left_eyeball = eyeballs->second;
-    std::vector<double> facing_yaw, facing_pitch;
-    out.ticks_with_gaze = 0;
-    for (size_t i = 0; i < ticks.size(); ++i) {
-      const auto offset =
-          fixation_offset(ticks[i], pupils[i], pose_options, gaze_options, target_world_m);
-      if (!offset) continue;
-      ++out.ticks_with_gaze;
-      if (std::abs((*offset)[0]) <= options.max_yaw_deg &&
-          std::abs((*offset)[1]) <= options.max_pitch_deg) {
-        facing_yaw.push_back((*offset)[0]);
-        facing_pitch.push_back((*offset)[1]);
-      }
+    std::vector<cv::Vec2d> offsets;
+    for (size_t i = 0; i < ticks.size(); ++i)
+      if (const auto offset =
+              fixation_offset(ticks[i], pupils[i], pose_options, gaze_options, target_world_m))
+        offsets.push_back(*offset);
+    out.ticks_with_gaze = static_cast<int>(offsets.size());
+    const bool follow = options.follow_yaw_bias && !options.eye_yaw;
+    if (follow && round == 0) {
+      // A first centre from the looks within twice the window sideways (a biased gaze on the
+      // target may sit beyond the window itself).
+      std::vector<double> near_yaw;
+      for (const cv::Vec2d& o : offsets)
+        if (std::abs(o[0]) <= 2 * options.max_yaw_deg && std::abs(o[1]) <= options.max_pitch_deg)
+          near_yaw.push_back(o[0]);
+      if (!near_yaw.empty())
+        yaw_centre = std::clamp(upper_median(near_yaw), -options.max_yaw_deg, options.max_yaw_deg);
     }
+    std::vector<double> facing_yaw, facing_pitch;
+    for (const cv::Vec2d& o : offsets)
+      if (std::abs(o[0] - yaw_centre) <= options.max_yaw_deg &&
+          std::abs(o[1]) <= options.max_pitch_deg) {
+        facing_yaw.push_back(o[0]);
+        facing_pitch.push_back(o[1]);
+      }
     out.fixation_ticks = static_cast<int>(facing_pitch.size());
     if (out.fixation_ticks < options.min_ticks) return out;  // not applied
     // Pitching the frame by c adds c to the target's head-frame pitch while the eye-in-head
     // pitch barely moves, so the offsets grow by about c: c takes away their median.
     c -= upper_median(facing_pitch);
+    if (follow)
+      yaw_centre = std::clamp(upper_median(facing_yaw), -options.max_yaw_deg, options.max_yaw_deg);
     // Moving both eyeballs by dx along the head's x turns the gaze of an eye looking ahead by
     // -dx / radius (rad) in yaw, so the yaw offsets grow by dx / radius.
     if (options.eye_yaw) shift_x -= eyes.radius_m * upper_median(facing_yaw) / kDegreesPerRadian;
@@ -158,6 +167,7 @@ GazeLevel level_from_gaze_fixations(const head_pose::FaceModel3d& model,
   out.applied = true;
   out.correction_deg = c;
   out.eyeball_shift_x_m = shift_x;
+  out.yaw_centre_deg = yaw_centre;
   return out;
 }
 

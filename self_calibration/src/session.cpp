@@ -118,6 +118,7 @@ nlohmann::json SessionSelfCalibration::to_json() const {
                      {"ticks_with_gaze", gaze_level.ticks_with_gaze},
                      {"fixation_ticks", gaze_level.fixation_ticks},
                      {"correction_deg", gaze_level.correction_deg},
+                     {"yaw_centre_deg", gaze_level.yaw_centre_deg},
                      {"eyeball_shift_x_mm", 1000 * gaze_level.eyeball_shift_x_m}};
   j["ticks_used"] = face.frames_used;
   j["points"] = face.model.points_m.size();
@@ -436,6 +437,7 @@ Status write_self_calibration(const SessionSelfCalibration& c, const std::filesy
     g.plane = gaze::OffsetPlane::kHeadPlane;
     g.right_eyeball = c.right_eyeball;
     g.left_eyeball = c.left_eyeball;
+    g.fixation_yaw = true;  // placed by anatomy: the gaze analyser learns their sideways bias
     g.provenance =
         "anatomical eyeballs (modalities/gaze/README.md) behind the eye openings of " + provenance;
     DS_RETURN_IF_ERROR(gaze::write_gaze_model(dir / "gaze.yaml", g));

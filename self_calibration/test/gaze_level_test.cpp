@@ -129,6 +129,28 @@ TEST(GazeLevel, EyesLookingPastTheTargetSidewaysGiveTheEyeballsShift) {
   EXPECT_EQ(pitch.eyeball_shift_x_m, 0.0);
 }
 
+// Eyeballs 2.5 mm to the side: the gaze on the robot passes ~13 deg beside it, outside the 10 deg
+// window. With follow_yaw_bias the window follows the fixations' median yaw, so the robot's ticks
+// still level a frame pitched by 6 deg; centred on the robot (the default) too few are left.
+TEST(GazeLevel, TheYawWindowFollowsAConjugateBias) {
+  const auto truth = head_pose::generic_face_model(false);
+  const cv::Vec3d robot(0, -0.30, 0.15);
+  Synthetic s;
+  make_ticks(s, truth, robot, 40, 0.0, 0.3, 0.0025);
+  GazeLevelOptions following;
+  following.follow_yaw_bias = true;
+  const auto follow =
+      level_from_gaze_fixations(pitched(truth, 6.0), s.ticks, s.pupils, robot, {}, following);
+  ASSERT_TRUE(follow.applied);
+  EXPECT_GE(follow.fixation_ticks, 15);
+  EXPECT_LE(follow.fixation_ticks, 22);
+  EXPECT_GT(std::abs(follow.yaw_centre_deg), 8.0);
+  EXPECT_NEAR(follow.correction_deg, -6.0, 1.0);
+  const auto fixed = level_from_gaze_fixations(pitched(truth, 6.0), s.ticks, s.pupils, robot, {});
+  EXPECT_FALSE(fixed.applied);
+  EXPECT_LT(fixed.fixation_ticks, GazeLevelOptions{}.min_ticks);
+}
+
 TEST(GazeLevel, NoFixationsOrNoPupilsLeaveTheLevel) {
   const auto truth = head_pose::generic_face_model(false);
   const cv::Vec3d robot(0, -0.30, 0.15);

@@ -11,7 +11,10 @@ namespace {
 class GazeAnalyzer : public Analyzer {
  public:
   explicit GazeAnalyzer(GazeAnalyzerOptions o)
-      : options_(std::move(o)), mutual_(options_.mutual), filter_(options_.filter) {}
+      : options_(std::move(o)),
+        mutual_(options_.mutual),
+        filter_(options_.filter),
+        fixation_yaw_(options_.fixation_yaw) {}
 
   std::string_view name() const override { return "gaze"; }
   AnalyzerContract contract() const override {
@@ -41,6 +44,7 @@ class GazeAnalyzer : public Analyzer {
     auto g = estimate_gaze(*lm->value, *eyes->value, image_head, cam->second, options_.estimator);
     if (!g) return absent(in.stamp, out);
     smooth(*g, image_head);
+    if (options_.mutual.mode == MutualGazeMode::k3d) correct_yaw(*g, image_head);
 
     double miss = 0;
     bool raw = false;
@@ -67,6 +71,7 @@ class GazeAnalyzer : public Analyzer {
   void reset() override {
     mutual_.reset();
     filter_.reset();
+    fixation_yaw_.reset();
   }
 
  private:
@@ -81,6 +86,26 @@ class GazeAnalyzer : public Analyzer {
     g.both.phi_deg = a.phi_deg;
   }
 
+  // Turns every ray by the yaw learnt from the earlier ticks' fixations on the robot's head
+  // (fixation_yaw.hpp), then learns from this tick's uncorrected gaze.
+  void correct_yaw(EyeGaze& g, const HeadPose& head) {
+    if (!g.both.valid) return;
+    const cv::Matx33d head_from_world = head.world_from_head.t();
+    const double yaw = fixation_yaw_.correction_deg();
+    fixation_yaw_.observe(head_from_world * g.both.direction_world,
+                          head_from_world * (options_.mutual.robot_head_m - g.both.origin_world_m));
+    g.fixation_yaw_deg = yaw;
+    if (yaw == 0) return;
+    for (GazeRay* r : {&g.right, &g.left, &g.both}) {
+      if (!r->valid) continue;
+      const cv::Vec3d turned = turned_yaw(head_from_world * r->direction_world, yaw);
+      r->direction_world = head.world_from_head * turned;
+      const EyeAngles a = angles_of_head_direction(turned);
+      r->theta_deg = a.theta_deg;
+      r->phi_deg = a.phi_deg;
+    }
+  }
+
   Status absent(Timestamp stamp, BlackboardWriter& out) {
     mutual_.reset();
     filter_.reset();
@@ -92,6 +117,7 @@ class GazeAnalyzer : public Analyzer {
   GazeAnalyzerOptions options_;
   MutualGazeTracker mutual_;
   DirectionFilter filter_;
+  FixationYawEstimator fixation_yaw_;
 };
 
 }  // namespace
@@ -107,6 +133,7 @@ Status GazeAnalyzerOptions::check() const {
                       reference_camera);
   if (auto s = estimator.check(); !s) return s;
   if (auto s = filter.check(); !s) return s;
+  if (auto s = fixation_yaw.check(); !s) return s;
   return mutual.check();
 }
 

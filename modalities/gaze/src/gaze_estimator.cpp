@@ -173,6 +173,7 @@ Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& 
       write_eyeball(fs, "left_eyeball", *model.left_eyeball);
     }
     fs << "samples" << model.samples << "provenance" << model.provenance;
+    fs << "fixation_yaw" << static_cast<int>(model.fixation_yaw);
     fs.release();
   } catch (const std::exception& e) {
     return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
@@ -231,6 +232,7 @@ Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
                         path.string());
     m.samples = fs["samples"].empty() ? 0 : static_cast<int>(fs["samples"]);
     m.provenance = fs["provenance"].empty() ? "" : static_cast<std::string>(fs["provenance"]);
+    m.fixation_yaw = !fs["fixation_yaw"].empty() && static_cast<int>(fs["fixation_yaw"]) != 0;
   } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }

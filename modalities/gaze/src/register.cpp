@@ -23,6 +23,16 @@ Status read_mutual_options(OptionsNode& node, MutualGazeOptions& m) {
   return ok_status();
 }
 
+Status read_fixation_yaw_options(OptionsNode& node, FixationYawOptions& f) {
+  DS_RETURN_IF_ERROR(node.get("enabled", f.enabled));
+  DS_RETURN_IF_ERROR(node.get("max_yaw_deg", f.max_yaw_deg));
+  DS_RETURN_IF_ERROR(node.get("max_pitch_deg", f.max_pitch_deg));
+  DS_RETURN_IF_ERROR(node.get("min_fixations", f.min_fixations));
+  DS_RETURN_IF_ERROR(node.get("window", f.window));
+  DS_RETURN_IF_ERROR(node.get("dead_zone_deg", f.dead_zone_deg));
+  return ok_status();
+}
+
 }  // namespace
 
 void register_analyzers(AnalyzerRegistry& registry) {
@@ -53,7 +63,11 @@ void register_analyzers(AnalyzerRegistry& registry) {
         o.estimator.right_eyeball = *m.right_eyeball;
         o.estimator.left_eyeball = *m.left_eyeball;
       }
+      o.fixation_yaw.enabled = m.fixation_yaw;
     }
+    DS_RETURN_IF_ERROR(read_fixation_yaw_options(options.child("fixation_yaw"), o.fixation_yaw));
+    if (o.fixation_yaw.enabled && o.mutual.mode == MutualGazeMode::k3d)
+      p.notes.push_back("the eyes' sideways bias is learnt from fixations on the robot's head");
     p.notes.push_back("gaze constants " + (ctx.subject.gaze_model.empty()
                                                ? std::string("built-in")
                                                : ctx.subject.gaze_model.string()));

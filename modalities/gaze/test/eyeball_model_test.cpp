@@ -136,9 +136,11 @@ TEST(GazeModelFile, EyeballsRoundTripAndMustComeInPairs) {
   GazeModelFile m;
   m.right_eyeball = kEye;
   m.left_eyeball = EyeballModel{{0.031, 0.002, 0.011}, 0.012};
+  m.fixation_yaw = true;
   ASSERT_TRUE(write_gaze_model(dir / "g.yaml", m));
   auto back = read_gaze_model(dir / "g.yaml");
   ASSERT_TRUE(back) << back.error().message;
+  EXPECT_TRUE(back->fixation_yaw);
   ASSERT_TRUE(back->right_eyeball && back->left_eyeball);
   EXPECT_LT(cv::norm(back->right_eyeball->centre_head_m - kEye.centre_head_m), 1e-12);
   EXPECT_NEAR(back->left_eyeball->radius_m, 0.012, 1e-12);
@@ -147,6 +149,7 @@ TEST(GazeModelFile, EyeballsRoundTripAndMustComeInPairs) {
   auto plain = read_gaze_model(dir / "eq4.yaml");
   ASSERT_TRUE(plain);
   EXPECT_FALSE(plain->right_eyeball);
+  EXPECT_FALSE(plain->fixation_yaw);
   // Only one eyeball: corrupt.
   std::ifstream in(dir / "g.yaml");
   std::string text((std::istreambuf_iterator<char>(in)), {});

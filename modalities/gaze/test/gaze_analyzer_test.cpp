@@ -53,6 +53,16 @@ void commit_inputs(Blackboard& bb, const Inputs& in, Timestamp t) {
   bb.commit(w, t);
 }
 
+// One tick: the inputs committed, the gaze analyser run on them, its writes committed.
+void process_tick(Analyzer& a, Blackboard& bb, const Inputs& in, Timestamp t) {
+  commit_inputs(bb, in, t);
+  MultiFrame mf;
+  mf.stamp = t;
+  BlackboardWriter w("gaze");
+  EXPECT_TRUE(a.process(mf, bb.snapshot(), w));
+  bb.commit(w, t);
+}
+
 TEST(GazeAnalyzer, WritesGazeAndMutualGazeOrAbsence) {
   GazeAnalyzerOptions o;
   EXPECT_FALSE(o.check()) << "no cameras";
@@ -132,12 +142,7 @@ TEST(GazeAnalyzer, MutualGazeNeedsAVisiblePupil) {
     in.eyes.pupil_stage = stage;
     in.eyes.right.pupil_found = right;
     in.eyes.left.pupil_found = left;
-    commit_inputs(bb, in, t);
-    MultiFrame mf;
-    mf.stamp = t;
-    BlackboardWriter w("gaze");
-    EXPECT_TRUE((*a)->process(mf, bb.snapshot(), w));
-    bb.commit(w, t);
+    process_tick(**a, bb, in, t);
     const auto m = bb.snapshot().get(keys::kMutualGaze);
     EXPECT_TRUE(m && m->present());
     return m && m->present() && m->value->raw;
@@ -152,6 +157,46 @@ TEST(GazeAnalyzer, MutualGazeNeedsAVisiblePupil) {
   EXPECT_TRUE(mutual_of(o, false, false, false));
   o.mutual.require_visible_pupil = false;
   EXPECT_TRUE(mutual_of(o, true, false, false));
+}
+
+// Pupils 2 px to the image's right of centre in both eyes: every gaze passes beside the robot
+// by the same yaw. With fixation_yaw on, the analyser learns that bias from the ticks that look
+// near the robot and turns the rays towards it; off (the default), the rays stay as measured.
+TEST(GazeAnalyzer, FixationYawTurnsABiasedGazeTowardsTheRobot) {
+  auto run = [](bool enabled) {
+    GazeAnalyzerOptions o;
+    o.cameras["cam"] = camera();
+    o.mutual.robot_head_m = {0, 0, 0};
+    o.fixation_yaw.enabled = enabled;
+    auto a = make_gaze_analyzer(o);
+    EXPECT_TRUE(a) << a.error().message;
+    Blackboard bb;
+    std::vector<EyeGaze> out;
+    for (int i = 0; i < 30; ++i) {
+      const Timestamp t = Timestamp::from_seconds(1) + Duration::from_ms(40 * i);
+      Inputs in = frontal(t);
+      in.eyes.right.center_px.x += 2;
+      in.eyes.left.center_px.x += 2;
+      process_tick(**a, bb, in, t);
+      const auto g = bb.snapshot().get(keys::kEyeGaze);
+      EXPECT_TRUE(g && g->present());
+      if (g && g->present()) out.push_back(*g->value);
+    }
+    return out;
+  };
+  auto miss_deg = [](const EyeGaze& g) {  // angle between the ray and the robot (at the origin)
+    const cv::Vec3d to_robot = -g.both.origin_world_m;
+    return std::acos(g.both.direction_world.dot(to_robot) / cv::norm(to_robot)) * 180 / CV_PI;
+  };
+  const auto off = run(false), on = run(true);
+  ASSERT_EQ(off.size(), 30U);
+  ASSERT_EQ(on.size(), 30U);
+  EXPECT_EQ(off.back().fixation_yaw_deg, 0);
+  EXPECT_GT(miss_deg(off.back()), 3);         // the bias this test builds
+  EXPECT_EQ(on.front().fixation_yaw_deg, 0);  // still learning
+  EXPECT_NE(on.back().fixation_yaw_deg, 0);
+  EXPECT_LT(miss_deg(on.back()), miss_deg(off.back()) - 1.5);
+  EXPECT_NEAR(miss_deg(on.front()), miss_deg(off.front()), 1e-9);
 }
 
 }  // namespace

@@ -36,6 +36,9 @@ struct EyeGaze {
   GazeRay left;
   GazeRay both;  // fused: origin between the eyes, mean direction of the valid eyes
   std::string method;
+  // Eye-in-head yaw (deg) added to every ray: the bias learnt from fixations on the robot
+  // (gaze/fixation_yaw.hpp); 0 when off or still learning.
+  double fixation_yaw_deg = 0;
 };
 
 // Mutual gaze with the robot (F1). `mutual` applies the hold rule to `raw` (this frame's test).

@@ -63,6 +63,7 @@ struct EyeGazeValue {
   std::optional<EyeRay> right, left;
   SensorId camera;
   std::string method;
+  double fixation_yaw_deg = 0;  // the eyes' yaw bias learnt from fixations on the robot, applied
 };
 
 // F6 getEyes: pixel centres in the selected camera; 3-D positions when a gaze exists.

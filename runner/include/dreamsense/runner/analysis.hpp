@@ -119,6 +119,9 @@ struct AnalysisSummary {
   };
   std::map<SensorId, Sensor> sensors;
   std::vector<sources::SessionMarker> markers;  // operator markers, summary.json "markers"
+  // The eyes' sideways bias the gaze analyser had learnt from fixations on the robot by the
+  // last getEyeGaze answer (EyeGazeValue::fixation_yaw_deg); null without a gaze.
+  std::optional<double> gaze_fixation_yaw_deg;
   nlohmann::json to_json() const;
 };
 

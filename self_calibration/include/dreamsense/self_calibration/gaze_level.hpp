@@ -43,6 +43,14 @@ struct GazeLevelOptions {
   // on the demo it did not follow the analysis's yaw bias on the robot (modalities/head_pose/
   // README.md, "Level from gaze fixations").
   bool eye_yaw = false;
+  // The yaw window is centred on the median yaw offset of the previous round's fixations instead
+  // of on the target (moving by at most max_yaw_deg): eyes with a conjugate sideways bias (the
+  // demo's glasses child: 5-9 deg, modalities/gaze/README.md "Yaw from fixations on the robot")
+  // otherwise leave most of their looks at the target at the window's edge, and too few
+  // fixations decide the level. Only the selection moves; the gaze is not corrected. Off: on the
+  // demo it helped two development seeds of the glasses child (head pose -2.0 / -1.2 deg) and
+  // none of four fresh ones (0 / 0 / +0.4 / +0.6 deg; modalities/head_pose/README.md).
+  bool follow_yaw_bias = false;
   Status check() const;
 };
 
@@ -51,6 +59,7 @@ struct GazeLevel {
   int ticks_with_gaze = 0;    // ticks where a head pose and the gaze of one eye at least were found
   int fixation_ticks = 0;     // of them, gazing at the target after the last round
   double correction_deg = 0;  // pitch added to the head frame (about its x axis), when applied
+  double yaw_centre_deg = 0;  // where the yaw window was centred in the last round
   // With eye_yaw: added to both eyeballs' centre_head_m x (metres), when applied.
   double eyeball_shift_x_m = 0;
 };

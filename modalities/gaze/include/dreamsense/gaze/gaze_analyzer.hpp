@@ -9,6 +9,7 @@
 
 #include "dreamsense/core/analyzer.hpp"
 #include "dreamsense/core/camera_model.hpp"
+#include "dreamsense/gaze/fixation_yaw.hpp"
 #include "dreamsense/gaze/gaze_estimator.hpp"
 #include "dreamsense/gaze/gaze_filter.hpp"
 #include "dreamsense/gaze/mutual_gaze.hpp"
@@ -25,6 +26,9 @@ struct GazeAnalyzerOptions {
   // rays stay unfiltered.
   GazeFilterOptions filter;
   MutualGazeOptions mutual;
+  // 3-D mode: the eyes' sideways bias learnt from fixations on mutual.robot_head_m
+  // (fixation_yaw.hpp); EyeGaze::fixation_yaw_deg reports it.
+  FixationYawOptions fixation_yaw;
   // Camera-plane mode: the camera whose plane holds the rectangle; empty = the selected camera
   // of each frame (DREAM).
   SensorId reference_camera;

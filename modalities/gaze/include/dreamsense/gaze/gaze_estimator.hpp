@@ -63,6 +63,10 @@ struct GazeModelFile {
   EyeAngleModel right_eye, left_eye;
   std::string provenance;
   int samples = 0;
+  // The eyeballs were placed by anatomy, not fitted to known targets: the gaze analyser learns
+  // their sideways bias from fixations on the robot (FixationYawOptions::enabled; key
+  // `fixation_yaw`, written by the self-calibration).
+  bool fixation_yaw = false;
 };
 Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& model);
 Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path);
