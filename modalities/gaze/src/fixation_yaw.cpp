@@ -1,5 +1,6 @@
 #include "dreamsense/gaze/fixation_yaw.hpp"
 
+#include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/statistics.hpp"
 
 #include <cmath>
@@ -32,9 +33,8 @@ cv::Vec2d head_yaw_pitch_deg(const cv::Vec3d& d) {
 }
 
 cv::Vec3d turned_yaw(const cv::Vec3d& d, double yaw_deg) {
-  // Forward is −z: turning towards +x by a is x' = x cos a − z sin a, z' = x sin a + z cos a.
-  const double a = yaw_deg / kDegreesPerRadian, c = std::cos(a), s = std::sin(a);
-  return {d[0] * c - d[2] * s, d[1], d[0] * s + d[2] * c};
+  // The head pose's yaw turns the gaze towards −x (HeadPose conventions), hence the sign.
+  return rotation_from_ypr_deg(-yaw_deg, 0, 0) * d;
 }
 
 void FixationYawEstimator::observe(const cv::Vec3d& gaze_head, const cv::Vec3d& target_head) {
