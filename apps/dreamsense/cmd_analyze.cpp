@@ -243,8 +243,10 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
     };
   auto r = with_progress(
       "analyse", quiet, [&](const auto& progress) { return runner::analyze_session(o, progress); });
-  if (r && calibration_status)
+  if (r && calibration_status) {
+    DS_RETURN_IF_ERROR(self_calibration::save_learnt_fixation_yaw(*calibration_status, *r));
     DS_RETURN_IF_ERROR(runner::add_to_summary(o.out_dir, "self_calibration", *calibration_status));
+  }
   return r;
 }
 
@@ -313,7 +315,8 @@ void add_analyze(CLI::App& app, const GlobalFlags& g, int& exit_code) {
   add_analysis_flags(*cmd, *flags);
   cmd->add_flag("--save-subject", flags->save_subject,
                 "When the self-calibration converges, also save it as the session's subject "
-                "folder (data/subjects/<metadata subject>, must not exist) for the next session");
+                "folder (data/subjects/<metadata subject>, must not exist) for the next session, "
+                "with the gaze's sideways correction learnt in this one");
   cmd->callback([flags, &g, &exit_code] {
     runner::AnalysisOptions o;
     o.session_dir = flags->session;

@@ -586,7 +586,11 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   ASSERT_NE(at, std::string::npos) << "the demo names its subject";
   manifest.replace(at, std::string("subject: demo_child").size(), "subject: nobody_known");
   std::ofstream(unknown / "session.yaml") << manifest;
-  r = run("-v analyze " + unknown.string() + " --out " + (root() / "y").string());
+  const fs::path subjects = root() / "saved-subjects";
+  fs::remove_all(subjects);
+  fs::create_directories(subjects);
+  r = run("-v analyze " + unknown.string() + " --out " + (root() / "y").string() +
+          " --save-subject --subjects-dir " + subjects.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("no calibration for subject 'nobody_known'"), std::string::npos) << r.err;
   // Issue 15: with no subject folder the analysis self-calibrates from the session (the demo's
@@ -619,6 +623,19 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
             std::string::npos);
   ASSERT_TRUE(summary.contains("gaze_fixation_yaw_deg")) << summary.dump();
   EXPECT_TRUE(summary["gaze_fixation_yaw_deg"].is_number()) << summary.dump();
+  // --save-subject: the child's folder for the next session, with the learnt correction in its
+  // gaze.yaml (none learnt: no key) so that the next session applies it from its first tick.
+  const fs::path saved = subjects / "nobody_known";
+  EXPECT_EQ(sc.value("saved_to", ""), saved.string()) << sc.dump();
+  EXPECT_TRUE(fs::exists(saved / "face_model.yaml"));
+  const double learnt = summary["gaze_fixation_yaw_deg"].get<double>();
+  const std::string saved_gaze = slurp(saved / "gaze.yaml");
+  EXPECT_EQ(saved_gaze.find("fixation_yaw_start_deg") != std::string::npos, learnt != 0)
+      << saved_gaze;
+  EXPECT_EQ(sc.contains("saved_fixation_yaw_deg"), learnt != 0) << sc.dump();
+  if (learnt != 0) {
+    EXPECT_EQ(sc["saved_fixation_yaw_deg"].get<double>(), learnt);
+  }
   // The head-fixation level and the full size range at every tick (the baselines) on request;
   // an unknown self-calibration option is an error naming it.
   r = run("analyze " + unknown.string() +

@@ -2,11 +2,15 @@
 
 #include "dreamsense/core/camera_model.hpp"
 #include "dreamsense/core/log.hpp"
+#include "dreamsense/gaze/fixation_yaw.hpp"
+#include "dreamsense/gaze/gaze_estimator.hpp"
 #include "dreamsense/perception/options_node.hpp"
 #include "dreamsense/self_calibration/session.hpp"
 #include "dreamsense/sources/session.hpp"
 
 #include <fmt/format.h>
+
+#include <cmath>
 
 namespace dreamsense::self_calibration {
 namespace fs = std::filesystem;
@@ -162,6 +166,27 @@ Result<fs::path> save_subject_folder(const fs::path& files, const fs::path& subj
   if (ec) return make_error(ErrorCode::kIoError, "{}: {}", target.string(), ec.message());
   log::info("self-calibration saved to {}", target.string());
   return target;
+}
+
+Status save_learnt_fixation_yaw(nlohmann::json& status, const runner::AnalysisSummary& summary) {
+  const auto saved = status.find("saved_to");
+  if (saved == status.end() || !saved->is_string() || !summary.gaze_fixation_yaw_deg ||
+      *summary.gaze_fixation_yaw_deg == 0)
+    return ok_status();
+  const double yaw = *summary.gaze_fixation_yaw_deg;
+  const fs::path file = fs::path(saved->get<std::string>()) / "gaze.yaml";
+  if (!(std::abs(yaw) <= gaze::kMaxFixationYawDeg)) {
+    log::warn("{}: the learnt sideways correction {:+.1f} deg is beyond +-{} deg, not saved",
+              file.string(), yaw, gaze::kMaxFixationYawDeg);
+    return ok_status();
+  }
+  DS_ASSIGN_OR_RETURN(gaze::GazeModelFile model, gaze::read_gaze_model(file));
+  model.fixation_yaw_start_deg = yaw;
+  DS_RETURN_IF_ERROR(gaze::write_gaze_model(file, model));
+  status["saved_fixation_yaw_deg"] = yaw;
+  log::info("{}: the gaze's learnt sideways correction {:+.1f} deg saved for the next session",
+            file.string(), yaw);
+  return ok_status();
 }
 
 std::vector<std::string> report_lines(const nlohmann::json& status) {

@@ -25,6 +25,10 @@ Status FixationYawOptions::check() const {
     return make_error(ErrorCode::kInvalidArgument,
                       "FixationYawOptions: dead_zone_deg must be in [0, 20) (got {})",
                       dead_zone_deg);
+  if (!(std::abs(start_deg) <= kMaxFixationYawDeg))
+    return make_error(ErrorCode::kInvalidArgument,
+                      "FixationYawOptions: start_deg must be within +-{} (got {})",
+                      kMaxFixationYawDeg, start_deg);
   return ok_status();
 }
 
@@ -37,24 +41,31 @@ cv::Vec3d turned_yaw(const cv::Vec3d& d, double yaw_deg) {
   return rotation_from_ypr_deg(-yaw_deg, 0, 0) * d;
 }
 
+FixationYawEstimator::FixationYawEstimator(FixationYawOptions options) : options_(options) {
+  reset();
+}
+
 void FixationYawEstimator::observe(const cv::Vec3d& gaze_head, const cv::Vec3d& target_head) {
   if (!options_.enabled) return;
   const cv::Vec2d offset = head_yaw_pitch_deg(target_head) - head_yaw_pitch_deg(gaze_head);
   if (!std::isfinite(offset[0]) || !std::isfinite(offset[1])) return;
-  // The selection follows the correction: a biased gaze on the target is still a fixation.
-  if (std::abs(offset[0] - correction_deg_) > options_.max_yaw_deg ||
+  // The selection follows this session's own estimate (a biased gaze on the target is still a
+  // fixation), not start_deg: an earlier session's value does not steer what this one learns.
+  if (std::abs(offset[0] - learnt_deg_) > options_.max_yaw_deg ||
       std::abs(offset[1]) > options_.max_pitch_deg)
     return;
   offsets_.push_back(offset[0]);
   if (static_cast<int>(offsets_.size()) > options_.window) offsets_.pop_front();
   if (static_cast<int>(offsets_.size()) < options_.min_fixations) return;
   const double bias = upper_median(std::vector<double>(offsets_.begin(), offsets_.end()));
-  correction_deg_ = std::copysign(std::max(0.0, std::abs(bias) - options_.dead_zone_deg), bias);
+  learnt_deg_ = std::copysign(std::max(0.0, std::abs(bias) - options_.dead_zone_deg), bias);
+  correction_deg_ = learnt_deg_;
 }
 
 void FixationYawEstimator::reset() {
   offsets_.clear();
-  correction_deg_ = 0;
+  learnt_deg_ = 0;
+  correction_deg_ = options_.enabled ? options_.start_deg : 0;
 }
 
 }  // namespace dreamsense::gaze

@@ -2,6 +2,7 @@
 
 #include "dreamsense/core/file_storage_check.hpp"
 #include "dreamsense/core/opencv_error.hpp"
+#include "dreamsense/gaze/fixation_yaw.hpp"
 #include "dreamsense/perception/eye_centers.hpp"
 #include "dreamsense/perception/face_landmarks.hpp"
 #include "dreamsense/perception/gaze.hpp"
@@ -9,6 +10,7 @@
 
 #include <opencv2/core/persistence.hpp>
 
+#include <cmath>
 #include <exception>
 #include <fstream>
 #include <optional>
@@ -174,6 +176,8 @@ Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& 
     }
     fs << "samples" << model.samples << "provenance" << model.provenance;
     fs << "fixation_yaw" << static_cast<int>(model.fixation_yaw);
+    if (model.fixation_yaw_start_deg != 0)
+      fs << "fixation_yaw_start_deg" << model.fixation_yaw_start_deg;
     fs.release();
   } catch (const std::exception& e) {
     return make_error(ErrorCode::kIoError, "{}: {}", path.string(), opencv_reason(e));
@@ -233,6 +237,13 @@ Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path) {
     m.samples = fs["samples"].empty() ? 0 : static_cast<int>(fs["samples"]);
     m.provenance = fs["provenance"].empty() ? "" : static_cast<std::string>(fs["provenance"]);
     m.fixation_yaw = !fs["fixation_yaw"].empty() && static_cast<int>(fs["fixation_yaw"]) != 0;
+    if (!fs["fixation_yaw_start_deg"].empty()) {
+      m.fixation_yaw_start_deg = static_cast<double>(fs["fixation_yaw_start_deg"]);
+      if (!(std::abs(m.fixation_yaw_start_deg) <= kMaxFixationYawDeg))
+        return make_error(ErrorCode::kCorruptData,
+                          "{}: fixation_yaw_start_deg must be within +-{} deg (got {})",
+                          path.string(), kMaxFixationYawDeg, m.fixation_yaw_start_deg);
+    }
   } catch (const std::exception& e) {
     return make_error(ErrorCode::kCorruptData, "{}: {}", path.string(), opencv_reason(e));
   }

@@ -30,6 +30,7 @@ Status read_fixation_yaw_options(OptionsNode& node, FixationYawOptions& f) {
   DS_RETURN_IF_ERROR(node.get("min_fixations", f.min_fixations));
   DS_RETURN_IF_ERROR(node.get("window", f.window));
   DS_RETURN_IF_ERROR(node.get("dead_zone_deg", f.dead_zone_deg));
+  DS_RETURN_IF_ERROR(node.get("start_deg", f.start_deg));
   return ok_status();
 }
 
@@ -64,10 +65,16 @@ void register_analyzers(AnalyzerRegistry& registry) {
         o.estimator.left_eyeball = *m.left_eyeball;
       }
       o.fixation_yaw.enabled = m.fixation_yaw;
+      o.fixation_yaw.start_deg = m.fixation_yaw_start_deg;
     }
     DS_RETURN_IF_ERROR(read_fixation_yaw_options(options.child("fixation_yaw"), o.fixation_yaw));
     if (o.fixation_yaw.enabled && o.mutual.mode == MutualGazeMode::k3d)
-      p.notes.push_back("the eyes' sideways bias is learnt from fixations on the robot's head");
+      p.notes.push_back(
+          o.fixation_yaw.start_deg == 0
+              ? std::string("the eyes' sideways bias is learnt from fixations on the robot's head")
+              : fmt::format("the eyes' sideways bias is learnt from fixations on the robot's "
+                            "head, starting from {:+.1f} deg (an earlier session's)",
+                            o.fixation_yaw.start_deg));
     p.notes.push_back("gaze constants " + (ctx.subject.gaze_model.empty()
                                                ? std::string("built-in")
                                                : ctx.subject.gaze_model.string()));

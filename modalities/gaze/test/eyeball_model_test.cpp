@@ -137,10 +137,12 @@ TEST(GazeModelFile, EyeballsRoundTripAndMustComeInPairs) {
   m.right_eyeball = kEye;
   m.left_eyeball = EyeballModel{{0.031, 0.002, 0.011}, 0.012};
   m.fixation_yaw = true;
+  m.fixation_yaw_start_deg = -6.25;
   ASSERT_TRUE(write_gaze_model(dir / "g.yaml", m));
   auto back = read_gaze_model(dir / "g.yaml");
   ASSERT_TRUE(back) << back.error().message;
   EXPECT_TRUE(back->fixation_yaw);
+  EXPECT_EQ(back->fixation_yaw_start_deg, -6.25);
   ASSERT_TRUE(back->right_eyeball && back->left_eyeball);
   EXPECT_LT(cv::norm(back->right_eyeball->centre_head_m - kEye.centre_head_m), 1e-12);
   EXPECT_NEAR(back->left_eyeball->radius_m, 0.012, 1e-12);
@@ -150,9 +152,17 @@ TEST(GazeModelFile, EyeballsRoundTripAndMustComeInPairs) {
   ASSERT_TRUE(plain);
   EXPECT_FALSE(plain->right_eyeball);
   EXPECT_FALSE(plain->fixation_yaw);
-  // Only one eyeball: corrupt.
+  EXPECT_EQ(plain->fixation_yaw_start_deg, 0);
   std::ifstream in(dir / "g.yaml");
   std::string text((std::istreambuf_iterator<char>(in)), {});
+  // A start correction beyond the plausible range: corrupt.
+  const size_t start = text.find("fixation_yaw_start_deg: ");
+  ASSERT_NE(start, std::string::npos);
+  std::ofstream(dir / "far.yaml") << text.substr(0, start) << "fixation_yaw_start_deg: 45.\n";
+  auto far = read_gaze_model(dir / "far.yaml");
+  ASSERT_FALSE(far);
+  EXPECT_EQ(far.error().code, ErrorCode::kCorruptData);
+  // Only one eyeball: corrupt.
   text = text.substr(0, text.find("left_eyeball"));
   std::ofstream(dir / "one.yaml") << text;
   auto one = read_gaze_model(dir / "one.yaml");

@@ -30,7 +30,9 @@ TEST(FixationYaw, LearnsAConjugateBiasFromFixations) {
   const cv::Vec3d target = direction(0, 0) * 0.9;
   for (int i = 0; i < 40; ++i) {
     e.observe(direction(-6 + std::sin(i * 1.3), 2 * std::cos(i * 0.7)), target);
-    if (i + 1 < o.min_fixations) EXPECT_EQ(e.correction_deg(), 0) << i;
+    if (i + 1 < o.min_fixations) {
+      EXPECT_EQ(e.correction_deg(), 0) << i;
+    }
   }
   EXPECT_EQ(e.fixations(), 40);
   EXPECT_NEAR(e.correction_deg(), 6 - o.dead_zone_deg, 0.5);
@@ -58,6 +60,32 @@ TEST(FixationYaw, NoCorrectionForASmallBiasLooksElsewhereOrWhenDisabled) {
   EXPECT_EQ(off.correction_deg(), 0);
 }
 
+// An earlier session's correction (the subject folder's) is applied from the first tick; this
+// session's own fixations replace it once there are min_fixations of them, selected without it.
+TEST(FixationYaw, AStartValueStandsInUntilTheSessionsOwnFixations) {
+  FixationYawOptions o;
+  o.enabled = true;
+  o.start_deg = 8;
+  FixationYawEstimator e(o);
+  EXPECT_EQ(e.correction_deg(), 8);
+  const cv::Vec3d target = direction(0, 0);
+  // 14 deg to the side: inside a window around the start value, outside the session's own.
+  e.observe(direction(-14, 0), target);
+  EXPECT_EQ(e.fixations(), 0);
+  EXPECT_EQ(e.correction_deg(), 8);
+  for (int i = 0; i < 40; ++i) {
+    e.observe(direction(-4 + 0.5 * std::sin(i * 1.3), 0), target);
+    if (i + 1 < o.min_fixations) {
+      EXPECT_EQ(e.correction_deg(), 8) << i;
+    }
+  }
+  EXPECT_NEAR(e.correction_deg(), 4 - o.dead_zone_deg, 0.5);  // this session's, not the start
+  e.reset();
+  EXPECT_EQ(e.correction_deg(), 8);
+  o.enabled = false;  // off: no start value either
+  EXPECT_EQ(FixationYawEstimator(o).correction_deg(), 0);
+}
+
 TEST(FixationYaw, OptionsAreChecked) {
   FixationYawOptions o;
   EXPECT_TRUE(o.check());
@@ -68,6 +96,13 @@ TEST(FixationYaw, OptionsAreChecked) {
   EXPECT_FALSE(o.check());
   o = {};
   o.dead_zone_deg = -1;
+  EXPECT_FALSE(o.check());
+  o = {};
+  o.start_deg = -kMaxFixationYawDeg;
+  EXPECT_TRUE(o.check());
+  o.start_deg = kMaxFixationYawDeg + 1;
+  EXPECT_FALSE(o.check());
+  o.start_deg = std::nan("");
   EXPECT_FALSE(o.check());
 }
 

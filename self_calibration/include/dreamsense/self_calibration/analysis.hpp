@@ -69,6 +69,15 @@ Result<std::filesystem::path> save_subject_folder(
     const std::filesystem::path& files, const std::filesystem::path& subjects_dir,
     const std::map<std::string, std::string>& metadata, const std::string& where);
 
+// After the analysis of a self-calibration that `--save-subject` saved (`status` has `saved_to`):
+// the sideways correction the gaze learnt from the child's fixations on the robot
+// (summary.gaze_fixation_yaw_deg, gaze/fixation_yaw.hpp) goes into the saved folder's gaze.yaml
+// (`fixation_yaw_start_deg`), so the next session of the child applies it from its first tick,
+// and into `status` (`saved_fixation_yaw_deg`). Nothing is written when there is no saved folder
+// or no correction was learnt; a correction beyond gaze::kMaxFixationYawDeg is not saved (a
+// warning). Error: the saved gaze.yaml cannot be read or written.
+Status save_learnt_fixation_yaw(nlohmann::json& status, const runner::AnalysisSummary& summary);
+
 // The report's "Child calibration" paragraph (runner::AnalysisOptions::report_calibration) from
 // a self-calibration's status (self_calibrate_for_analysis's, or LiveSelfCalibration::status()):
 // what head pose and gaze used, the quality figures, or why it did not converge.

@@ -11,7 +11,9 @@
 // ticks whose corrected gaze is within max_yaw_deg sideways and max_pitch_deg up/down of the
 // target, the median of those angles is the bias. It is shrunk towards zero by dead_zone_deg
 // (the estimate's own error on a child without a bias, ~2 deg) and applied only after
-// min_fixations such ticks, so a child without a bias keeps the uncorrected gaze.
+// min_fixations such ticks, so a child without a bias keeps the uncorrected gaze. A correction
+// learnt in an earlier session with the same eyeballs (the subject folder's gaze.yaml) can stand
+// in until then (start_deg).
 
 #include "dreamsense/core/status.hpp"
 
@@ -21,6 +23,10 @@
 
 namespace dreamsense::gaze {
 
+// Largest sideways correction accepted from a file or an option (deg): the demo's glasses child,
+// the largest bias measured, needed 6.
+inline constexpr double kMaxFixationYawDeg = 20;
+
 struct FixationYawOptions {
   bool enabled = false;       // on for the self-calibration's anatomical eyeballs (gaze model file)
   double max_yaw_deg = 10;    // a fixation: corrected gaze this close to the target sideways ...
@@ -28,6 +34,10 @@ struct FixationYawOptions {
   int min_fixations = 10;     // no correction before this many fixations
   int window = 500;           // the median of the newest this many fixations (~50 s of looks)
   double dead_zone_deg = 2;   // |median| below this: no correction; above: median -+ this
+  // The correction until min_fixations are seen (deg; within +-kMaxFixationYawDeg): 0, or what an
+  // earlier session of this child learnt for the same eyeballs (GazeModelFile). It does not move
+  // the fixation window: this session's estimate is its own.
+  double start_deg = 0;
   Status check() const;
 };
 
@@ -41,8 +51,9 @@ cv::Vec3d turned_yaw(const cv::Vec3d& direction_head, double yaw_deg);
 
 class FixationYawEstimator {
  public:
-  explicit FixationYawEstimator(FixationYawOptions options = {}) : options_(options) {}
-  // The yaw (deg) to add to the gaze's eye-in-head direction now (0 while disabled or learning).
+  explicit FixationYawEstimator(FixationYawOptions options = {});
+  // The yaw (deg) to add to the gaze's eye-in-head direction now (0 while disabled; start_deg
+  // while learning).
   double correction_deg() const { return correction_deg_; }
   int fixations() const { return static_cast<int>(offsets_.size()); }
   // One tick's uncorrected gaze and the target's direction from the eyes, both in the head frame.
@@ -53,7 +64,8 @@ class FixationYawEstimator {
  private:
   FixationYawOptions options_;
   std::deque<double> offsets_;
-  double correction_deg_ = 0;
+  double learnt_deg_ = 0;      // this session's own estimate (0 before min_fixations)
+  double correction_deg_ = 0;  // learnt_deg_, or start_deg before min_fixations
 };
 
 }  // namespace dreamsense::gaze

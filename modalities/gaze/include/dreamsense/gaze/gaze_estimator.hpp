@@ -67,6 +67,10 @@ struct GazeModelFile {
   // their sideways bias from fixations on the robot (FixationYawOptions::enabled; key
   // `fixation_yaw`, written by the self-calibration).
   bool fixation_yaw = false;
+  // The sideways correction an earlier session of this child learnt for these eyeballs (deg; key
+  // `fixation_yaw_start_deg`, written by `analyze --save-subject`): applied from the first tick
+  // until this session's own fixations take over (FixationYawOptions::start_deg).
+  double fixation_yaw_start_deg = 0;
 };
 Status write_gaze_model(const std::filesystem::path& path, const GazeModelFile& model);
 Result<GazeModelFile> read_gaze_model(const std::filesystem::path& path);
