@@ -181,6 +181,13 @@ TEST(Live, NewChildIsSelfCalibratedDuringTheSessionAndSavedForTheNext) {
   const json live_summary = json::parse(slurp(dir / "out3" / "summary.json"));
   EXPECT_EQ(live_summary["live_self_calibration"].value("saved_to", ""), saved_live.string());
   EXPECT_FALSE(live_summary.contains("self_calibration"));  // no recording was self-calibrated
+  // The gaze's learnt sideways correction goes with those eyeballs (none learnt: no key).
+  const json& learnt = live_summary["gaze_fixation_yaw_deg"];
+  const bool has_correction = learnt.is_number() && learnt.get<double>() != 0;
+  EXPECT_EQ(slurp(saved_live / "gaze.yaml").find("fixation_yaw_start_deg") != std::string::npos,
+            has_correction);
+  EXPECT_EQ(live_summary["live_self_calibration"].contains("saved_fixation_yaw_deg"),
+            has_correction);
   fs::remove_all(dir);
 }
 

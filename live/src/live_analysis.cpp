@@ -129,6 +129,8 @@ Result<LiveAnalysisSummary> run_live_analysis(const LiveAnalysisOptions& options
                               o.out_dir / "self_calibration", o.plan.subjects_dir,
                               capture->manifest().metadata, "live configuration"));
       j["saved_to"] = saved.string();
+      // The live gaze learnt its sideways correction with these eyeballs (from the switch on).
+      DS_RETURN_IF_ERROR(self_calibration::save_learnt_fixation_yaw(j, s.analysis));
     }
     DS_RETURN_IF_ERROR(runner::add_to_summary(o.out_dir, "live_self_calibration", j));
     s.self_calibration = std::move(j);
