@@ -1,6 +1,7 @@
+#include "dreamsense/self_calibration/analysis.hpp"
+
 #include "dreamsense/gaze/fixation_yaw.hpp"
 #include "dreamsense/gaze/gaze_estimator.hpp"
-#include "dreamsense/self_calibration/analysis.hpp"
 
 #include <gtest/gtest.h>
 
