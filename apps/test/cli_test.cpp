@@ -636,6 +636,21 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
   if (learnt != 0) {
     EXPECT_EQ(sc["saved_fixation_yaw_deg"].get<double>(), learnt);
   }
+  // The next session with that folder starts from the saved correction (here one written in).
+  {
+    std::string text = saved_gaze;
+    if (const size_t at = text.find("fixation_yaw_start_deg:"); at != std::string::npos)
+      text.erase(at, text.find('\n', at) + 1 - at);
+    std::ofstream(saved / "gaze.yaml") << text << "fixation_yaw_start_deg: -4.5\n";
+    const fs::path plan = root() / "returning-child-plan.txt";
+    r = run("analyze " + unknown.string() + " --subject " + saved.string() +
+            " --print-pipeline > " + plan.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string printed = slurp(plan);
+    EXPECT_NE(printed.find("fixation_yaw.start_deg=-4.5"), std::string::npos) << printed;
+    EXPECT_NE(printed.find("starting from -4.5 deg (an earlier session's)"), std::string::npos)
+        << printed;
+  }
   // The head-fixation level and the full size range at every tick (the baselines) on request;
   // an unknown self-calibration option is an error naming it.
   r = run("analyze " + unknown.string() +
