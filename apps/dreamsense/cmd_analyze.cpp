@@ -231,11 +231,17 @@ Result<runner::AnalysisSummary> run_analysis_with_progress(const runner::Analysi
     DS_ASSIGN_OR_RETURN(calibration_status,
                         self_calibrate_with_progress(o, mode, std::move(self_calibration_overrides),
                                                      save_subject, quiet));
-  } else if (!self_calibration_overrides.empty()) {
-    log::info(
-        "--set self_calibration.{}: no self-calibration in this analysis (a subject "
-        "folder or model files are given), the option is not used",
-        self_calibration_overrides.front().key);
+  } else {
+    if (!self_calibration_overrides.empty())
+      log::info(
+          "--set self_calibration.{}: no self-calibration in this analysis (a subject "
+          "folder or model files are given), the option is not used",
+          self_calibration_overrides.front().key);
+    if (save_subject && !quiet)
+      std::fprintf(stderr,
+                   "--save-subject: nothing saved (no self-calibration in this analysis: the "
+                   "subject has a calibration folder, model files or --subject none were given, "
+                   "or the session has no calibrated camera)\n");
   }
   if (calibration_status)
     o.report_calibration = [status = *calibration_status] {

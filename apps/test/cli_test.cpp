@@ -671,9 +671,13 @@ TEST_F(Cli, TrainFaceAndSubjectFolders) {
           (root() / "y3").string());
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("self_calibration.gaze_levl"), std::string::npos) << r.err;
-  // `--subject none` keeps the generic model and does not self-calibrate.
-  r = run("analyze " + unknown.string() + " --subject none --out " + (root() / "z").string());
+  // `--subject none` keeps the generic model and does not self-calibrate (so --save-subject
+  // says that it saved nothing).
+  r = run("analyze " + unknown.string() + " --subject none --save-subject --out " +
+              (root() / "z").string(),
+          false);
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("--save-subject: nothing saved"), std::string::npos) << r.err;
   const json generic = json::parse(slurp(root() / "z" / "summary.json"));
   EXPECT_FALSE(generic.contains("self_calibration"));
   // Built-in gaze constants: nothing is learnt.

@@ -143,6 +143,8 @@ Result<nlohmann::json> self_calibrate_for_analysis(runner::AnalysisOptions& o,
         "self-calibration did not converge ({}): {}; generic face model and built-in gaze "
         "constants",
         head_pose::to_string(c.face.status), c.face.reason);
+    if (options.save_subject)
+      progress("--save-subject: nothing saved (the self-calibration did not converge)");
   }
   return j;
 }
