@@ -356,6 +356,12 @@ Result<AnalysisSummary> run_plan(
     rc.calibration_lines = options.report_calibration
                                ? options.report_calibration()
                                : calibration_lines(plan_subject, options.plan.include_names);
+    // A correction the gaze applied to its rays is part of how the gaze numbers were made.
+    if (summary.gaze_fixation_yaw_deg && *summary.gaze_fixation_yaw_deg != 0)
+      rc.calibration_lines.push_back(fmt::format(
+          "gaze: a sideways correction of {:+.1f} deg at the end (the eyes' bias, learnt from "
+          "the child's looks at the robot's head; summary.json gaze_fixation_yaw_deg)",
+          *summary.gaze_fixation_yaw_deg));
     for (const auto& d : summary.damage)
       if (d.any())
         rc.summary_lines.push_back(fmt::format(
