@@ -28,7 +28,7 @@ namespace dreamsense::gaze {
 inline constexpr double kMaxFixationYawDeg = 20;
 
 struct FixationYawOptions {
-  bool enabled = false;       // on for the self-calibration's anatomical eyeballs (gaze model file)
+  bool enabled = false;  // on for the self-calibration's anatomical eyeballs (gaze model file)
   // A fixation: this session's corrected gaze this close to the target sideways and up/down
   // (head frame). Sideways wider than the self-calibration's 10 deg: with a bias about as large
   // as the window, a window centred on the target holds only the nearer half of the looks at
@@ -36,9 +36,9 @@ struct FixationYawOptions {
   // bias ~10 deg, nothing learnt, gaze 13.5 deg; modalities/gaze/README.md).
   double max_yaw_deg = 15;
   double max_pitch_deg = 12;
-  int min_fixations = 10;     // no correction before this many fixations
-  int window = 500;           // the median of the newest this many fixations (~50 s of looks)
-  double dead_zone_deg = 2;   // |median| below this: no correction; above: median -+ this
+  int min_fixations = 10;    // no correction before this many fixations
+  int window = 500;          // the median of the newest this many fixations (~50 s of looks)
+  double dead_zone_deg = 2;  // |median| below this: no correction; above: median -+ this
   // The correction until min_fixations are seen (deg; within +-kMaxFixationYawDeg): 0, or what an
   // earlier session of this child learnt for the same eyeballs (GazeModelFile). It does not move
   // the fixation window: this session's estimate is its own.
