@@ -41,8 +41,9 @@ cv::Vec3d turned_yaw(const cv::Vec3d& d, double yaw_deg) {
   return rotation_from_ypr_deg(-yaw_deg, 0, 0) * d;
 }
 
-FixationYawEstimator::FixationYawEstimator(FixationYawOptions options) : options_(options) {
-  reset();
+double FixationYawEstimator::correction_deg() const {
+  if (!options_.enabled) return 0;
+  return fixations() >= options_.min_fixations ? learnt_deg_ : options_.start_deg;
 }
 
 void FixationYawEstimator::observe(const cv::Vec3d& gaze_head, const cv::Vec3d& target_head) {
@@ -59,13 +60,11 @@ void FixationYawEstimator::observe(const cv::Vec3d& gaze_head, const cv::Vec3d& 
   if (static_cast<int>(offsets_.size()) < options_.min_fixations) return;
   const double bias = upper_median(std::vector<double>(offsets_.begin(), offsets_.end()));
   learnt_deg_ = std::copysign(std::max(0.0, std::abs(bias) - options_.dead_zone_deg), bias);
-  correction_deg_ = learnt_deg_;
 }
 
 void FixationYawEstimator::reset() {
   offsets_.clear();
   learnt_deg_ = 0;
-  correction_deg_ = options_.enabled ? options_.start_deg : 0;
 }
 
 }  // namespace dreamsense::gaze

@@ -56,10 +56,10 @@ cv::Vec3d turned_yaw(const cv::Vec3d& direction_head, double yaw_deg);
 
 class FixationYawEstimator {
  public:
-  explicit FixationYawEstimator(FixationYawOptions options = {});
+  explicit FixationYawEstimator(FixationYawOptions options = {}) : options_(options) {}
   // The yaw (deg) to add to the gaze's eye-in-head direction now (0 while disabled; start_deg
   // while learning).
-  double correction_deg() const { return correction_deg_; }
+  double correction_deg() const;
   int fixations() const { return static_cast<int>(offsets_.size()); }
   // One tick's uncorrected gaze and the target's direction from the eyes, both in the head frame.
   // Updates the correction for the following ticks.
@@ -69,8 +69,7 @@ class FixationYawEstimator {
  private:
   FixationYawOptions options_;
   std::deque<double> offsets_;
-  double learnt_deg_ = 0;      // this session's own estimate (0 before min_fixations)
-  double correction_deg_ = 0;  // learnt_deg_, or start_deg before min_fixations
+  double learnt_deg_ = 0;  // this session's own estimate (0 before min_fixations)
 };
 
 }  // namespace dreamsense::gaze
